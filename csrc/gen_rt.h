@@ -1,0 +1,195 @@
+/*
+ * gen_rt.h - the eomgen C runtime: small dense linear algebra, integrators,
+ * constraint projection and constrained linearization.
+ *
+ * No model knowledge lives here; generated model code calls these functions.
+ * Matrices are row-major: element (i, j) of an m x n matrix a is a[i*n + j].
+ * Every function returns an int status: GEN_RT_OK (0) or a negative code.
+ * No heap, no globals, no stdio: all memory belongs to the caller.
+ *
+ * The scalar type is gen_rt_real: double unless GEN_RT_REAL_FLOAT is defined.
+ */
+#ifndef GEN_RT_H
+#define GEN_RT_H
+
+#include "gen_rt_config.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifdef GEN_RT_REAL_FLOAT
+typedef float gen_rt_real;
+#define GEN_RT_EPS 1.1920929e-07F
+#define GEN_RT_C(x) x##F
+#else
+typedef double gen_rt_real;
+#define GEN_RT_EPS 2.220446049250313e-16
+#define GEN_RT_C(x) x
+#endif
+
+/* Status codes, shared by the runtime and every generated model. */
+#define GEN_RT_OK 0
+#define GEN_RT_ERR_NULL (-1)            /* a required pointer argument is NULL */
+#define GEN_RT_ERR_NONFINITE_INPUT (-2) /* an input holds NaN or inf */
+#define GEN_RT_ERR_SINGULAR (-3)        /* matrix singular or too badly conditioned */
+#define GEN_RT_ERR_NO_CONVERGENCE (-4)  /* Newton projection / consistency did not converge */
+#define GEN_RT_ERR_STEP_UNDERFLOW (-5)  /* adaptive step size fell below its minimum */
+#define GEN_RT_ERR_MAX_STEPS (-6)       /* step budget exhausted */
+#define GEN_RT_ERR_BAD_ARG (-7)         /* an argument is out of range (size, tolerance, step) */
+#define GEN_RT_ERR_NONFINITE_MODEL (-8) /* the model expressions evaluate to NaN/inf here */
+#define GEN_RT_ERR_OUTPUT_FULL (-9)     /* caller's output buffer too small */
+#define GEN_RT_STATUS_MIN (-9)
+
+/* A human-readable message for a status code (static storage, never NULL). */
+const char *gen_rt_status_message(int status);
+
+/* Relative pivot threshold below which a factorization reports singular. */
+#ifndef GEN_RT_PIVOT_RTOL
+#ifdef GEN_RT_REAL_FLOAT
+#define GEN_RT_PIVOT_RTOL GEN_RT_C(1e-6)
+#else
+#define GEN_RT_PIVOT_RTOL GEN_RT_C(1e-12)
+#endif
+#endif
+
+/* 1 if all n values are finite. */
+int gen_rt_all_finite(int n, const gen_rt_real *v);
+
+/* ---- dense linear algebra (gen_rt_linalg.c) --------------------------- */
+
+/* LU with partial pivoting, in place: a (n x n) becomes L\U, piv[n] the
+ * row permutation. scale > 0 is the magnitude the pivots are judged
+ * against (pass 0 to use max |a_ij|); a pivot with
+ * |p| <= GEN_RT_PIVOT_RTOL * scale gives GEN_RT_ERR_SINGULAR. */
+int gen_rt_lu_factor(int n, gen_rt_real *a, int *piv, gen_rt_real scale);
+/* Solve with a factor from gen_rt_lu_factor; b is n x nrhs, overwritten. */
+int gen_rt_lu_solve(int n, const gen_rt_real *lu, const int *piv, int nrhs,
+                    gen_rt_real *b);
+/* Cholesky a = L L^T in place (lower triangle holds L). Not positive
+ * definite, or a pivot below GEN_RT_PIVOT_RTOL * max diag: SINGULAR. */
+int gen_rt_chol_factor(int n, gen_rt_real *a);
+int gen_rt_chol_solve(int n, const gen_rt_real *l, int nrhs, gen_rt_real *b);
+/* c (m x n) = a (m x k) * b (k x n) */
+void gen_rt_matmul(int m, int k, int n, const gen_rt_real *a,
+                   const gen_rt_real *b, gen_rt_real *c);
+gen_rt_real gen_rt_max_abs(int n, const gen_rt_real *v);
+
+/* ---- constrained accelerations (gen_rt_dynamics.c) --------------------
+ * Model form:  M(q) u' = f(q,u,r,t) + A(q)^T lam,   A(q) u' + a(q,u,t) = 0
+ * with n speeds and m velocity constraints (A is m x n).            */
+
+/* Work length (reals) for gen_rt_accel_kkt and gen_rt_accel_partitioned. */
+#define GEN_RT_ACCEL_WORK(n, m) (((n) + (m)) * ((n) + (m) + 1) + 2 * (n) * (n) + 4 * (n) + 1)
+#define GEN_RT_ACCEL_IWORK(n, m) ((n) + (m) + 1)
+
+/* Multiplier form: solve [M, -A^T; A, 0] [u'; lam] = [f; -a] with pivoted LU.
+ * lam may be NULL. */
+int gen_rt_accel_kkt(int n, int m, const gen_rt_real *M, const gen_rt_real *f,
+                     const gen_rt_real *A, const gen_rt_real *a,
+                     gen_rt_real *work, int *iwork, gen_rt_real *ud,
+                     gen_rt_real *lam);
+/* Kane form with a partition: u_dep = columns dep[m] of A, u_ind = ind[n-m].
+ * Eliminates the dependent accelerations through A_dep (singular when the
+ * partition is), solves the n-m reduced equations, then recovers the
+ * multipliers lam = (A A^T)^-1 A (M u' - f) when lam != NULL. */
+int gen_rt_accel_partitioned(int n, int m, const int *ind, const int *dep,
+                             const gen_rt_real *M, const gen_rt_real *f,
+                             const gen_rt_real *A, const gen_rt_real *a,
+                             gen_rt_real *work, int *iwork, gen_rt_real *ud,
+                             gen_rt_real *lam);
+
+/* ---- projection onto the constraint manifold (gen_rt_project.c) ------- */
+
+/* Minimum-norm correction dx = -J^T (J J^T)^-1 res, applied to x (length n):
+ * J is m x n. Used for one Gauss-Newton step on the coordinates and for the
+ * (linear) velocity projection. work: m*m + m reals. */
+int gen_rt_min_norm_correct(int m, int n, const gen_rt_real *J,
+                            const gen_rt_real *res, gen_rt_real *work,
+                            gen_rt_real *x);
+#define GEN_RT_MIN_NORM_WORK(m, n) ((m) * (m) + (m) + 1)
+
+/* ---- integrators (gen_rt_integrate.c) --------------------------------- */
+
+typedef int (*gen_rt_rhs_fn)(void *ctx, gen_rt_real t, const gen_rt_real *x,
+                             gen_rt_real *dxdt);
+/* Called after every accepted step (projection); may modify x. */
+typedef int (*gen_rt_post_fn)(void *ctx, gen_rt_real t, gen_rt_real *x);
+
+/* Classic fourth-order Runge-Kutta step, x updated in place.
+ * work: GEN_RT_RK4_WORK(nx) reals. */
+#define GEN_RT_RK4_WORK(nx) (5 * (nx))
+int gen_rt_rk4_step(gen_rt_rhs_fn f, void *ctx, int nx, gen_rt_real t,
+                    gen_rt_real h, gen_rt_real *work, gen_rt_real *x);
+
+/* Dormand-Prince 5(4) with PI step-size control. */
+typedef struct {
+    gen_rt_real rtol, atol;
+    gen_rt_real h_init;   /* first trial step, <= 0: chosen automatically */
+    gen_rt_real h_min;    /* below this: GEN_RT_ERR_STEP_UNDERFLOW (<= 0: automatic) */
+    gen_rt_real h_max;    /* <= 0: unbounded */
+    long max_steps;       /* bound on attempted steps per call, <= 0: 100000 */
+} gen_rt_dopri5_opts;
+
+typedef struct {
+    long n_accepted, n_rejected, n_rhs;
+    gen_rt_real h_last;   /* step size to continue with */
+} gen_rt_dopri5_stats;
+
+#define GEN_RT_DOPRI5_WORK(nx) (9 * (nx))
+/* Integrates x from t0 to t1 exactly (the last step is clipped). On error
+ * x holds the last accepted state and *t_reached its time. stats
+ * accumulates (zero it before the first call); stats->h_last seeds the next
+ * call when opts->h_init <= 0 and h_last > 0. */
+int gen_rt_dopri5_integrate(gen_rt_rhs_fn f, gen_rt_post_fn post, void *ctx,
+                            int nx, gen_rt_real t0, gen_rt_real t1,
+                            const gen_rt_dopri5_opts *opts, gen_rt_real *work,
+                            gen_rt_dopri5_stats *stats, gen_rt_real *t_reached,
+                            gen_rt_real *x);
+
+/* ---- constrained linearization (gen_rt_linearize.c) -------------------
+ * Linearizes  Kqd q' + k(q,u) = 0,  M u' - f - A^T lam = 0 (R),
+ * A u' + a = 0 (S),  f_c(q) = 0,  A u + b = 0  about an operating point,
+ * eliminating dependent coordinates and speeds through the constraint
+ * Jacobians and the accelerations and multipliers through the KKT matrix
+ * (the method of Peterson, Gede and Hubbard). Output: A_lin (ns x ns),
+ * B_lin (ns x nr) for the independent state [q_ind; u_ind], ns = nq-mc+nu-mv. */
+typedef struct {
+    int nq, nu, mc, mv, nr;
+    const int *q_ind, *q_dep, *u_ind, *u_dep;
+} gen_rt_lin_dims;
+
+typedef struct {
+    const gen_rt_real *Kqd; /* nq x nq: d(kin)/d(q') */
+    const gen_rt_real *Kq;  /* nq x nq: d(kin)/dq at fixed q', u */
+    const gen_rt_real *Ku;  /* nq x nu */
+    const gen_rt_real *M;   /* nu x nu */
+    const gen_rt_real *Rq;  /* nu x nq: dR/dq at fixed u', lam */
+    const gen_rt_real *Ru;  /* nu x nu */
+    const gen_rt_real *Rr;  /* nu x nr (may be NULL when nr == 0) */
+    const gen_rt_real *A;   /* mv x nu */
+    const gen_rt_real *Sq;  /* mv x nq */
+    const gen_rt_real *Su;  /* mv x nu */
+    const gen_rt_real *Vq;  /* mv x nq: d(A u + b)/dq */
+    const gen_rt_real *Jc;  /* mc x nq: d f_c / dq */
+} gen_rt_lin_blocks;
+
+#define GEN_RT_LIN_WORK(nq, nu, mc, mv, nr)                                   \
+    ((nq) * ((nq) - (mc)) + (mc) * (mc) + (mc) * ((nq) - (mc)) +             \
+     (nu) * ((nu) - (mv)) + (nu) * ((nq) - (mc)) + (mv) * (mv) +             \
+     (mv) * ((nq) - (mc) + (nu) - (mv)) +                                    \
+     2 * (nq) * ((nq) - (mc) + (nu) - (mv)) +                                \
+     ((nu) + (mv)) * ((nu) + (mv)) +                                         \
+     ((nu) + (mv)) * ((nq) - (mc) + (nu) - (mv) + (nr)) +                    \
+     (nu) * ((nq) - (mc) + (nu) - (mv)) + (nu) * ((nq) - (mc)) +             \
+     (mv) * ((nq) - (mc)) + (nq) * (nq) + 8)
+#define GEN_RT_LIN_IWORK(nq, nu, mc, mv) ((nq) + (nu) + (mc) + (mv) + 1)
+
+int gen_rt_linearize(const gen_rt_lin_dims *d, const gen_rt_lin_blocks *b,
+                     gen_rt_real *work, int *iwork, gen_rt_real *A_lin,
+                     gen_rt_real *B_lin);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* GEN_RT_H */

@@ -1,0 +1,133 @@
+/* gen_rt_dynamics.c - accelerations (and multipliers) of a constrained model:
+ *   M u' = f + A^T lam,   A u' + a = 0.                                     */
+#include "gen_rt.h"
+
+#ifndef GEN_RT_PARTITION_CMAX
+#ifdef GEN_RT_REAL_FLOAT
+#define GEN_RT_PARTITION_CMAX GEN_RT_C(1e5)
+#else
+#define GEN_RT_PARTITION_CMAX GEN_RT_C(1e9)
+#endif
+#endif
+
+int gen_rt_accel_kkt(int n, int m, const gen_rt_real *M, const gen_rt_real *f,
+                     const gen_rt_real *A, const gen_rt_real *a,
+                     gen_rt_real *work, int *iwork, gen_rt_real *ud,
+                     gen_rt_real *lam)
+{
+    int N = n + m, i, j, st;
+    gen_rt_real *K = work, *z = work + N * N;
+    if (n <= 0 || m < 0) return GEN_RT_ERR_BAD_ARG;
+    if (!M || !f || !work || !iwork || !ud || (m > 0 && (!A || !a)))
+        return GEN_RT_ERR_NULL;
+    for (i = 0; i < N; ++i)
+        for (j = 0; j < N; ++j) {
+            gen_rt_real v = 0;
+            if (i < n && j < n) v = M[i * n + j];
+            else if (i < n) v = -A[(j - n) * n + i];
+            else if (j < n) v = A[(i - n) * n + j];
+            K[i * N + j] = v;
+        }
+    for (i = 0; i < n; ++i) z[i] = f[i];
+    for (i = 0; i < m; ++i) z[n + i] = -a[i];
+    st = gen_rt_lu_factor(N, K, iwork, 0);
+    if (st) return st;
+    st = gen_rt_lu_solve(N, K, iwork, 1, z);
+    if (st) return st;
+    if (!gen_rt_all_finite(N, z)) return GEN_RT_ERR_SINGULAR;
+    for (i = 0; i < n; ++i) ud[i] = z[i];
+    if (lam) for (i = 0; i < m; ++i) lam[i] = z[n + i];
+    return GEN_RT_OK;
+}
+
+int gen_rt_accel_partitioned(int n, int m, const int *ind, const int *dep,
+                             const gen_rt_real *M, const gen_rt_real *f,
+                             const gen_rt_real *A, const gen_rt_real *a,
+                             gen_rt_real *work, int *iwork, gen_rt_real *ud,
+                             gen_rt_real *lam)
+{
+    int ni = n - m, i, j, k, st;
+    gen_rt_real *Ad, *C, *T, *cf, *MT, *Mr, *fr, *tmp;
+    if (n <= 0 || m < 0 || ni < 0) return GEN_RT_ERR_BAD_ARG;
+    if (!M || !f || !work || !iwork || !ud) return GEN_RT_ERR_NULL;
+    if (m > 0 && (!A || !a || !dep)) return GEN_RT_ERR_NULL;
+    if (ni > 0 && !ind) return GEN_RT_ERR_NULL;
+    Ad = work;                 /* m x m */
+    C = Ad + m * m;            /* m x (ni + 1): [-Ad^-1 A_i | -Ad^-1 a] */
+    T = C + m * (ni + 1);      /* n x ni */
+    cf = T + n * ni;           /* n */
+    MT = cf + n;               /* n x ni */
+    Mr = MT + n * ni;          /* ni x ni */
+    fr = Mr + ni * ni;         /* ni */
+    tmp = fr + ni;             /* n */
+    if (m > 0) {
+        for (i = 0; i < m; ++i) {
+            for (j = 0; j < m; ++j) Ad[i * m + j] = A[i * n + dep[j]];
+            for (k = 0; k < ni; ++k) C[i * (ni + 1) + k] = -A[i * n + ind[k]];
+            C[i * (ni + 1) + ni] = -a[i];
+        }
+        st = gen_rt_lu_factor(m, Ad, iwork, gen_rt_max_abs(m * n, A));
+        if (st) return st;
+        st = gen_rt_lu_solve(m, Ad, iwork, ni + 1, C);
+        if (st) return st;
+        if (!gen_rt_all_finite(m * (ni + 1), C)) return GEN_RT_ERR_SINGULAR;
+        for (i = 0; i < m * (ni + 1); ++i) {
+            if ((i % (ni + 1)) != ni &&
+                (C[i] > GEN_RT_PARTITION_CMAX || C[i] < -GEN_RT_PARTITION_CMAX))
+                return GEN_RT_ERR_SINGULAR;
+        }
+    }
+    for (i = 0; i < n * ni; ++i) T[i] = 0;
+    for (i = 0; i < n; ++i) cf[i] = 0;
+    for (k = 0; k < ni; ++k) T[ind[k] * ni + k] = 1;
+    for (j = 0; j < m; ++j) {
+        for (k = 0; k < ni; ++k) T[dep[j] * ni + k] = C[j * (ni + 1) + k];
+        cf[dep[j]] = C[j * (ni + 1) + ni];
+    }
+    /* reduced system (T^T M T) ui' = T^T (f - M cf) */
+    gen_rt_matmul(n, n, ni, M, T, MT);
+    for (i = 0; i < ni; ++i)
+        for (j = 0; j < ni; ++j) {
+            gen_rt_real s = 0;
+            for (k = 0; k < n; ++k) s += T[k * ni + i] * MT[k * ni + j];
+            Mr[i * ni + j] = s;
+        }
+    gen_rt_matmul(n, n, 1, M, cf, tmp);
+    for (k = 0; k < n; ++k) tmp[k] = f[k] - tmp[k];
+    for (i = 0; i < ni; ++i) {
+        gen_rt_real s = 0;
+        for (k = 0; k < n; ++k) s += T[k * ni + i] * tmp[k];
+        fr[i] = s;
+    }
+    if (ni > 0) {
+        st = gen_rt_lu_factor(ni, Mr, iwork, 0);
+        if (st) return st;
+        st = gen_rt_lu_solve(ni, Mr, iwork, 1, fr);
+        if (st) return st;
+    }
+    gen_rt_matmul(n, ni, 1, T, fr, ud);
+    for (k = 0; k < n; ++k) ud[k] += cf[k];
+    if (!gen_rt_all_finite(n, ud)) return GEN_RT_ERR_SINGULAR;
+    if (lam && m > 0) {
+        /* A A^T lam = A (M ud - f); reuse the work space from Ad on */
+        gen_rt_real *AAt = work, *y = work + m * m, *r = y + m;
+        gen_rt_matmul(n, n, 1, M, ud, r);
+        for (k = 0; k < n; ++k) r[k] -= f[k];
+        for (i = 0; i < m; ++i) {
+            gen_rt_real s = 0;
+            for (j = 0; j < m; ++j) {
+                gen_rt_real t2 = 0;
+                for (k = 0; k < n; ++k) t2 += A[i * n + k] * A[j * n + k];
+                AAt[i * m + j] = t2;
+            }
+            for (k = 0; k < n; ++k) s += A[i * n + k] * r[k];
+            y[i] = s;
+        }
+        st = gen_rt_lu_factor(m, AAt, iwork, 0);
+        if (st) return st;
+        st = gen_rt_lu_solve(m, AAt, iwork, 1, y);
+        if (st) return st;
+        for (i = 0; i < m; ++i) lam[i] = y[i];
+    }
+    return GEN_RT_OK;
+}

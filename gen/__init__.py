@@ -1,0 +1,18 @@
+"""eomgen: turn sympy.physics.mechanics equations of motion into fast,
+verified C simulators.
+
+    model = gen.Model.from_kanes(km, constants={...}, name="pend")
+    gen.generate(model, "out/")            # C sources + CMake project
+    sim = gen.compile(model)               # cffi module, numpy in and out
+    A, B = sim.linearize(x_op)
+"""
+__version__ = "0.1.0"
+
+from .errors import (BuildError, ConvergenceError, EomgenError, ModelError,  # noqa: E402
+                     SingularError, SolverError)
+from .model import Model  # noqa: E402
+from .render import generate  # noqa: E402
+from .build import compile  # noqa: E402,A001
+
+__all__ = ["Model", "generate", "compile", "EomgenError", "ModelError", "BuildError",
+           "SolverError", "SingularError", "ConvergenceError", "__version__"]

@@ -1,0 +1,161 @@
+"""Build generated sources with cffi (API mode, out of line) into a cache
+keyed by the content of the generated files and the generator version.
+
+Builds happen in a private temporary directory and are moved into the
+cache with an atomic rename, so two processes building the same model at
+once both succeed and load the same module. A failed compile raises
+BuildError with the full compiler log.
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import os
+import shutil
+import subprocess
+import sys
+import sysconfig
+import tempfile
+import time
+from pathlib import Path
+
+from . import __version__
+from .errors import BuildError, ModelError
+from .render import RUNTIME_SOURCES, cdef_text, render_files
+
+__all__ = ["compile", "cache_dir", "build_cffi"]
+
+C_FLAGS = ["-std=c99", "-O2", "-fno-strict-aliasing"]
+STRICT_FLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"]
+
+
+def cache_dir() -> Path:
+    env = os.environ.get("EOMGEN_CACHE")
+    if env:
+        return Path(env).expanduser().resolve()
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "eomgen"
+
+
+def _compiler():
+    cc = os.environ.get("CC") or sysconfig.get_config_var("CC") or "cc"
+    return cc.split()[0]
+
+
+def _compile_log(src_dir: Path, sources, extra_flags=()):
+    """Compile the sources alone (no Python) to capture a readable log."""
+    logs = []
+    ok = True
+    for s in sources:
+        cmd = [_compiler(), *STRICT_FLAGS, *extra_flags, "-c", str(src_dir / s), "-o", os.devnull,
+               "-I", str(src_dir)]
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+        if proc.returncode != 0 or proc.stderr.strip():
+            logs.append("$ " + " ".join(cmd) + "\n" + proc.stdout + proc.stderr)
+        ok = ok and proc.returncode == 0
+    return ok, "\n".join(logs)
+
+
+def build_cffi(model, real="double", verbose=False, timings=None, files=None):
+    """Generate and build; return the path of the extension module and its
+    module name."""
+    t0 = time.perf_counter()
+    if files is None:
+        files = render_files(model, real=real, timings=timings)
+    t1 = time.perf_counter()
+    cdef = cdef_text(model, real=real)
+    h = hashlib.sha256()
+    h.update(__version__.encode())
+    h.update(sys.version.encode())
+    h.update(" ".join(C_FLAGS).encode())
+    h.update(cdef.encode())
+    for k in sorted(files):
+        h.update(k.encode() + b"\0" + files[k].encode() + b"\0")
+    key = h.hexdigest()[:16]
+    modname = f"_eomgen_{model.name}_{key}"
+    root = cache_dir()
+    final = root / modname
+    so = _find_module(final, modname)
+    if so is not None:
+        if timings is not None:
+            timings["generate"] = t1 - t0
+            timings["compile"] = 0.0
+            timings["cached"] = True
+        return so, modname
+    root.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{modname}.", dir=root))
+    try:
+        src = tmp / "src"
+        src.mkdir()
+        for fname, text in files.items():
+            (src / fname).write_text(text)
+        import cffi
+        ffi = cffi.FFI()
+        try:
+            ffi.cdef(cdef)
+        except Exception as e:  # cffi's CDefError and parse errors
+            raise BuildError(f"internal error: the cffi declarations do not parse: {e}", cdef) from e
+        sources = [str(src / f"{model.name}.c")] + [str(src / s) for s in RUNTIME_SOURCES]
+        ffi.set_source(modname, f'#include "{model.name}.h"\n', sources=sources,
+                       include_dirs=[str(src)], extra_compile_args=list(C_FLAGS),
+                       libraries=["m"])
+        build = tmp / "build"
+        build.mkdir()
+        try:
+            so_path = ffi.compile(tmpdir=str(build), verbose=verbose)
+        except Exception as e:
+            ok, log = _compile_log(src, [f"{model.name}.c"] + RUNTIME_SOURCES)
+            raise BuildError(f"compiling the model '{model.name}' failed ({type(e).__name__}: {e})",
+                             log or str(e)) from None
+        dest_tmp = tmp / modname
+        dest_tmp.mkdir()
+        shutil.copy2(so_path, dest_tmp / Path(so_path).name)
+        shutil.copytree(src, dest_tmp / "src")
+        try:
+            os.rename(dest_tmp, final)
+        except OSError:
+            # another process won the race: use its build
+            if _find_module(final, modname) is None:
+                raise
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    so = _find_module(final, modname)
+    if so is None:
+        raise BuildError(f"the built module for '{model.name}' is missing from {final}")
+    if timings is not None:
+        timings["generate"] = t1 - t0
+        timings["compile"] = time.perf_counter() - t1
+        timings["cached"] = False
+    return so, modname
+
+
+def _find_module(folder: Path, modname: str):
+    if not folder.is_dir():
+        return None
+    for f in folder.iterdir():
+        if f.name.startswith(modname) and f.suffix in (".so", ".pyd", ".dylib"):
+            return f
+    return None
+
+
+def _load(so: Path, modname: str):
+    if modname in sys.modules:
+        return sys.modules[modname]
+    spec = importlib.util.spec_from_file_location(modname, str(so))
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    sys.modules[modname] = mod
+    return mod
+
+
+def compile(model, backend="c", real="double", verbose=False):  # noqa: A001
+    """Generate, build through cffi (cached) and return a Simulator."""
+    from .bindings import Simulator
+    if backend != "c":
+        raise ModelError(f"unknown backend {backend!r}: this version builds 'c'")
+    timings = {}
+    so, modname = build_cffi(model, real=real, verbose=verbose, timings=timings)
+    mod = _load(so, modname)
+    sim = Simulator(model, mod, real=real)
+    sim.build_info = {"module": str(so), **timings}
+    return sim

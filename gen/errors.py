@@ -1,0 +1,48 @@
+"""The exception hierarchy of eomgen.
+
+Every error the product raises on purpose is one of these; each names the
+culprit (the symbol, the argument, the status and state) in its message.
+"""
+
+
+class EomgenError(Exception):
+    """Base class of every eomgen error."""
+
+
+class ModelError(EomgenError, ValueError):
+    """The model cannot be generated correctly as given (unknown symbols,
+    bad partition, unprintable expressions, bad name)."""
+
+
+class BuildError(EomgenError, RuntimeError):
+    """Compiling the generated code failed; ``log`` holds the full compiler
+    output."""
+
+    def __init__(self, message, log=""):
+        super().__init__(message if not log else f"{message}\n--- compiler log ---\n{log}")
+        self.log = log
+
+
+class SolverError(EomgenError, RuntimeError):
+    """A generated C function returned a failure status.
+
+    Attributes: ``status`` (the negative C code), ``status_name``, ``time``
+    and ``state`` (where it happened, when known)."""
+
+    def __init__(self, message, status=None, status_name=None, time=None, state=None):
+        super().__init__(message)
+        self.status = status
+        self.status_name = status_name
+        self.time = time
+        self.state = state
+
+
+class SingularError(SolverError):
+    """The system to solve is singular or badly conditioned at this state
+    (for example a coordinate partition that does not determine the
+    dependent coordinates there), or the model expressions are."""
+
+
+class ConvergenceError(SolverError):
+    """Newton projection / consistent-state computation did not converge,
+    or the adaptive integrator could not meet its tolerance."""

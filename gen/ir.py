@@ -1,0 +1,311 @@
+"""Kernels: named straight-line functions with typed array inputs and
+outputs, and one CSE'd list of assignments each.
+
+Jacobians are formed by forward-mode differentiation of the CSE'd
+assignment list (an expression graph), never by expanding full symbolic
+matrices, so they stay the size of the graph as models grow.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import sympy as sm
+
+__all__ = ["Arg", "Output", "Kernel", "make_kernel", "differentiate_graph", "build_kernels"]
+
+
+@dataclass(frozen=True)
+class Arg:
+    """A kernel input: a C array (length n) or scalar (n == 0) of reals."""
+    name: str
+    symbols: tuple          # the internal symbols it carries, in order
+    scalar: bool = False
+
+    @property
+    def n(self):
+        return len(self.symbols)
+
+
+@dataclass
+class Output:
+    """A kernel output matrix, row-major, named in C as ``out_<name>``."""
+    name: str
+    rows: int
+    cols: int
+    exprs: list             # flattened row-major, after CSE
+
+    @property
+    def size(self):
+        return self.rows * self.cols
+
+
+@dataclass
+class Kernel:
+    name: str
+    args: list
+    outputs: list
+    assignments: list = field(default_factory=list)   # [(Symbol, Expr)]
+
+    @property
+    def op_count(self):
+        return sum(sm.count_ops(e) for _, e in self.assignments) + sum(
+            sm.count_ops(e) for o in self.outputs for e in o.exprs)
+
+
+class _Namer:
+    def __init__(self, prefix):
+        self.prefix = prefix
+        self.i = 0
+
+    def __iter__(self):
+        return self
+
+    def __next__(self):
+        s = sm.Symbol(f"{self.prefix}{self.i}")
+        self.i += 1
+        return s
+
+
+def _flatten(mat):
+    mat = sm.Matrix(mat)
+    return [mat[i, j] for i in range(mat.shape[0]) for j in range(mat.shape[1])], mat.shape
+
+
+def make_kernel(name, args, outputs, cse=True):
+    """outputs: list of (name, Matrix). One joint CSE over all of them."""
+    flat, shapes = [], []
+    for oname, mat in outputs:
+        f, shp = _flatten(mat)
+        flat.extend(f)
+        shapes.append((oname, shp))
+    if cse and flat:
+        assignments, reduced = sm.cse(flat, symbols=_Namer("w"), order="none")
+    else:
+        assignments, reduced = [], flat
+    outs, k = [], 0
+    for oname, (rows, cols) in shapes:
+        outs.append(Output(oname, rows, cols, list(reduced[k:k + rows * cols])))
+        k += rows * cols
+    return prune(Kernel(name, list(args), outs, list(assignments)))
+
+
+def differentiate_graph(assignments, exprs, wrt, prefix="d"):
+    """Forward-mode derivatives of ``exprs`` (written over the temporaries
+    of ``assignments``) with respect to the symbols ``wrt``.
+
+    Returns (new_assignments, jac) where new_assignments extend the primal
+    list with derivative temporaries, and jac[i][j] = d exprs[i] / d wrt[j].
+    Primal subexpressions that reappear in a derivative are replaced by
+    their temporaries (so d sqrt(w3) reuses w4 = sqrt(w3))."""
+    namer = _Namer(prefix)
+    widx = {v: j for j, v in enumerate(wrt)}
+    reverse = {}
+    for s, e in assignments:
+        if not e.is_Atom:
+            reverse.setdefault(e, s)
+    deriv = {}                  # temp -> {j: symbol or expr}
+    new = []
+
+    def dexpr(e):
+        """{j: d e / d wrt[j]} for an expression over wrt and temps."""
+        out = {}
+        for s in e.free_symbols:
+            if s in widx:
+                pd = e.diff(s)
+                j = widx[s]
+                out[j] = out.get(j, 0) + pd
+            elif s in deriv and deriv[s]:
+                pd = e.diff(s)
+                if pd == 0:
+                    continue
+                for j, ds in deriv[s].items():
+                    out[j] = out.get(j, 0) + pd * ds
+        res = {}
+        for j, v in out.items():
+            if v != 0:
+                v = v.xreplace(reverse) if reverse else v
+                res[j] = v
+        return res
+
+    for s, e in assignments:
+        d = dexpr(e)
+        entry = {}
+        for j, v in d.items():
+            if v.is_Atom:
+                entry[j] = v
+            else:
+                ds = next(namer)
+                new.append((ds, v))
+                entry[j] = ds
+        deriv[s] = entry
+    jac = []
+    for e in exprs:
+        d = dexpr(e)
+        jac.append([d.get(j, sm.S.Zero) for j in range(len(wrt))])
+    return new, jac
+
+
+def make_jacobian_kernel(name, args, plain, jacobians, cse_derivatives=True):
+    """A kernel whose outputs are plain matrices and Jacobians of
+    matrices, all from one joint CSE.
+
+    plain: [(out_name, Matrix)]
+    jacobians: [(out_name, Matrix F (column), wrt symbols)] -> dF/dwrt
+    """
+    flat, spans = [], []
+    for oname, mat in plain:
+        f, shp = _flatten(mat)
+        spans.append(("plain", oname, len(flat), shp, None))
+        flat.extend(f)
+    for oname, mat, wrt in jacobians:
+        f, shp = _flatten(mat)
+        spans.append(("jac", oname, len(flat), (len(f), len(wrt)), list(wrt)))
+        flat.extend(f)
+    if flat:
+        assignments, reduced = sm.cse(flat, symbols=_Namer("w"), order="none")
+    else:
+        assignments, reduced = [], []
+    # one forward sweep for the union of all differentiation variables
+    allwrt = []
+    for kind, _, _, _, wrt in spans:
+        if kind == "jac":
+            for v in wrt:
+                if v not in allwrt:
+                    allwrt.append(v)
+    jac_rows_exprs = []
+    for kind, _, start, shp, wrt in spans:
+        if kind == "jac":
+            jac_rows_exprs.extend(reduced[start:start + shp[0]])
+    new, jac_all = differentiate_graph(assignments, jac_rows_exprs, allwrt)
+    outs_flat = []
+    shapes = []
+    k = 0
+    for kind, oname, start, shp, wrt in spans:
+        if kind == "plain":
+            outs_flat.extend(reduced[start:start + shp[0] * shp[1]])
+            shapes.append((oname, shp))
+        else:
+            cols = [allwrt.index(v) for v in wrt]
+            for i in range(shp[0]):
+                row = jac_all[k + i]
+                outs_flat.extend(row[c] for c in cols)
+            k += shp[0]
+            shapes.append((oname, shp))
+    # second CSE over the derivative temporaries and the outputs
+    if cse_derivatives and (new or outs_flat):
+        dsyms = [s for s, _ in new]
+        dexprs = [e for _, e in new]
+        a2, r2 = sm.cse(dexprs + outs_flat, symbols=_Namer("v"), order="none")
+        new_assign = list(a2)
+        # keep d-temporaries as named assignments so outputs can refer to them
+        for s, e in zip(dsyms, r2[:len(dsyms)]):
+            new_assign.append((s, e))
+        outs_flat = r2[len(dsyms):]
+        # a2 may refer to d-temps defined later; order topologically
+        new = _toposort(new_assign, set(s for s, _ in assignments))
+    outs, k = [], 0
+    for oname, (rows, cols) in shapes:
+        outs.append(Output(oname, rows, cols, list(outs_flat[k:k + rows * cols])))
+        k += rows * cols
+    return prune(Kernel(name, list(args), outs, list(assignments) + list(new)))
+
+
+def _toposort(assign, known):
+    """Order assignments so every temporary is defined before use."""
+    defined = set(known)
+    pending = list(assign)
+    ordered = []
+    names = {s for s, _ in assign}
+    while pending:
+        progress = False
+        rest = []
+        for s, e in pending:
+            need = {x for x in e.free_symbols if x in names}
+            if need <= defined:
+                ordered.append((s, e))
+                defined.add(s)
+                progress = True
+            else:
+                rest.append((s, e))
+        if not progress:
+            raise RuntimeError("cyclic temporaries in derivative kernel")
+        pending = rest
+    return ordered
+
+
+# --------------------------------------------------------------------------
+def build_kernels(model):
+    """Every kernel a model's C code needs, as plain data."""
+    m = model
+    Aq = Arg("q", tuple(m.q))
+    Au = Arg("u", tuple(m.u))
+    Ar = Arg("r", tuple(m.r))
+    Ap = Arg("p", tuple(m.p))
+    At = Arg("t", (m.t,), scalar=True)
+    U = sm.Matrix(m.u)
+    Qd = [sm.Dummy(f"qd{i}") for i in range(m.nq)]
+    Ud = [sm.Dummy(f"ud{i}") for i in range(m.nu)]
+    Lam = [sm.Dummy(f"lam{i}") for i in range(m.mv)]
+    Aqd = Arg("qd", tuple(Qd))
+    Aud = Arg("ud", tuple(Ud))
+    Alam = Arg("lam", tuple(Lam))
+
+    kernels = {}
+    kernels["mass_matrix"] = make_kernel("mass_matrix", [Aq, Ap, At], [("M", m.M)])
+    kernels["forcing"] = make_kernel("forcing", [Aq, Au, Ar, Ap, At], [("f", m.f)])
+    if m.qdot is not None:
+        kin_out = [("qdot", m.qdot)]
+    else:
+        kin_out = [("Kqd", m.Kqd), ("kr", -(m.Ku * U + m.kf))]
+    kernels["kinematics"] = make_kernel("kinematics", [Aq, Au, Ap, At], kin_out)
+    # everything the right-hand side needs, jointly CSE'd
+    rhs_out = list(kin_out) + [("M", m.M), ("f", m.f)]
+    if m.mv:
+        rhs_out += [("A", m.A), ("a", m.a)]
+    kernels["rhs_terms"] = make_kernel("rhs_terms", [Aq, Au, Ar, Ap, At], rhs_out)
+    if m.mc:
+        kernels["constraints"] = make_kernel("constraints", [Aq, Ap, At], [("fc", m.fc)])
+        kernels["constraint_jacobian"] = make_jacobian_kernel(
+            "constraint_jacobian", [Aq, Ap, At], [("fc", m.fc)], [("Jc", m.fc, m.q)])
+    if m.mv:
+        kernels["velocity_constraint_matrix"] = make_kernel(
+            "velocity_constraint_matrix", [Aq, Ap, At], [("A", m.A), ("b", m.b)])
+        kernels["velocity_constraints"] = make_kernel(
+            "velocity_constraints", [Aq, Au, Ap, At], [("fv", m.A * U + m.b)])
+    if m.energy is not None:
+        kernels["energy"] = make_kernel("energy", [Aq, Au, Ap, At], [("E", sm.Matrix([m.energy]))])
+
+    # linearization pieces (sympy's Linearizer f_0..f_4, f_c, f_v, f_a)
+    kin_res = m.Kqd * sm.Matrix(Qd) + m.Ku * U + m.kf
+    R = m.M * sm.Matrix(Ud) - m.f
+    if m.mv:
+        R = R - m.A.T * sm.Matrix(Lam)
+    plain = [("Kqd", m.Kqd), ("Ku", m.Ku), ("M", m.M)]
+    jacs = [("Kq", kin_res, m.q), ("Rq", R, m.q), ("Ru", R, m.u)]
+    if m.nr:
+        jacs.append(("Rr", R, m.r))
+    if m.mv:
+        S = m.A * sm.Matrix(Ud) + m.a
+        plain.append(("A", m.A))
+        jacs += [("Sq", S, m.q), ("Su", S, m.u), ("Vq", m.A * U + m.b, m.q)]
+    if m.mc:
+        jacs.append(("Jc", m.fc, m.q))
+    kernels["lin_terms"] = make_jacobian_kernel(
+        "lin_terms", [Aq, Au, Aqd, Aud, Alam, Ar, Ap, At], plain, jacs)
+    return kernels
+
+
+def prune(kernel):
+    """Drop temporaries that no output needs (dead code would trip
+    -Wunused-variable)."""
+    needed = set()
+    for o in kernel.outputs:
+        for e in o.exprs:
+            needed |= e.free_symbols
+    keep = []
+    for s, e in reversed(kernel.assignments):
+        if s in needed:
+            keep.append((s, e))
+            needed |= e.free_symbols
+    kernel.assignments = list(reversed(keep))
+    return kernel
