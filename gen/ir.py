@@ -109,7 +109,7 @@ def differentiate_graph(assignments, exprs, wrt, prefix="d"):
     def dexpr(e):
         """{j: d e / d wrt[j]} for an expression over wrt and temps."""
         out = {}
-        for s in e.free_symbols:
+        for s in sorted(e.free_symbols, key=sm.default_sort_key):
             if s in widx:
                 pd = e.diff(s)
                 j = widx[s]

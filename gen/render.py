@@ -297,6 +297,8 @@ def write_atomic(files, out_dir):
     is moved into place only when complete; a failure leaves out_dir as it
     was. Files already in out_dir that we do not generate are kept."""
     out = Path(out_dir).resolve()
+    if out.exists() and not out.is_dir():
+        raise ModelError(f"output path {out} exists and is not a directory")
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
     try:

@@ -131,6 +131,12 @@ static void test_pendulum_horizontal(void)
     CHECK_INT(gen_rt_accel_partitioned(2, 1, ind0, dep0, p.M, p.f, p.A, p.a, work,
                                        iwork, ud, lam),
               GEN_RT_ERR_SINGULAR);
+    /* nearly horizontal: x = 1e-14 L is as bad as x = 0 for this partition */
+    p.A[0] = (gen_rt_real)(1e-14 * PL);
+    CHECK_INT(gen_rt_accel_partitioned(2, 1, ind0, dep0, p.M, p.f, p.A, p.a, work,
+                                       iwork, ud, lam),
+              GEN_RT_ERR_SINGULAR);
+    p.A[0] = 0;
     CHECK_INT(gen_rt_accel_partitioned(2, 1, ind1, dep1, p.M, p.f, p.A, p.a, work,
                                        iwork, ud, lam),
               GEN_RT_OK);

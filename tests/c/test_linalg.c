@@ -205,6 +205,11 @@ static void test_chol(void)
         gen_rt_real negd[4] = {-1, 0, 0, -2};
         gen_rt_real semi[9] = {1, 1, 0, 1, 1, 0, 0, 0, 1}; /* singular PSD */
         gen_rt_real zero[1] = {0};
+        /* SPD in exact arithmetic, but the second pivot is 1e-14 relative */
+        gen_rt_real near[4] = {1, 1, 1, (gen_rt_real)(1 + 1e-14)};
+        gen_rt_real fine[4] = {1, 1, 1, (gen_rt_real)(1 + TOL(1e-9, 1e-3))};
+        CHECK_INT(gen_rt_chol_factor(2, near), GEN_RT_ERR_SINGULAR);
+        CHECK_INT(gen_rt_chol_factor(2, fine), GEN_RT_OK);
         CHECK_INT(gen_rt_chol_factor(2, indef), GEN_RT_ERR_SINGULAR);
         CHECK_INT(gen_rt_chol_factor(2, negd), GEN_RT_ERR_SINGULAR);
         CHECK_INT(gen_rt_chol_factor(3, semi), GEN_RT_ERR_SINGULAR);

@@ -1,0 +1,46 @@
+import os
+import shutil
+import sys
+import tempfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "examples"))
+sys.path.insert(0, str(ROOT / "tests"))
+if "EOMGEN_CACHE" not in os.environ:
+    os.environ["EOMGEN_CACHE"] = tempfile.mkdtemp(prefix="eomgen-test-cache-")
+
+import gen  # noqa: E402
+import seed_pendulum  # noqa: E402
+
+
+def require_tool(name):
+    """Skip with a reason when an outside tool is missing, but fail under CI."""
+    path = shutil.which(name)
+    if path is None:
+        if os.environ.get("CI") == "true":
+            pytest.fail(f"{name} is required under CI=true but is not installed")
+        pytest.skip(f"{name} not installed")
+    return path
+
+
+@pytest.fixture(scope="session")
+def kane_model():
+    return seed_pendulum.kane_model()
+
+
+@pytest.fixture(scope="session")
+def lagrange_model():
+    return seed_pendulum.lagrange_model()
+
+
+@pytest.fixture(scope="session")
+def kane_sim(kane_model):
+    return gen.compile(kane_model)
+
+
+@pytest.fixture(scope="session")
+def lagrange_sim(lagrange_model):
+    return gen.compile(lagrange_model)

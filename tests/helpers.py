@@ -1,0 +1,43 @@
+"""Shared numeric helpers for the tests."""
+import numpy as np
+
+
+def rel_err(c, s):
+    """max |c - s| relative to max |s| (absolute when s is all zero)."""
+    c = np.asarray(c, dtype=float)
+    s = np.asarray(s, dtype=float)
+    assert c.shape == s.shape, (c.shape, s.shape)
+    if c.size == 0:
+        return 0.0
+    scale = np.max(np.abs(s))
+    d = np.max(np.abs(c - s))
+    return float(d / scale) if scale > 0 else float(d)
+
+
+def crossing_times(t, y, direction=+1):
+    """Times where y crosses zero in the given direction, by cubic
+    interpolation through the four samples around each crossing."""
+    out = []
+    for i in range(1, len(y) - 2):
+        if direction > 0 and y[i] <= 0 < y[i + 1] or direction < 0 and y[i] >= 0 > y[i + 1]:
+            tt = t[i - 1:i + 3]
+            yy = y[i - 1:i + 3]
+            c = np.polyfit(tt - t[i], yy, 3)
+            roots = np.roots(c)
+            h = t[i + 1] - t[i]
+            good = [r.real + t[i] for r in roots
+                    if abs(r.imag) < 1e-12 and -1e-12 <= r.real <= h + 1e-12]
+            if good:
+                out.append(min(good, key=lambda v: abs(v - t[i])))
+    return np.array(out)
+
+
+def pendulum_state(theta, thetadot, L, order):
+    """A consistent state of the nonminimal pendulum (gravity along +x,
+    x = L cos(theta), y = L sin(theta)). order: 'kane' -> [q2, q1, u2, u1],
+    'lagrange' -> [q1, q2, q1', q2']."""
+    x, y = L * np.cos(theta), L * np.sin(theta)
+    vx, vy = -L * np.sin(theta) * thetadot, L * np.cos(theta) * thetadot
+    if order == "kane":
+        return np.array([y, x, vy, vx])
+    return np.array([x, y, vx, vy])
