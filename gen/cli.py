@@ -59,6 +59,23 @@ def _pairs(items, names, what):
     return out
 
 
+def _compiled_state(file, real, state_items, param_items):
+    """Compile the model file; the consistent state and constants from
+    NAME=VALUE lists."""
+    import numpy as np
+    from .build import compile as gcompile
+    sim = gcompile(load_model(file), real=real)
+    x = np.zeros(sim.nx)
+    for k, v in _pairs(state_items, sim.state_names, "state").items():
+        x[sim.state_names.index(k)] = v
+    p = sim.constants.copy()
+    for k, v in _pairs(param_items, sim.constant_names, "constant").items():
+        p[sim.constant_names.index(k)] = v
+    if sim.mc or sim.mv:
+        x = sim.consistent_state(x, p=p)
+    return sim, x, p
+
+
 def cmd_generate(a):
     from .render import generate
     m = load_model(a.file)
@@ -88,17 +105,7 @@ def cmd_build(a):
 
 def cmd_linearize(a):
     import numpy as np
-    from .build import compile as gcompile
-    m = load_model(a.file)
-    sim = gcompile(m, real=a.real)
-    x = np.zeros(sim.nx)
-    for k, v in _pairs(a.at, sim.state_names, "state").items():
-        x[sim.state_names.index(k)] = v
-    p = sim.constants.copy()
-    for k, v in _pairs(a.param, sim.constant_names, "constant").items():
-        p[sim.constant_names.index(k)] = v
-    if sim.mc or sim.mv:
-        x = sim.consistent_state(x, p=p)
+    sim, x, p = _compiled_state(a.file, a.real, a.at, a.param)
     A, B = sim.linearize(x, p=p)
     names = sim.independent_state_names
     w = max(len(n) for n in names) + 2
@@ -117,18 +124,7 @@ def cmd_linearize(a):
 
 
 def cmd_simulate(a):
-    import numpy as np
-    from .build import compile as gcompile
-    m = load_model(a.file)
-    sim = gcompile(m, real=a.real)
-    x = np.zeros(sim.nx)
-    for k, v in _pairs(a.x0, sim.state_names, "state").items():
-        x[sim.state_names.index(k)] = v
-    p = sim.constants.copy()
-    for k, v in _pairs(a.param, sim.constant_names, "constant").items():
-        p[sim.constant_names.index(k)] = v
-    if sim.mc or sim.mv:
-        x = sim.consistent_state(x, p=p)
+    sim, x, p = _compiled_state(a.file, a.real, a.x0, a.param)
     t, X = sim.simulate(x, a.t_end, a.dt, method=a.method, p=p)
     out = open(a.csv, "w") if a.csv else sys.stdout
     try:
