@@ -5,6 +5,7 @@ verified C simulators.
     gen.generate(model, "out/")            # C sources + CMake project
     sim = gen.compile(model)               # cffi module, numpy in and out
     A, B = sim.linearize(x_op)
+    A, B = gen.linearize_symbolic(model, {q1: L, q2: 0})   # sympy matrices
 """
 __version__ = "0.1.0"
 
@@ -13,6 +14,7 @@ from .errors import (BuildError, ConvergenceError, EomgenError, ModelError,  # n
 from .model import Model  # noqa: E402
 from .render import generate  # noqa: E402
 from .build import compile  # noqa: E402,A001
+from .symbolic import linearize_symbolic  # noqa: E402
 
 __all__ = ["Model", "generate", "compile", "EomgenError", "ModelError", "BuildError",
-           "SolverError", "SingularError", "ConvergenceError", "__version__"]
+           "SolverError", "SingularError", "ConvergenceError", "linearize_symbolic", "__version__"]
