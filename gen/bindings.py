@@ -43,12 +43,24 @@ class Simulator:
         self.constants = np.array(model.p_values, dtype=float)
         self.q_ind, self.q_dep = list(model.q_ind), list(model.q_dep)
         self.u_ind, self.u_dep = list(model.u_ind), list(model.u_dep)
+        # per-call overhead: typed buffers without casts, functions looked up
+        # once, the default constants converted once
+        self._arr_t = f"{self._ctype}[]"
+        self._dt = np.dtype(self.dtype)
+        self._fns = {}
+        self._p_default = np.ascontiguousarray(self.constants, dtype=self.dtype)
 
     # ------------------------------------------------------------ helpers
     def _fn(self, name):
-        return getattr(self._lib, f"{self._p}_{name}")
+        f = self._fns.get(name)
+        if f is None:
+            f = self._fns[name] = getattr(self._lib, f"{self._p}_{name}")
+        return f
 
     def _vec(self, v, n, what, default=None):
+        if (type(v) is np.ndarray and v.dtype is self._dt and v.shape == (n,)
+                and v.flags.c_contiguous):
+            return v                                   # fast path: no copy
         if v is None:
             if default is None:
                 v = np.zeros(n)
@@ -80,7 +92,7 @@ class Simulator:
     def _ptr(self, a):
         if a is None:
             return self._ffi.NULL
-        return self._ffi.cast(f"{self._ctype} *", self._ffi.from_buffer(a))
+        return self._ffi.from_buffer(self._arr_t, a)
 
     def _check(self, status, where, t=None, state=None):
         if status == 0:
@@ -104,6 +116,8 @@ class Simulator:
                   state=None if state is None else np.array(state, dtype=float))
 
     def _params(self, p):
+        if p is None:
+            return self._p_default
         return self._vec(p, self.np, "constants p", default=self.constants)
 
     # ------------------------------------------------------- evaluation
@@ -119,7 +133,7 @@ class Simulator:
         """f(q, u, r, t), shape (nu,): M u' = f + A^T lam."""
         q = self._vec(q, self.nq, "coordinates q")
         u = self._vec(u, self.nu, "speeds u")
-        r = self._vec(r, self.nr, "inputs r")
+        r = None if r is None else self._vec(r, self.nr, "inputs r")
         out = np.empty(self.nu, dtype=self.dtype)
         st = self._fn("eval_forcing")(self._ptr(q), self._ptr(u), self._ptr(r),
                                       self._ptr(self._params(p)), t, self._ptr(out))
@@ -187,7 +201,7 @@ class Simulator:
     def rhs(self, t, x, r=None, p=None):
         """x' (shape (nx,)), usable as solve_ivp's fun: rhs(t, x)."""
         x = self._vec(x, self.nx, "state x")
-        r = self._vec(r, self.nr, "inputs r")
+        r = None if r is None else self._vec(r, self.nr, "inputs r")
         out = np.empty(self.nx, dtype=self.dtype)
         st = self._fn("eval_rhs")(t, self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
                                   self._ptr(out), self._ffi.NULL)
@@ -197,7 +211,7 @@ class Simulator:
     def multipliers(self, t, x, r=None, p=None):
         """Multipliers lam of the velocity constraints, shape (mv,)."""
         x = self._vec(x, self.nx, "state x")
-        r = self._vec(r, self.nr, "inputs r")
+        r = None if r is None else self._vec(r, self.nr, "inputs r")
         out = np.empty(self.nx, dtype=self.dtype)
         lam = np.zeros(max(1, self.mv), dtype=self.dtype)
         st = self._fn("eval_rhs")(t, self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
@@ -237,7 +251,7 @@ class Simulator:
         if not (np.isfinite(t_end) and t_end >= t0):
             raise ValueError(f"t_end must be a number >= t0 = {t0}, got {t_end!r}")
         x0 = self._vec(x0, self.nx, "state x0")
-        r = self._vec(r, self.nr, "inputs r")
+        r = None if r is None else self._vec(r, self.nr, "inputs r")
         rows = self._fn("simulate_rows")(t0, t_end, dt)
         if rows < 0:
             self._check(rows, "simulate_rows")
@@ -269,7 +283,7 @@ class Simulator:
     def step_rk4(self, t, x, h, r=None, p=None, project=True):
         """One RK4 step; returns the new state."""
         x = self._vec(x, self.nx, "state x").copy()
-        r = self._vec(r, self.nr, "inputs r")
+        r = None if r is None else self._vec(r, self.nr, "inputs r")
         st = self._fn("step_rk4")(t, h, self._ptr(r), self._ptr(self._params(p)),
                                   1 if project else 0, self._ptr(x))
         self._check(st, "step_rk4", t, x)
@@ -281,7 +295,7 @@ class Simulator:
         [q_ind, u_ind] (sympy's A_and_B=True partition): A (ns, ns), B (ns, nr).
         The operating point need not be an equilibrium."""
         x = self._vec(x_op, self.nx, "state x_op")
-        r = self._vec(r_op, self.nr, "inputs r_op")
+        r = None if r_op is None else self._vec(r_op, self.nr, "inputs r_op")
         A = np.empty(self.ns * self.ns, dtype=self.dtype)
         B = np.zeros(max(1, self.ns * self.nr), dtype=self.dtype)
         st = self._fn("linearize")(self._ptr(x), self._ptr(r), self._ptr(self._params(p)), t,
