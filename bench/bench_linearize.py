@@ -176,11 +176,11 @@ def main():
             rows.append((case, model.nx, t_sym, t1 - t0, t2 - t1, c_call, py_call))
             sym = f"{t_sym:9.3f}" if t_sym is not None else f"> {args.timeout:.0f}".rjust(9)
             ratio = f"{t_sym / c_call:12.3g}" if t_sym is not None else f"> {args.timeout / c_call:10.3g}"
-            print(f"{case:14s} nx={model.nx:3d}  sympy {sym} s  model {t1 - t0:7.3f} s  "
+            print(f"{case:14s} nx={model.nx:3d}  sympy {sym} s  derive {t1 - t0:7.3f} s  "
                   f"gen+compile {t2 - t1:7.3f} s  C {c_call * 1e6:9.3f} us  "
                   f"py {py_call * 1e6:8.2f} us  sympy/C {ratio}", flush=True)
     print()
-    print("| model | nx | sympy linearize (s) | model extraction (s) | generate + compile (s) "
+    print("| model | nx | sympy linearize (s) | derive + extract (s) | generate + compile (s) "
           "| C linearize (us) | via Python (us) | C calls per sympy call |")
     print("|---|---|---|---|---|---|---|---|")
     for case, nx, ts, tm, tg, tc, tp in rows:
