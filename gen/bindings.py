@@ -76,17 +76,23 @@ class Simulator:
         return a
 
     def _from_dict(self, d, what):
+        kind = what.split()[0]
         names = {"state": self.state_names, "inputs": self.input_names,
-                 "constants": self.constant_names}.get(what.split()[0])
+                 "constants": self.constant_names}.get(kind)
         if names is None:
             raise ValueError(f"{what} cannot be given as a dict")
+        labels = {"state": self.model.state_labels, "inputs": self.model.input_labels,
+                  "constants": self.model.constant_labels}[kind]
         base = {"state": np.zeros(self.nx), "inputs": np.zeros(self.nr),
                 "constants": self.constants.copy()}[what.split()[0]]
         for k, v in d.items():
             k = str(k)
-            if k not in names:
+            if k in names:
+                base[names.index(k)] = float(v)
+            elif k in labels:                  # the sympy spelling works too
+                base[labels.index(k)] = float(v)
+            else:
                 raise ValueError(f"unknown name {k!r} in {what}; known: {names}")
-            base[names.index(k)] = float(v)
         return base
 
     def _ptr(self, a):

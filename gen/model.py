@@ -35,7 +35,7 @@ from sympy.physics import mechanics as me
 
 from .errors import ModelError
 
-__all__ = ["Model", "validate_name"]
+__all__ = ["Model", "validate_name", "c_name", "c_names"]
 
 # C keywords (C99/C11/C23) and the C library / libm names a prefix must not
 # shadow (a prefix is followed by "_" in every emitted name, but the prefix
@@ -90,6 +90,42 @@ def _as_matrix(x, what):
     return m
 
 
+def c_name(label: str) -> str:
+    """An identifier for a sympy name: letters, digits and '_' kept, a prime
+    becomes '_p', other ASCII punctuation '_', other characters 'u' + their
+    hex code point; a leading digit gets a leading '_'."""
+    out = []
+    for ch in label:
+        if ch.isascii() and (ch.isalnum() or ch == "_"):
+            out.append(ch)
+        elif ch == "'":
+            out.append("_p")
+        elif ch.isascii():
+            if not out or out[-1] != "_":       # one '_' per run of punctuation
+                out.append("_")
+        else:
+            out.append(f"u{ord(ch):04x}")
+    name = "".join(out).strip("_") or "s"
+    if name[0].isdigit():
+        name = "_" + name
+    return name
+
+
+def c_names(labels):
+    """c_name of each label, made unique (suffix _2, _3, ...) in order."""
+    seen = set()
+    out = []
+    for label in labels:
+        base = c_name(label)
+        name, k = base, 2
+        while name in seen:
+            name = f"{base}_{k}"
+            k += 1
+        seen.add(name)
+        out.append(name)
+    return out
+
+
 def _sym_name(s) -> str:
     """A readable name for a symbol or function of time: 'q1' for q1(t)."""
     if isinstance(s, sm.Function) or (isinstance(s, sm.Expr) and s.is_Function):
@@ -133,9 +169,15 @@ class Model:
     fc: sm.Matrix
     qdot: sm.Matrix | None           # explicit q' (when Kqd is diagonal), else None
     energy: sm.Expr | None = None    # total energy, if known
+    # names as identifiers ([A-Za-z_][A-Za-z0-9_]*, unique): what generated
+    # files, the CLI and the Python API use
     state_names: list = field(default_factory=list)
     input_names: list = field(default_factory=list)
     constant_names: list = field(default_factory=list)
+    # the names as sympy prints them (may hold any character)
+    state_labels: list = field(default_factory=list)
+    input_labels: list = field(default_factory=list)
+    constant_labels: list = field(default_factory=list)
 
     # ------------------------------------------------------------------ sizes
     @property
@@ -450,13 +492,20 @@ class Model:
         else:
             a_ = sm.zeros(0, 1)
 
-        state_names = [_sym_name(s) for s in q] + list(speed_names)
-        input_names = [_sym_name(s) for s in inputs]
-        constant_names = [str(s) for s in constants]
-        all_names = state_names + input_names + constant_names
-        dup = sorted({n_ for n_ in all_names if all_names.count(n_) > 1})
+        state_labels = [_sym_name(s) for s in q] + list(speed_names)
+        input_labels = [_sym_name(s) for s in inputs]
+        constant_labels = [str(s) for s in constants]
+        all_labels = state_labels + input_labels + constant_labels
+        dup = sorted({n_ for n_ in all_labels if all_labels.count(n_) > 1})
         if dup:
-            raise ModelError(f"names used twice among states, inputs and constants: {dup}")
+            raise ModelError(f"names used twice among states, inputs and constants: {dup}; "
+                             "give each coordinate, speed, input and constant its own name")
+        # the names generated files use (CSV columns, --x0 NAME=..., C string
+        # literals and comments): plain identifiers, unique after sanitizing
+        safe = c_names(all_labels)
+        ns_, nr_ = len(state_labels), len(input_labels)
+        state_names, input_names = safe[:ns_], safe[ns_:ns_ + nr_]
+        constant_names = safe[ns_ + nr_:]
 
         model = cls(
             name=name, method=method, q_orig=list(q), u_orig=list(u), r_orig=inputs,
@@ -464,7 +513,8 @@ class Model:
             q_ind=list(q_ind), q_dep=list(q_dep), u_ind=list(u_ind), u_dep=list(u_dep),
             Kqd=Kqd_, Ku=Ku_, kf=kf_, M=M_, f=f_, A=A_, b=b_, a=a_, fc=fc_, qdot=qdot,
             energy=E_, state_names=state_names, input_names=input_names,
-            constant_names=constant_names)
+            constant_names=constant_names, state_labels=state_labels,
+            input_labels=input_labels, constant_labels=constant_labels)
         model._check_partition()
         return model
 
@@ -540,7 +590,8 @@ def _check_expressions(mat, what, allowed):
         for fn in e.atoms(sm.Function):
             if isinstance(fn, sm.core.function.AppliedUndef):
                 raise ModelError(
-                    f"the {what} contain {fn}, a function of time that is not a coordinate, "
+                    f"the {what} contain {fn.func}(t), a function of time that is not a "
+                    "coordinate, "
                     "speed or declared input: list it in inputs=[...]")
             if not isinstance(fn, _PRINTABLE_FUNCS):
                 raise ModelError(

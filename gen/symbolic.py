@@ -27,10 +27,10 @@ def _key_index(model, key):
     ('r', i)."""
     names = model.state_names
     if isinstance(key, str):
-        if key in names:
-            return "x", names.index(key)
-        if key in model.input_names:
-            return "r", model.input_names.index(key)
+        for pool, where in ((names, "x"), (model.state_labels, "x"),
+                            (model.input_names, "r"), (model.input_labels, "r")):
+            if key in pool:
+                return where, pool.index(key)
         raise ModelError(f"operating point names {key!r}, which is not a state or input of "
                          f"'{model.name}'; states: {names}, inputs: {model.input_names}")
     pool = list(model.q_orig) + list(model.u_orig)
