@@ -15,6 +15,7 @@ from .model import Model  # noqa: E402
 from .render import generate  # noqa: E402
 from .build import compile  # noqa: E402,A001
 from .symbolic import linearize_symbolic  # noqa: E402
+from .verify import VerifyReport, verify  # noqa: E402
 
 __all__ = ["Model", "generate", "compile", "EomgenError", "ModelError", "BuildError",
-           "SolverError", "SingularError", "ConvergenceError", "linearize_symbolic", "__version__"]
+           "SolverError", "SingularError", "ConvergenceError", "linearize_symbolic", "verify", "VerifyReport", "__version__"]
