@@ -21,12 +21,18 @@ from pathlib import Path
 
 from . import __version__
 from .errors import BuildError, ModelError
-from .render import RUNTIME_SOURCES, cdef_text, render_files
+from .eigen import eigen_version, find_eigen
+from .batch import batch_cdef, batch_source
+from .render import EIGEN_SOURCES, RUNTIME_SOURCES, cdef_text, render_files
 
 __all__ = ["compile", "cache_dir", "build_cffi"]
 
 C_FLAGS = ["-std=c99", "-O2", "-fno-strict-aliasing"]
 STRICT_FLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"]
+# the C++/Eigen backend (Eigen's own headers are -isystem: their warnings are not ours)
+CXX_FLAGS = ["-std=c++17", "-O2", "-fno-strict-aliasing"]
+CXX_STRICT_FLAGS = ["-std=c++17", "-Wall", "-Wextra", "-Werror", "-pedantic"]
+BACKENDS = ("c", "eigen")
 
 
 def cache_dir() -> Path:
@@ -42,13 +48,18 @@ def _compiler():
     return cc.split()[0]
 
 
-def _compile_log(src_dir: Path, sources, extra_flags=()):
+def _cxx_compiler():
+    cxx = os.environ.get("CXX") or sysconfig.get_config_var("CXX") or "g++"
+    return cxx.split()[0]
+
+
+def _compile_log(src_dir: Path, sources, extra_flags=(), compiler=None, flags=STRICT_FLAGS):
     """Compile the sources alone (no Python) to capture a readable log."""
     logs = []
     ok = True
     for s in sources:
-        cmd = [_compiler(), *STRICT_FLAGS, *extra_flags, "-c", str(src_dir / s), "-o", os.devnull,
-               "-I", str(src_dir)]
+        cmd = [compiler or _compiler(), *flags, *extra_flags, "-c", str(src_dir / s), "-o",
+               os.devnull, "-I", str(src_dir)]
         proc = subprocess.run(cmd, capture_output=True, text=True)
         if proc.returncode != 0 or proc.stderr.strip():
             logs.append("$ " + " ".join(cmd) + "\n" + proc.stdout + proc.stderr)
@@ -56,23 +67,43 @@ def _compile_log(src_dir: Path, sources, extra_flags=()):
     return ok, "\n".join(logs)
 
 
-def build_cffi(model, real="double", verbose=False, timings=None, files=None):
+def eigen_include_dir():
+    """The Eigen 3.4 include directory the eigen backend compiles against
+    (BuildError when there is none)."""
+    d, why = find_eigen()
+    if d is None:
+        raise BuildError(f"the eigen backend needs Eigen 3.4: {why}")
+    return d
+
+
+def build_cffi(model, real="double", verbose=False, timings=None, files=None, backend="c"):
     """Generate and build; return the path of the extension module and its
     module name."""
+    if backend not in BACKENDS:
+        raise ModelError(f"unknown backend {backend!r}: choose one of {list(BACKENDS)}")
     t0 = time.perf_counter()
+    eigen_dir = eigen_include_dir() if backend == "eigen" else None
     if files is None:
-        files = render_files(model, real=real, timings=timings)
+        files = render_files(model, real=real, backend=backend, timings=timings)
     t1 = time.perf_counter()
-    cdef = cdef_text(model, real=real)
+    cdef = cdef_text(model, real=real) + batch_cdef(model.name)
+    # cffi's wrapper: the model header and the batch loops over its public API
+    wrapper = (f'#include "{model.name}.h"\n'
+               + batch_source(model.name, model.nu, model.nx, model.ns, model.nr))
     h = hashlib.sha256()
     h.update(__version__.encode())
     h.update(sys.version.encode())
     h.update(" ".join(C_FLAGS).encode())
+    if backend != "c":
+        # the backend, its flags and the Eigen it compiles against
+        h.update(f"\0backend={backend}\0{' '.join(CXX_FLAGS)}\0eigen={eigen_dir}:"
+                 f"{eigen_version(eigen_dir)}\0".encode())
     h.update(cdef.encode())
     for k in sorted(files):
         h.update(k.encode() + b"\0" + files[k].encode() + b"\0")
     key = h.hexdigest()[:16]
-    modname = f"_eomgen_{model.name}_{key}"
+    modname = (f"_eomgen_{model.name}_{key}" if backend == "c"
+               else f"_eomgen_{model.name}_{backend}_{key}")
     root = cache_dir()
     final = root / modname
     so = _find_module(final, modname)
@@ -95,16 +126,30 @@ def build_cffi(model, real="double", verbose=False, timings=None, files=None):
             ffi.cdef(cdef)
         except Exception as e:  # cffi's CDefError and parse errors
             raise BuildError(f"internal error: the cffi declarations do not parse: {e}", cdef) from e
-        sources = [str(src / f"{model.name}.c")] + [str(src / s) for s in RUNTIME_SOURCES]
-        ffi.set_source(modname, f'#include "{model.name}.h"\n', sources=sources,
-                       include_dirs=[str(src)], extra_compile_args=list(C_FLAGS),
-                       libraries=["m"])
+        if backend == "c":
+            own = [f"{model.name}.c"] + RUNTIME_SOURCES
+            ffi.set_source(modname, wrapper,
+                           sources=[str(src / s) for s in own],
+                           include_dirs=[str(src)], extra_compile_args=list(C_FLAGS),
+                           libraries=["m"])
+        else:
+            # all C++: the extern "C" layer over the typed API, and cffi's wrapper
+            own = [s.format(name=model.name) for s in EIGEN_SOURCES]
+            ffi.set_source(modname, wrapper,
+                           sources=[str(src / s) for s in own], source_extension=".cpp",
+                           include_dirs=[str(src)],
+                           extra_compile_args=[*CXX_FLAGS, "-isystem", str(eigen_dir)],
+                           libraries=["stdc++", "m"])
         build = tmp / "build"
         build.mkdir()
         try:
             so_path = ffi.compile(tmpdir=str(build), verbose=verbose)
         except Exception as e:
-            ok, log = _compile_log(src, [f"{model.name}.c"] + RUNTIME_SOURCES)
+            if backend == "c":
+                ok, log = _compile_log(src, own)
+            else:
+                ok, log = _compile_log(src, own, ["-isystem", str(eigen_dir)],
+                                       compiler=_cxx_compiler(), flags=CXX_STRICT_FLAGS)
             raise BuildError(f"compiling the model '{model.name}' failed ({type(e).__name__}: {e})",
                              log or str(e)) from None
         dest_tmp = tmp / modname
@@ -149,13 +194,17 @@ def _load(so: Path, modname: str):
 
 
 def compile(model, backend="c", real="double", verbose=False):  # noqa: A001
-    """Generate, build through cffi (cached) and return a Simulator."""
+    """Generate, build through cffi (cached) and return a Simulator.
+    backend="c" (C99 model + C runtime) or "eigen" (C++17 over Eigen 3.4,
+    through its extern "C" layer: the same API, the same Simulator)."""
     from .bindings import Simulator
-    if backend != "c":
-        raise ModelError(f"unknown backend {backend!r}: this version builds 'c'")
+    if backend not in BACKENDS:
+        raise ModelError(f"unknown backend {backend!r}: choose one of {list(BACKENDS)}")
     timings = {}
-    so, modname = build_cffi(model, real=real, verbose=verbose, timings=timings)
+    so, modname = build_cffi(model, real=real, verbose=verbose, timings=timings, backend=backend)
     mod = _load(so, modname)
     sim = Simulator(model, mod, real=real)
     sim.build_info = {"module": str(so), **timings}
+    if backend != "c":
+        sim.build_info["backend"] = backend
     return sim

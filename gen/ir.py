@@ -234,6 +234,87 @@ def _toposort(assign, known):
 
 
 # --------------------------------------------------------------------------
+def mass_structure(model):
+    """(symmetric, nonzero): whether the mass matrix is symmetric (checked
+    numerically at two random points: exact symmetry of the expressions is
+    not needed, only of the values) and its structural nonzero pattern.
+    Cached on the model."""
+    cached = getattr(model, "_mass_structure", None)
+    if cached is not None:
+        return cached
+    import random
+    M = model.M
+    n = M.shape[0]
+    nonzero = [[M[i, j] != 0 for j in range(n)] for i in range(n)]
+    symmetric = all(nonzero[i][j] == nonzero[j][i] for i in range(n) for j in range(i))
+    rnd = random.Random(12345)
+    syms = sorted(M.free_symbols, key=str)
+    for _ in range(2 if symmetric else 0):
+        vals = {s: sm.Float(rnd.uniform(0.3, 1.3), 30) for s in syms}
+        Mv = M.xreplace(vals)
+        for i in range(n):
+            for j in range(i):
+                a, b = Mv[i, j], Mv[j, i]
+                try:
+                    a, b = complex(a.evalf(30)), complex(b.evalf(30))
+                except (TypeError, ValueError):
+                    symmetric = False
+                    break
+                if abs(a - b) > 1e-20 + 1e-12 * max(abs(a), abs(b)):
+                    symmetric = False
+                    break
+            if not symmetric:
+                break
+    model._mass_structure = (symmetric, nonzero)
+    return model._mass_structure
+
+
+def _mass_for_kernels(model):
+    """M with its upper triangle taken from the lower one when M is
+    symmetric, so each pair is computed once (CSE merges the copies)."""
+    symmetric, _ = mass_structure(model)
+    if not symmetric:
+        return model.M
+    n = model.M.shape[0]
+    return sm.Matrix(n, n, lambda i, j: model.M[max(i, j), min(i, j)])
+
+
+def collect_constants(mat, variables, cache=None):
+    """Rewrite every sum c1*d + c2*d + ... as (c1 + c2 + ...)*d, where the
+    c's hold no variable (constants and numbers only): Kane's forcing and
+    mass matrix are full of sums of masses times one state term, which CSE
+    cannot see as shared. Linear in the size of the expression graph."""
+    from collections import defaultdict
+    variables = frozenset(variables)
+    cache = {} if cache is None else cache
+
+    def walk(e):
+        if e.is_Atom:
+            return e
+        hit = cache.get(e)
+        if hit is not None:
+            return hit
+        args = [walk(a) for a in e.args]
+        if e.is_Add:
+            groups = defaultdict(list)
+            order = []
+            for term in args:
+                c, d = term.as_independent(*variables, as_Add=False)
+                if d not in groups:
+                    order.append(d)
+                groups[d].append(c)
+            out = (sm.Add(*[sm.Add(*groups[d]) * d for d in order]) if len(order) < len(args)
+                   else e.func(*args))
+        elif args != list(e.args):
+            out = e.func(*args)
+        else:
+            out = e
+        cache[e] = out
+        return out
+
+    return sm.Matrix(mat.shape[0], mat.shape[1], [walk(x) for x in mat])
+
+
 def build_kernels(model):
     """Every kernel a model's C code needs, as plain data."""
     m = model
@@ -250,16 +331,20 @@ def build_kernels(model):
     Aud = Arg("ud", tuple(Ud))
     Alam = Arg("lam", tuple(Lam))
 
+    variables = set(m.q) | set(m.u) | set(m.r) | {m.t}
+    cache = {}
+    Msym = collect_constants(_mass_for_kernels(m), variables, cache)
+    F = collect_constants(m.f, variables, cache)
     kernels = {}
-    kernels["mass_matrix"] = make_kernel("mass_matrix", [Aq, Ap, At], [("M", m.M)])
-    kernels["forcing"] = make_kernel("forcing", [Aq, Au, Ar, Ap, At], [("f", m.f)])
+    kernels["mass_matrix"] = make_kernel("mass_matrix", [Aq, Ap, At], [("M", Msym)])
+    kernels["forcing"] = make_kernel("forcing", [Aq, Au, Ar, Ap, At], [("f", F)])
     if m.qdot is not None:
         kin_out = [("qdot", m.qdot)]
     else:
         kin_out = [("Kqd", m.Kqd), ("kr", -(m.Ku * U + m.kf))]
     kernels["kinematics"] = make_kernel("kinematics", [Aq, Au, Ap, At], kin_out)
     # everything the right-hand side needs, jointly CSE'd
-    rhs_out = list(kin_out) + [("M", m.M), ("f", m.f)]
+    rhs_out = list(kin_out) + [("M", Msym), ("f", F)]
     if m.mv:
         rhs_out += [("A", m.A), ("a", m.a)]
     kernels["rhs_terms"] = make_kernel("rhs_terms", [Aq, Au, Ar, Ap, At], rhs_out)
@@ -277,10 +362,10 @@ def build_kernels(model):
 
     # linearization pieces (sympy's Linearizer f_0..f_4, f_c, f_v, f_a)
     kin_res = m.Kqd * sm.Matrix(Qd) + m.Ku * U + m.kf
-    R = m.M * sm.Matrix(Ud) - m.f
+    R = Msym * sm.Matrix(Ud) - F
     if m.mv:
         R = R - m.A.T * sm.Matrix(Lam)
-    plain = [("Kqd", m.Kqd), ("Ku", m.Ku), ("M", m.M)]
+    plain = [("Kqd", m.Kqd), ("Ku", m.Ku), ("M", Msym)]
     jacs = [("Kq", kin_res, m.q), ("Rq", R, m.q), ("Ru", R, m.u)]
     if m.nr:
         jacs.append(("Rr", R, m.r))

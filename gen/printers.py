@@ -13,7 +13,7 @@ from sympy.printing.c import C99CodePrinter
 
 from .errors import ModelError
 
-__all__ = ["ModelCPrinter", "print_kernel_body"]
+__all__ = ["ModelCPrinter", "ModelCxxPrinter", "print_kernel_body"]
 
 
 class ModelCPrinter(C99CodePrinter):
@@ -22,7 +22,9 @@ class ModelCPrinter(C99CodePrinter):
     def __init__(self, symbol_map, real_type="double"):
         if real_type not in ("double", "float"):
             raise ModelError(f"real type must be 'double' or 'float', got {real_type!r}")
-        settings = {"strict": True,
+        # math_macros off: M_LN2, M_SQRT2, ... are not C99 and are double
+        # constants (a silent promotion in float code); log(2) prints as log(2)
+        settings = {"strict": True, "math_macros": {},
                     "type_aliases": {real: float32 if real_type == "float" else float64}}
         super().__init__(settings)
         self.symbol_map = symbol_map
@@ -92,3 +94,39 @@ def print_kernel_body(kernel, printer, indent="    "):
         for k, e in enumerate(o.exprs):
             lines.append(f"{indent}out_{o.name}[{k}] = {printer.doprint(e)};")
     return lines
+
+
+class ModelCxxPrinter(ModelCPrinter):
+    """C++17 printer for the Eigen backend: the same symbol map and the same
+    strictness as ModelCPrinter, but every function is ``std::``-qualified
+    (overloaded on the argument type) and every literal is a ``Scalar(...)``
+    so one kernel body serves any scalar type given as a template
+    parameter (double, float)."""
+
+    _ns = "std::"
+
+    def __init__(self, symbol_map, scalar="Scalar"):
+        super().__init__(symbol_map, "double")
+        # the declared type of temporaries (print_kernel_body reads it)
+        self.real_type = scalar
+
+    def _lit(self, text):
+        return f"{self.real_type}({text})"
+
+    def _suffix(self):
+        return ""
+
+    def _print_Float(self, expr):
+        return self._lit(super()._print_Float(expr))
+
+    def _print_Rational(self, expr):
+        return f"{self._lit(str(int(expr.p)))}/{self._lit(str(int(expr.q)))}"
+
+    def _print_Infinity(self, expr):
+        return f"std::numeric_limits<{self.real_type}>::infinity()"
+
+    def _print_NegativeInfinity(self, expr):
+        return f"(-std::numeric_limits<{self.real_type}>::infinity())"
+
+    def _print_NaN(self, expr):
+        return f"std::numeric_limits<{self.real_type}>::quiet_NaN()"

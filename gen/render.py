@@ -14,11 +14,12 @@ import jinja2
 
 from . import __version__
 from .errors import ModelError
-from .ir import build_kernels
-from .printers import ModelCPrinter, print_kernel_body
+from .ir import build_kernels, mass_structure
+from .solvers import ldlt_solve_c
+from .printers import ModelCPrinter, ModelCxxPrinter, print_kernel_body
 from .resources import csrc_dir, templates_dir
 
-__all__ = ["generate", "api_functions", "cdef_text", "RUNTIME_SOURCES", "STATUSES"]
+__all__ = ["generate", "api_functions", "cdef_text", "RUNTIME_SOURCES", "STATUSES", "BACKENDS"]
 
 RUNTIME_SOURCES = ["gen_rt_status.c", "gen_rt_linalg.c", "gen_rt_dynamics.c",
                    "gen_rt_project.c", "gen_rt_integrate.c", "gen_rt_linearize.c"]
@@ -44,7 +45,37 @@ C_TEMPLATES = [
     ("{name}.c", "c/model.c.j2"),
     ("main.c", "c/main.c.j2"),
     ("CMakeLists.txt", "c/CMakeLists.txt.j2"),
+    ("arm-none-eabi.cmake", "c/arm-none-eabi.cmake.j2"),   # Cortex-M4F toolchain file
 ]
+
+# The C++17/Eigen backend: the typed API (header-only templates over the
+# scalar type), an extern "C" layer with the C backend's API (the same
+# header, rendered from the same template and the same api_functions list),
+# and the same standalone simulator main.c linked against that layer.
+EIGEN_TEMPLATES = [
+    ("{name}.h", "c/model.h.j2"),
+    ("{name}.hpp", "eigen/model.hpp.j2"),
+    ("{name}.cpp", "eigen/model.cpp.j2"),
+    ("main.c", "c/main.c.j2"),
+    ("CMakeLists.txt", "eigen/CMakeLists.txt.j2"),
+]
+# the C++ sources of the extern "C" library (compiled by gen.build)
+EIGEN_SOURCES = ["{name}.cpp"]
+
+BACKENDS = {"c": C_TEMPLATES, "eigen": EIGEN_TEMPLATES}
+
+# the model prefix is also the C++ namespace of the Eigen backend
+CXX_RESERVED = frozenset("""
+alignas alignof and and_eq asm auto bitand bitor bool break case catch char char8_t
+char16_t char32_t class compl concept const consteval constexpr constinit const_cast
+continue co_await co_return co_yield decltype default delete do double dynamic_cast
+else enum explicit export extern false float for friend goto if inline int long
+mutable namespace new noexcept not not_eq nullptr operator or or_eq private
+protected public register reinterpret_cast requires return short signed sizeof
+static static_assert static_cast struct switch template this thread_local throw
+true try typedef typeid typename union unsigned using virtual void volatile
+wchar_t while xor xor_eq std Eigen eomgen detail
+""".split())
 
 
 def api_functions(p):
@@ -117,8 +148,8 @@ def cdef_text(model, real="double"):
     return "\n".join(lines) + "\n"
 
 
-def _kernel_context(kernels, printer, p):
-    R = f"{p}_real"
+def _kernel_context(kernels, printer, p, R=None):
+    R = R or f"{p}_real"
     out = []
     docs = {
         "mass_matrix": "M(q)",
@@ -183,14 +214,17 @@ def _fmt_real(v, real):
     return s + ("F" if real == "float" else "")
 
 
-def build_context(model, real="double", kernels=None, timings=None):
+def build_context(model, real="double", kernels=None, timings=None, backend="c"):
     if real not in ("double", "float"):
         raise ModelError(f"real must be 'double' or 'float', got {real!r}")
     t0 = time.perf_counter()
     if kernels is None:
         kernels = build_kernels(model)
     t1 = time.perf_counter()
-    printer = ModelCPrinter(_symbol_map(model, kernels), real)
+    if backend == "eigen":
+        printer = ModelCxxPrinter(_symbol_map(model, kernels), "Scalar")
+    else:
+        printer = ModelCPrinter(_symbol_map(model, kernels), real)
     p = model.name
     m = model
     mx = lambda n: max(1, n)  # noqa: E731  C99 has no zero-length arrays
@@ -212,7 +246,8 @@ def build_context(model, real="double", kernels=None, timings=None):
                       + 2 * nq * ns + (nu + mv) ** 2 + (nu + mv) * (ns + nr) + nu * ns
                       + nu * niq + mv * niq + nq * nq + 8)
     sz["lin_iwork"] = nq + nu + mc + mv + 1
-    kctx = _kernel_context(kernels, printer, p)
+    kctx = _kernel_context(kernels, printer, p,
+                           "Scalar" if backend == "eigen" else None)
     t2 = time.perf_counter()
     lin_names = {"Kqd": "Kqd", "Ku": "Ku", "M": "M", "A": "A", "Kq": "Kq", "Rq": "Rq",
                  "Ru": "Ru", "Rr": "Rr", "Sq": "Sq", "Su": "Su", "Vq": "Vq", "Jc": "Jc"}
@@ -256,11 +291,56 @@ def build_context(model, real="double", kernels=None, timings=None):
         "ind_names": m.independent_state_names,
         "runtime_sources": RUNTIME_SOURCES,
         "p_values_c": [_fmt_real(v, real) for v in m.p_values],
+        "mass_solve": _mass_solve_code(m, real),
     }
+    if backend == "eigen":
+        ctx.update(_eigen_context(model, kernels))
     if timings is not None:
         timings["kernels"] = t1 - t0
         timings["printing"] = t2 - t1
     return ctx
+
+
+def _mass_solve_code(model, real):
+    """The unrolled LDL^T solve of an unconstrained model with a symmetric
+    mass matrix ("" otherwise: constrained models use the runtime's
+    pivoted LU on the augmented systems)."""
+    if model.mv:
+        return ""
+    symmetric, nonzero = mass_structure(model)
+    if not symmetric:
+        return ""
+    return ldlt_solve_c(model.name, model.nu, nonzero, f"{model.name}_real")
+
+
+# shapes of the linearization blocks (names of the lin_terms kernel outputs)
+_LIN_SHAPES = {"Kqd": ("NQ", "NQ"), "Ku": ("NQ", "NU"), "M": ("NU", "NU"), "A": ("MV", "NU"),
+               "Kq": ("NQ", "NQ"), "Rq": ("NU", "NQ"), "Ru": ("NU", "NU"), "Rr": ("NU", "NR"),
+               "Sq": ("MV", "NQ"), "Su": ("MV", "NU"), "Vq": ("MV", "NQ"), "Jc": ("MC", "NQ")}
+# the blocks the C backend checks for NaN/inf before the elimination
+_LIN_CHECKED = ("Kq", "Rq", "Ru", "Sq", "Su", "Jc", "Vq", "Rr")
+
+
+def _eigen_context(model, kernels):
+    """What the C++ templates need beyond the C context."""
+    m = model
+    if m.name in CXX_RESERVED:
+        raise ModelError(f"model name {m.name!r} is a C++ keyword or reserved namespace; the "
+                         f"Eigen backend uses the name as a namespace: choose another "
+                         f"(for example 'my_{m.name}')")
+    return {
+        "nqi": m.nq - m.mc, "nui": m.nu - m.mv,
+        "p_default_cxx": ", ".join(f"Scalar({_fmt_real(v, 'double')})" for v in m.p_values)
+                         or "Scalar(0)",
+        "lin_call_cxx": ", ".join(f"{o.name}.data()" for o in kernels["lin_terms"].outputs),
+        "lin_decls": [(o.name,) + _LIN_SHAPES[o.name]
+                      for o in kernels["lin_terms"].outputs if o.name not in ("M", "A")],
+        "lin_checks": [(o.name,) + _LIN_SHAPES[o.name]
+                       for o in kernels["lin_terms"].outputs if o.name in _LIN_CHECKED],
+        "cxx_sources": [f.format(name=m.name) for f in EIGEN_SOURCES],
+        # the C API by verb, so the extern "C" layer prints its signatures from api_functions
+        "fns": {fn["name"][len(m.name) + 1:]: fn for fn in _fn_entries(m.name)},
+    }
 
 
 def _env():
@@ -272,8 +352,10 @@ def _env():
 
 def render_files(model, real="double", backend="c", timings=None):
     """{file name: text} for a model (nothing written)."""
-    if backend != "c":
-        raise ModelError(f"unknown backend {backend!r}: this version generates 'c'")
+    if backend not in BACKENDS:
+        raise ModelError(f"unknown backend {backend!r}: choose one of {sorted(BACKENDS)}")
+    if backend == "eigen":
+        return _render_eigen(model, real, timings)
     ctx = build_context(model, real=real, timings=timings)
     env = _env()
     files = {}
@@ -287,6 +369,17 @@ def render_files(model, real="double", backend="c", timings=None):
         "#ifndef GEN_RT_CONFIG_H\n#define GEN_RT_CONFIG_H\n"
         + ("#define GEN_RT_REAL_FLOAT\n" if real == "float" else "")
         + "#endif\n")
+    if timings is not None:
+        timings["templates"] = time.perf_counter() - t0
+    return files
+
+
+def _render_eigen(model, real, timings):
+    ctx = build_context(model, real=real, timings=timings, backend="eigen")
+    env = _env()
+    t0 = time.perf_counter()
+    files = {fname.format(name=model.name): env.get_template(tname).render(**ctx)
+             for fname, tname in EIGEN_TEMPLATES}
     if timings is not None:
         timings["templates"] = time.perf_counter() - t0
     return files
@@ -326,7 +419,9 @@ def write_atomic(files, out_dir):
 
 
 def generate(model, out_dir, backend="c", real="double", timings=None):
-    """Write the model's C sources, the runtime, a CMake project and a
-    standalone simulator into out_dir; return the paths written."""
+    """Write the model's sources, a CMake project and a standalone simulator
+    into out_dir; return the paths written. backend="c": C99 model and the C
+    runtime; backend="eigen": a C++17 header over Eigen 3.4 (scalar type a
+    template parameter) plus an extern "C" layer with the C backend's API."""
     files = render_files(model, real=real, backend=backend, timings=timings)
     return write_atomic(files, out_dir)
