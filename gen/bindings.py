@@ -49,6 +49,9 @@ class Simulator:
         self._dt = np.dtype(self.dtype)
         self._fns = {}
         self._p_default = np.ascontiguousarray(self.constants, dtype=self.dtype)
+        self._p_default_c = self._ffi.from_buffer(self._arr_t, self._p_default)
+        self._xshape = (self.nx,)
+        self._rhs_c = self._fn("eval_rhs")
 
     # ------------------------------------------------------------ helpers
     def _fn(self, name):
@@ -204,9 +207,33 @@ class Simulator:
         self._check(st, "eval_energy", t, x)
         return float(out[0])
 
-    def rhs(self, t, x, r=None, p=None):
-        """x' (shape (nx,)), usable as solve_ivp's fun: rhs(t, x)."""
+    def rhs(self, t, x, r=None, p=None, out=None):
+        """x' (shape (nx,)), usable as solve_ivp's fun: rhs(t, x). An
+        (N, nx) array of states gives an (N, nx) array in one C call
+        (see rhs_batch). out: a preallocated C-contiguous result array."""
+        if (r is None and p is None and out is None and type(x) is np.ndarray
+                and x.dtype is self._dt and x.shape == self._xshape and x.flags.c_contiguous):
+            # the common call (solve_ivp): no conversions, no lookups
+            res = np.empty(self.nx, dtype=self._dt)
+            fb = self._ffi.from_buffer
+            st = self._rhs_c(t, fb(self._arr_t, x), self._ffi.NULL, self._p_default_c,
+                             fb(self._arr_t, res), self._ffi.NULL)
+            if st:
+                self._check(st, "eval_rhs", t, x)
+            return res
+        if np.ndim(x) == 2:
+            return self.rhs_batch(t, x, r, p, out=out)
         x = self._vec(x, self.nx, "state x")
+        if out is not None:
+            if (type(out) is not np.ndarray or out.dtype is not self._dt
+                    or out.shape != (self.nx,) or not out.flags.c_contiguous):
+                raise ValueError(f"out must be a C-contiguous {self.dtype.__name__} array of "
+                                 f"shape ({self.nx},)")
+            r = None if r is None else self._vec(r, self.nr, "inputs r")
+            st = self._fn("eval_rhs")(t, self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
+                                      self._ptr(out), self._ffi.NULL)
+            self._check(st, "eval_rhs", t, x)
+            return out
         r = None if r is None else self._vec(r, self.nr, "inputs r")
         out = np.empty(self.nx, dtype=self.dtype)
         st = self._fn("eval_rhs")(t, self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
@@ -309,6 +336,125 @@ class Simulator:
         self._check(st, "linearize", t, x)
         return (A.reshape(self.ns, self.ns),
                 B[:self.ns * self.nr].reshape(self.ns, self.nr).copy())
+
+    # ------------------------------------------------------------ batches
+    def _rows(self, a, n, width, what, allow_none=True):
+        """None, one vector (stride 0) or an (n, width) array -> (array, stride)."""
+        if a is None:
+            if allow_none:
+                return None, 0
+            a = np.zeros(width)
+        a = np.ascontiguousarray(a, dtype=self.dtype)
+        if a.ndim == 1 and a.shape == (width,):
+            return a, 0
+        if a.shape == (n, width):
+            return a, width
+        raise ValueError(f"{what} must have shape ({width},) or ({n}, {width}), got {a.shape}")
+
+    def _batch_fn(self, name):
+        f = getattr(self._lib, f"{self._p}_{name}", None)
+        if f is None:
+            raise NotImplementedError(f"this compiled module has no {name}; rebuild it")
+        return f
+
+    def _batch_check(self, idx, status, where, X, t=None):
+        if idx >= 0:
+            try:
+                self._check(status, where, t, X[idx])
+            except (ValueError, SolverError) as e:
+                raise type(e)(f"state {idx} of {len(X)}: {e}") if isinstance(e, ValueError) \
+                    else type(e)(f"state {idx} of {len(X)}: {e}", status=e.status,
+                                 status_name=e.status_name, time=e.time, state=e.state) from None
+
+    def rhs_batch(self, t, X, r=None, p=None, out=None):
+        """x' for N states in one C call: X (N, nx) -> (N, nx). t a scalar
+        or (N,); r, p one vector for all or one row per state."""
+        X = np.ascontiguousarray(X, dtype=self.dtype)
+        if X.ndim != 2 or X.shape[1] != self.nx:
+            raise ValueError(f"states must have shape (N, {self.nx}), got {X.shape}")
+        n = X.shape[0]
+        if np.ndim(t) == 0:
+            T, ts = np.array([t], dtype=self.dtype), 0
+        else:
+            T, ts = np.ascontiguousarray(t, dtype=self.dtype), 1
+            if T.shape != (n,):
+                raise ValueError(f"t must be a number or have shape ({n},), got {T.shape}")
+        R, rs = self._rows(r, n, self.nr, "inputs r")
+        P, ps = self._rows(p, n, self.np, "constants p")
+        if out is None:
+            out = np.empty((n, self.nx), dtype=self.dtype)
+        elif out.shape != (n, self.nx) or out.dtype is not self._dt or not out.flags.c_contiguous:
+            raise ValueError(f"out must be a C-contiguous array of shape ({n}, {self.nx})")
+        st = self._ffi.new("int *")
+        idx = self._batch_fn("rhs_batch")(n, self._ptr(T), ts, self._ptr(X), self._ptr(R), rs,
+                                           self._ptr(P), ps, self._ptr(out), st)
+        self._batch_check(idx, st[0], "eval_rhs", X)
+        return out
+
+    def mass_matrix_batch(self, Q, p=None):
+        """M for N configurations: Q (N, nq) (or (N, nx) states) -> (N, nu, nu)."""
+        Q = np.ascontiguousarray(Q, dtype=self.dtype)
+        if Q.ndim != 2 or Q.shape[1] not in (self.nq, self.nx):
+            raise ValueError(f"coordinates must have shape (N, {self.nq}) or (N, {self.nx}), "
+                             f"got {Q.shape}")
+        n = Q.shape[0]
+        P, ps = self._rows(p, n, self.np, "constants p")
+        out = np.empty((n, self.nu, self.nu), dtype=self.dtype)
+        st = self._ffi.new("int *")
+        idx = self._batch_fn("mass_matrix_batch")(n, self._ptr(Q), Q.shape[1], self._ptr(P), ps,
+                                                   self._ptr(out), st)
+        self._batch_check(idx, st[0], "eval_mass_matrix", Q)
+        return out
+
+    def linearize_batch(self, X, r=None, p=None, t=0.0):
+        """(A, B) at N operating points: X (N, nx) -> A (N, ns, ns), B (N, ns, nr)."""
+        X = np.ascontiguousarray(X, dtype=self.dtype)
+        if X.ndim != 2 or X.shape[1] != self.nx:
+            raise ValueError(f"operating points must have shape (N, {self.nx}), got {X.shape}")
+        n = X.shape[0]
+        R, rs = self._rows(r, n, self.nr, "inputs r")
+        P, ps = self._rows(p, n, self.np, "constants p")
+        A = np.empty((n, self.ns, self.ns), dtype=self.dtype)
+        B = np.empty((n, self.ns, self.nr), dtype=self.dtype)
+        st = self._ffi.new("int *")
+        idx = self._batch_fn("linearize_batch")(n, self._ptr(X), self._ptr(R), rs, self._ptr(P),
+                                                 ps, t, self._ptr(A),
+                                                 self._ptr(B) if self.nr else self._ffi.NULL, st)
+        self._batch_check(idx, st[0], "linearize", X, t)
+        return A, B
+
+    def simulate_batch(self, X0, t_end, dt, r=None, p=None, workers=None, **kw):
+        """simulate() for N initial states (X0 (N, nx)) and/or N parameter
+        sets (p (N, np)), on `workers` threads (default: every core); the C
+        integrator runs without the GIL. Returns (t, X) with X (N, rows, nx);
+        keyword arguments as for simulate()."""
+        from concurrent.futures import ThreadPoolExecutor
+        import os
+        X0 = np.asarray(X0, dtype=float)
+        if X0.ndim == 1:
+            X0 = X0[None, :]
+        P = None if p is None else np.asarray(p, dtype=float)
+        R = None if r is None else np.asarray(r, dtype=float)
+        n = max(len(X0), 1 if P is None or P.ndim == 1 else len(P),
+                1 if R is None or R.ndim == 1 else len(R))
+        if len(X0) not in (1, n):
+            raise ValueError(f"X0 must have 1 or {n} rows, got {len(X0)}")
+
+        def row(a, i):
+            if a is None:
+                return None
+            return a if a.ndim == 1 else a[i]
+
+        def one(i):
+            x0 = X0[0] if len(X0) == 1 else X0[i]
+            return self.simulate(x0, t_end, dt, r=row(R, i), p=row(P, i), **kw)
+
+        workers = workers or os.cpu_count() or 1
+        with ThreadPoolExecutor(max_workers=workers) as ex:
+            results = list(ex.map(one, range(n)))
+        t = results[0][0]
+        return (t, np.stack([res[1] for res in results]),
+                *([np.stack([res[k] for res in results]) for k in range(2, len(results[0]))]))
 
     def __repr__(self):
         return (f"<eomgen Simulator '{self.name}' ({self.method}, {self.real}): "

@@ -182,7 +182,7 @@ def test_unknown_backend_and_real(tmp_path, kane_model):
 def test_python_api_bad_arrays(kane_sim):
     with pytest.raises(ValueError, match=r"state x must have shape \(4,\)"):
         kane_sim.rhs(0.0, np.zeros(3))
-    with pytest.raises(ValueError, match=r"shape \(4,\)"):
+    with pytest.raises(ValueError, match=r"states must have shape \(N, 4\), got \(2, 2\)"):
         kane_sim.rhs(0.0, np.zeros((2, 2)))
     with pytest.raises(ValueError, match=r"constants p must have shape \(3,\)"):
         kane_sim.rhs(0.0, np.zeros(4), p=[1.0])
