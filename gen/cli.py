@@ -1,7 +1,11 @@
-"""eomgen command line: generate, build, simulate, linearize a model file.
+"""eomgen command line: generate, build, simulate, linearize, verify and
+report on a model file.
 
-A model file is a Python file defining model() -> gen.Model, or name
-another function as FILE.py:function.
+A model file is a Python file defining ``model()`` that returns a
+``gen.Model``; ``FILE.py:function`` names another function. Exit codes:
+0 success, 1 a failure (a model the generator refuses, a failed compile or
+solve, a verification mismatch), 2 a usage error. No Python traceback
+unless ``--debug``.
 """
 from __future__ import annotations
 
@@ -18,176 +22,516 @@ from .errors import EomgenError
 EXAMPLES = """examples:
   eomgen generate examples/seed_pendulum.py -o out/pend
   eomgen build examples/seed_pendulum.py:lagrange_model -o out/pend_lagrange
+  eomgen simulate examples/seed_pendulum.py --t-end 5 --x0 q2=0.5 --csv run.csv --plot run.png
   eomgen linearize examples/seed_pendulum.py --at q1=1 --at q2=0
-  eomgen simulate examples/seed_pendulum.py --t-end 5 --x0 q2=0.5 --x0 q1=0.8 --csv run.csv
+  eomgen verify examples/seed_pendulum.py --samples 20
+  eomgen generate examples/seed_pendulum.py -o out/pend_f --real float
+  eomgen report examples/seed_pendulum.py --target cortex-m4f -o footprint.txt
+
+A model file defines model() returning a gen.Model (or name a function: FILE.py:func).
+Exit codes: 0 ok, 1 failure, 2 usage error. --debug shows Python tracebacks.
 """
 
 
 class UsageError(Exception):
-    pass
+    """Wrong arguments: exit code 2, one line."""
 
 
-def load_model(spec: str):
+# --------------------------------------------------------------- progress
+class Progress:
+    """Stage lines on stderr: shown while running on a terminal, silent
+    when stderr is not a terminal or with --quiet; --verbose prints every
+    stage with its time (even when not a terminal)."""
+
+    def __init__(self, quiet=False, verbose=False, stream=None):
+        self.stream = stream or sys.stderr
+        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+        self.quiet = quiet
+        self.verbose = verbose and not quiet
+        self.live = self.tty and not quiet
+        self.times = []
+
+    def stage(self, name):
+        return _Stage(self, name)
+
+    def record(self, name, seconds):
+        self.times.append((name, seconds))
+        if self.verbose:
+            print(f"eomgen: {name:<34} {seconds:8.2f} s", file=self.stream)
+
+    def summary(self):
+        if self.verbose and self.times:
+            total = sum(t for _, t in self.times)
+            print(f"eomgen: {'total':<34} {total:8.2f} s", file=self.stream)
+
+
+class _Stage:
+    def __init__(self, progress, name):
+        self.p = progress
+        self.name = name
+
+    def __enter__(self):
+        self.t0 = time.perf_counter()
+        if self.p.live and not self.p.verbose:
+            print(f"\reomgen: {self.name} ...\033[K", end="", file=self.p.stream, flush=True)
+        return self
+
+    def __exit__(self, *exc):
+        dt = time.perf_counter() - self.t0
+        if self.p.live and not self.p.verbose:
+            print("\r\033[K", end="", file=self.p.stream, flush=True)
+        if exc[0] is None:
+            self.p.record(self.name, dt)
+        return False
+
+
+# ------------------------------------------------------------ model files
+def load_model(spec: str, progress=None):
+    """Import a model file and call its function (default model())."""
     path, _, func = spec.partition(":")
     func = func or "model"
     p = Path(path)
     if not p.is_file():
-        raise UsageError(f"model file not found: {path}")
+        raise UsageError(f"model file not found: {path} (give a .py file that defines model())")
+    if p.suffix != ".py":
+        raise UsageError(f"{path} is not a Python file: a model file is a .py file defining "
+                         "model()")
     sys.path.insert(0, str(p.resolve().parent))
     modname = f"_eomgen_modelfile_{abs(hash(str(p.resolve())))}"
     spec_ = importlib.util.spec_from_file_location(modname, str(p))
     mod = importlib.util.module_from_spec(spec_)
-    spec_.loader.exec_module(mod)
+    progress = progress or Progress(quiet=True)
+    with progress.stage(f"import {p.name}"):
+        try:
+            spec_.loader.exec_module(mod)
+        except EomgenError:
+            raise
+        except Exception as e:
+            raise EomgenError(f"importing {path} failed: {type(e).__name__}: {e}") from e
     fn = getattr(mod, func, None)
     if fn is None or not callable(fn):
-        raise UsageError(f"{path} defines no function {func}() returning a gen.Model")
-    return fn()
+        raise UsageError(f"{path} defines no function {func}(): a model file must define "
+                         f"{func}() returning a gen.Model (or name one as {path}:function)")
+    with progress.stage(f"derive the model ({func}())"):
+        try:
+            model = fn()
+        except EomgenError:
+            raise
+        except Exception as e:
+            raise EomgenError(f"{path}:{func}() failed: {type(e).__name__}: {e}") from e
+    from .model import Model
+    if not isinstance(model, Model):
+        raise UsageError(f"{path}:{func}() returned {type(model).__name__}, not a gen.Model")
+    return model
 
 
-def _pairs(items, names, what):
+def _number(text, what):
+    try:
+        v = float(text)
+    except ValueError:
+        raise UsageError(f"{what}: {text!r} is not a number") from None
+    if v != v or v in (float("inf"), float("-inf")):
+        raise UsageError(f"{what}: {text!r} is not a finite number")
+    return v
+
+
+def _pairs(items, names, what, labels=()):
+    """NAME=VALUE strings -> {index: value}; names may also be given in
+    their sympy spelling (labels)."""
     out = {}
     for it in items or []:
         if "=" not in it:
             raise UsageError(f"{what} must be NAME=VALUE, got {it!r}")
         k, v = it.split("=", 1)
-        if k not in names:
-            raise UsageError(f"unknown {what} name {k!r}; known: {', '.join(names)}")
-        try:
-            out[k] = float(v)
-        except ValueError:
-            raise UsageError(f"{what} {k}: {v!r} is not a number") from None
+        k = k.strip()
+        if k in names:
+            i = names.index(k)
+        elif k in labels:
+            i = list(labels).index(k)
+        else:
+            raise UsageError(f"unknown {what} name {k!r}; known: {', '.join(names) or 'none'}")
+        out[i] = _number(v, f"{what} {k}")
     return out
 
 
-def _compiled_state(file, real, state_items, param_items):
-    """Compile the model file; the consistent state and constants from
-    NAME=VALUE lists."""
+def _compile(model, a, progress):
+    """generate + compile through cffi, each stage shown/timed."""
+    from .build import build_cffi, _load
+    from .bindings import Simulator
+    from .render import render_files
+    backend = getattr(a, "backend", "c") or "c"
+    timings = {}
+    with progress.stage("kernels, printing, templates"):
+        files = render_files(model, real=a.real, backend=backend, timings=timings)
+    with progress.stage("compile (cffi, cached)"):
+        kw = {"backend": backend} if backend != "c" else {}
+        so, modname = build_cffi(model, real=a.real, files=files, **kw)
+    for k in ("kernels", "printing", "templates"):
+        if k in timings and progress.verbose:
+            print(f"eomgen:   {k:<32} {timings[k]:8.2f} s", file=progress.stream)
+    return Simulator(model, _load(so, modname), real=a.real)
+
+
+def _state(sim, a, items):
     import numpy as np
-    from .build import compile as gcompile
-    sim = gcompile(load_model(file), real=real)
+    m = sim.model
     x = np.zeros(sim.nx)
-    for k, v in _pairs(state_items, sim.state_names, "state").items():
-        x[sim.state_names.index(k)] = v
+    for i, v in _pairs(items, sim.state_names, "state", m.state_labels).items():
+        x[i] = v
     p = sim.constants.copy()
-    for k, v in _pairs(param_items, sim.constant_names, "constant").items():
-        p[sim.constant_names.index(k)] = v
+    for i, v in _pairs(a.param, sim.constant_names, "constant", m.constant_labels).items():
+        p[i] = v
+    r = np.zeros(sim.nr)
+    for i, v in _pairs(getattr(a, "input", None), sim.input_names, "input",
+                       m.input_labels).items():
+        r[i] = v
     if sim.mc or sim.mv:
         x = sim.consistent_state(x, p=p)
-    return sim, x, p
+    return x, p, r
 
 
-def cmd_generate(a):
-    from .render import generate
-    m = load_model(a.file)
+# ------------------------------------------------------------- subcommands
+def cmd_generate(a, progress):
+    from .render import render_files, write_atomic
+    m = load_model(a.file, progress)
     if a.name:
-        m.name = a.name
-    t0 = time.perf_counter()
-    paths = generate(m, a.output, backend=a.backend, real=a.real)
-    print(f"wrote {len(paths)} files to {a.output} in {time.perf_counter() - t0:.2f} s")
+        from .model import validate_name
+        try:
+            m.name = validate_name(a.name)
+        except EomgenError as e:
+            raise UsageError(str(e)) from None
+    timings = {}
+    with progress.stage("kernels, printing, templates"):
+        files = render_files(m, real=a.real, backend=a.backend, timings=timings)
+    with progress.stage("write files"):
+        paths = write_atomic(files, a.output)
+    print(f"wrote {len(paths)} files to {a.output}")
     return 0
 
 
-def cmd_build(a):
+def cmd_build(a, progress):
     from .render import generate
-    m = load_model(a.file)
-    generate(m, a.output, real=a.real)
+    m = load_model(a.file, progress)
+    with progress.stage("generate"):
+        generate(m, a.output, real=a.real, backend=a.backend)
     bld = Path(a.output) / "build"
-    r = subprocess.run(["cmake", "-S", a.output, "-B", str(bld), "-DCMAKE_BUILD_TYPE=Release"],
-                       capture_output=True, text=True)
+    with progress.stage("cmake configure"):
+        r = subprocess.run(["cmake", "-S", a.output, "-B", str(bld),
+                            "-DCMAKE_BUILD_TYPE=Release"], capture_output=True, text=True)
     if r.returncode == 0:
-        r = subprocess.run(["cmake", "--build", str(bld)], capture_output=True, text=True)
+        with progress.stage("cmake build"):
+            r = subprocess.run(["cmake", "--build", str(bld)], capture_output=True, text=True)
     if r.returncode != 0:
-        print(r.stdout + r.stderr, file=sys.stderr)
-        raise EomgenError("the CMake build failed")
-    print(bld / f"{m.name}_sim")
+        raise EomgenError("the CMake build failed:\n" + r.stdout + r.stderr)
+    exe = bld / f"{m.name}_sim"
+    print(exe)
     return 0
 
 
-def cmd_linearize(a):
+def _table(rows, cols, M, w):
+    out = [" " * w + "".join(f"{c:>16}" for c in cols)]
+    for name, row in zip(rows, M):
+        out.append(f"{name:<{w}}" + "".join(f"{v + 0.0:16.9g}" for v in row))  # no -0
+    return "\n".join(out)
+
+
+def cmd_linearize(a, progress):
     import numpy as np
-    sim, x, p = _compiled_state(a.file, a.real, a.at, a.param)
-    A, B = sim.linearize(x, p=p)
+    m = load_model(a.file, progress)
+    sim = _compile(m, a, progress)
+    x, p, r = _state(sim, a, a.at)
+    with progress.stage("linearize"):
+        A, B = sim.linearize(x, r_op=r, p=p)
     names = sim.independent_state_names
-    w = max(len(n) for n in names) + 2
+    w = max(len(n) for n in names + sim.input_names + ["x"]) + 2
     print("operating point:", ", ".join(f"{n}={v:.12g}" for n, v in zip(sim.state_names, x)))
+    if sim.nr:
+        print("inputs:", ", ".join(f"{n}={v:.12g}" for n, v in zip(sim.input_names, r)))
     print("A =")
-    print(" " * w + "".join(f"{n:>16}" for n in names))
-    for n, row in zip(names, A):
-        print(f"{n:<{w}}" + "".join(f"{v:16.9g}" for v in row))
+    print(_table(names, names, A, w))
     print("B =" + (" (no inputs)" if sim.nr == 0 else ""))
     if sim.nr:
-        print(" " * w + "".join(f"{n:>16}" for n in sim.input_names))
-        for n, row in zip(names, B):
-            print(f"{n:<{w}}" + "".join(f"{v:16.9g}" for v in row))
-    print("eigenvalues of A:", " ".join(f"{complex(e):.9g}" for e in np.linalg.eigvals(A)))
+        print(_table(names, sim.input_names, B, w))
+    ev = np.linalg.eigvals(A)
+    ev = ev[np.lexsort((ev.imag, ev.real))]
+    print("eigenvalues of A:", "  ".join(f"{e.real + 0.0:.9g}{e.imag + 0.0:+.9g}j" for e in ev))
     return 0
 
 
-def cmd_simulate(a):
-    sim, x, p = _compiled_state(a.file, a.real, a.x0, a.param)
-    t, X = sim.simulate(x, a.t_end, a.dt, method=a.method, p=p)
-    out = open(a.csv, "w") if a.csv else sys.stdout
-    try:
-        out.write(",".join(["t"] + sim.state_names) + "\n")
-        for ti, xi in zip(t, X):
-            out.write(",".join(f"{v:.17g}" for v in [ti, *xi]) + "\n")
-    finally:
-        if a.csv:
-            out.close()
+def cmd_simulate(a, progress):
+    import numpy as np
+    m = load_model(a.file, progress)
+    sim = _compile(m, a, progress)
+    x, p, r = _state(sim, a, a.x0)
+    if not a.t_end > 0:
+        raise UsageError(f"--t-end must be positive, got {a.t_end}")
+    if not a.dt > 0:
+        raise UsageError(f"--dt must be positive, got {a.dt}")
+    with progress.stage(f"simulate {a.t_end:g} s ({a.method})"):
+        t, X, lam = sim.simulate(x, a.t_end, a.dt, method=a.method, r=r, p=p,
+                                 rtol=a.rtol, atol=a.atol, return_multipliers=True)
+    cols = ["t"] + sim.state_names
+    data = [t[:, None], X]
+    res_names, res = [], []
+    if sim.mc:
+        fc = np.array([sim.constraints(xi[:sim.nq], p=p) for xi in X])
+        res_names += [f"fc{i}" for i in range(sim.mc)]
+        res.append(fc)
+    if sim.mv:
+        fv = np.array([sim.velocity_constraints(xi[:sim.nq], xi[sim.nq:], p=p) for xi in X])
+        res_names += [f"fv{i}" for i in range(sim.mv)]
+        res.append(fv)
+    E = None
+    if m.energy is not None:
+        E = np.array([sim.energy(xi, p=p) for xi in X])
+    for out in (a.csv, a.plot):
+        if out:
+            Path(out).resolve().parent.mkdir(parents=True, exist_ok=True)
     if a.csv:
+        with progress.stage(f"write {a.csv}"):
+            extra = [lam] if sim.mv else []
+            table = np.hstack(data + extra + res + ([E[:, None]] if E is not None else []))
+            header = cols + [f"lam{i}" for i in range(sim.mv)] + res_names + \
+                (["energy"] if E is not None else [])
+            with open(a.csv, "w") as fh:
+                fh.write(",".join(header) + "\n")
+                for row in table:
+                    fh.write(",".join(f"{v:.17g}" for v in row) + "\n")
         print(f"wrote {len(t)} rows to {a.csv}")
+    if a.plot:
+        with progress.stage(f"plot {a.plot}"):
+            _plot(a.plot, m, sim, t, X, res_names, res, E)
+        print(f"wrote {a.plot}")
+    if not a.csv and not a.plot:
+        print(",".join(cols))
+        for row in np.hstack(data):
+            print(",".join(f"{v:.17g}" for v in row))
     return 0
+
+
+def _plot(path, m, sim, t, X, res_names, res, E):
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise UsageError("--plot needs matplotlib: pip install 'eomgen[plot]'") from None
+    import numpy as np
+    panels = 1 + bool(res) + (E is not None)
+    fig, axes = plt.subplots(panels, 1, figsize=(8, 2.6 * panels + 0.6), sharex=True,
+                             squeeze=False)
+    axes = axes[:, 0]
+    ax = axes[0]
+    for i, n in enumerate(sim.state_names):
+        ax.plot(t, X[:, i], label=n, lw=1.2, ls="-" if i < sim.nq else "--")
+    ax.set_ylabel("state")
+    ax.legend(loc="upper right", ncol=min(4, sim.nx), fontsize=8)
+    ax.set_title(f"{m.name}: simulation ({m.method}, nq={sim.nq}, nu={sim.nu}, "
+                 f"{sim.mc} configuration / {sim.mv} velocity constraints)", fontsize=10)
+    k = 1
+    if res:
+        ax = axes[k]
+        k += 1
+        R = np.hstack(res)
+        floor = 1e-17                      # exact zeros drawn at the floor
+        for i, n in enumerate(res_names):
+            ax.semilogy(t, np.maximum(np.abs(R[:, i]), floor), label=f"|{n}|", lw=1)
+        ax.set_ylim(floor / 2, max(1e-12, 10 * float(np.max(np.abs(R)))))
+        ax.set_ylabel("constraint residual")
+        ax.legend(loc="upper right", ncol=4, fontsize=8)
+    if E is not None:
+        ax = axes[k]
+        scale = max(abs(E[0]), 1e-300)
+        ax.plot(t, (E - E[0]) / scale, lw=1, color="k")
+        ax.set_ylabel("(E - E0) / |E0|")
+    axes[-1].set_xlabel("t [s]")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def cmd_verify(a, progress):
+    from .verify import verify
+    m = load_model(a.file, progress)
+    backends = ["c", "eigen"] if a.backend == "both" else [a.backend]
+    ok = True
+    for backend in backends:
+        with progress.stage(f"verify {backend} against sympy ({a.samples} states)"):
+            rep = verify(m, samples=a.samples, backend=backend, real=a.real,
+                         sources=a.sources, tol=a.tol, seed=a.seed)
+        print(rep.table())
+        ok = ok and rep.ok
+    return 0 if ok else 1
+
+
+def cmd_report(a, progress):
+    import json
+    from .footprint import format_table, report_many
+    m = load_model(a.file, progress)
+    reals = ["float", "double"] if a.real == "both" else [a.real]
+    with progress.stage("build and measure the embedded library"):
+        reps = report_many([(m, r) for r in reals], target=a.target, root=a.build_dir,
+                           stack_limit=a.stack_limit)
+    text = format_table(reps)
+    if a.json:
+        for rep in reps:
+            rep.pop("table", None)
+        Path(a.json).write_text(json.dumps(reps, indent=2) + "\n")
+    if a.output:
+        Path(a.output).write_text(text)
+        print(f"wrote {a.output}")
+    else:
+        print(text, end="")
+    return 0
+
+
+# ------------------------------------------------------------------ parser
+class _Parser(argparse.ArgumentParser):
+    """Usage errors as one line and exit code 2."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: {message}\n")
+
+
+def _sub(sub, name, help_, example, common):
+    return sub.add_parser(name, help=help_, description=help_ + ".",
+                          epilog="example:\n  " + example,
+                          formatter_class=argparse.RawDescriptionHelpFormatter,
+                          parents=[common])
+
+
+def _add_real(p, default="double", both=False):
+    choices = ["double", "float"] + (["both"] if both else [])
+    p.add_argument("--real", default=default, choices=choices,
+                   help=f"scalar type of the generated code (default {default})")
+
+
+def _common(defaults):
+    """--quiet/--verbose/--debug, accepted before and after the subcommand
+    (the subcommand's copies must not reset what was given before it)."""
+    c = argparse.ArgumentParser(add_help=False)
+    d = {} if defaults else {"default": argparse.SUPPRESS}
+    c.add_argument("--quiet", "-q", action="store_true", help="no progress display", **d)
+    c.add_argument("--verbose", "-v", action="store_true",
+                   help="print every stage with its time", **d)
+    c.add_argument("--debug", action="store_true", help="show Python tracebacks", **d)
+    return c
 
 
 def build_parser():
-    ap = argparse.ArgumentParser(
-        prog="eomgen", formatter_class=argparse.RawDescriptionHelpFormatter,
-        description="Generate verified C simulators from sympy.physics.mechanics models.",
-        epilog=EXAMPLES)
+    common = _common(defaults=False)
+    ap = _Parser(prog="eomgen", formatter_class=argparse.RawDescriptionHelpFormatter,
+                 description="Generate verified C simulators from sympy.physics.mechanics "
+                             "models.", epilog=EXAMPLES, parents=[_common(defaults=True)])
     ap.add_argument("--version", action="version", version=f"eomgen {__version__}")
-    ap.add_argument("--debug", action="store_true", help="show Python tracebacks")
-    sub = ap.add_subparsers(dest="cmd", required=True)
-    g = sub.add_parser("generate", help="write C sources and a CMake project")
-    g.add_argument("file")
-    g.add_argument("-o", "--output", required=True)
-    g.add_argument("--backend", default="c", choices=["c"])
-    g.add_argument("--real", default="double", choices=["double"])
-    g.add_argument("--name")
+    sub = ap.add_subparsers(dest="cmd", required=True, parser_class=_Parser,
+                            metavar="{generate,build,simulate,linearize,verify,report}")
+
+    g = _sub(sub, "generate", "write the model's C (or C++/Eigen) sources and a CMake project",
+             "eomgen generate examples/seed_pendulum.py -o out/pend --real float", common)
+    g.add_argument("file", help="model file (FILE.py or FILE.py:function)")
+    g.add_argument("-o", "--output", required=True, help="output folder")
+    g.add_argument("--backend", default="c", choices=["c", "eigen"])
+    _add_real(g)
+    g.add_argument("--name", help="C prefix (default: the model's name)")
     g.set_defaults(fn=cmd_generate)
-    b = sub.add_parser("build", help="generate and build the standalone binary with CMake")
-    b.add_argument("file")
-    b.add_argument("-o", "--output", required=True)
-    b.add_argument("--real", default="double", choices=["double"])
+
+    b = _sub(sub, "build", "generate and build the standalone simulator with CMake; "
+             "prints the binary's path",
+             "eomgen build examples/seed_pendulum.py:lagrange_model -o out/pl", common)
+    b.add_argument("file", help="model file (FILE.py or FILE.py:function)")
+    b.add_argument("-o", "--output", required=True, help="output folder (build in OUTPUT/build)")
+    b.add_argument("--backend", default="c", choices=["c", "eigen"])
+    _add_real(b)
     b.set_defaults(fn=cmd_build)
-    li = sub.add_parser("linearize", help="print A and B at a state")
-    li.add_argument("file")
-    li.add_argument("--at", action="append", metavar="NAME=VALUE")
-    li.add_argument("--param", action="append", metavar="NAME=VALUE")
-    li.add_argument("--real", default="double", choices=["double"])
-    li.set_defaults(fn=cmd_linearize)
-    s = sub.add_parser("simulate", help="simulate and write CSV")
-    s.add_argument("file")
-    s.add_argument("--t-end", type=float, required=True)
-    s.add_argument("--dt", type=float, default=0.01)
+
+    s = _sub(sub, "simulate", "simulate the compiled model; write CSV and/or a plot (states, "
+             "constraint residuals, energy error)",
+             "eomgen simulate examples/seed_pendulum.py --t-end 5 --x0 q2=0.5 --plot run.png",
+             common)
+    s.add_argument("file", help="model file (FILE.py or FILE.py:function)")
+    s.add_argument("--t-end", type=float, required=True, help="end time [s]")
+    s.add_argument("--dt", type=float, default=0.01,
+                   help="RK4 step, or DOPRI5 output interval (default 0.01)")
     s.add_argument("--method", default="rk4", choices=["rk4", "dopri5"])
-    s.add_argument("--x0", action="append", metavar="NAME=VALUE")
-    s.add_argument("--param", action="append", metavar="NAME=VALUE")
-    s.add_argument("--csv")
-    s.add_argument("--real", default="double", choices=["double"])
-    s.set_defaults(fn=cmd_simulate)
+    s.add_argument("--rtol", type=float, default=1e-8, help="DOPRI5 relative tolerance")
+    s.add_argument("--atol", type=float, default=1e-10, help="DOPRI5 absolute tolerance")
+    s.add_argument("--x0", action="append", metavar="NAME=VALUE",
+                   help="initial state entry (repeat); dependent entries are solved")
+    s.add_argument("--param", action="append", metavar="NAME=VALUE", help="constant value")
+    s.add_argument("--input", action="append", metavar="NAME=VALUE",
+                   help="constant input value")
+    s.add_argument("--csv", help="write the trajectory (t, states, lam, residuals, energy)")
+    s.add_argument("--plot", help="write a PNG plot")
+    _add_real(s)
+    s.set_defaults(fn=cmd_simulate, backend="c")
+
+    li = _sub(sub, "linearize", "print A and B (labelled) and the eigenvalues of A at a state",
+              "eomgen linearize examples/seed_pendulum.py --at q1=-1", common)
+    li.add_argument("file", help="model file (FILE.py or FILE.py:function)")
+    li.add_argument("--at", action="append", metavar="NAME=VALUE",
+                    help="operating-point entry (repeat); dependent entries are solved")
+    li.add_argument("--param", action="append", metavar="NAME=VALUE", help="constant value")
+    li.add_argument("--input", action="append", metavar="NAME=VALUE", help="input value")
+    _add_real(li)
+    li.set_defaults(fn=cmd_linearize, backend="c")
+
+    v = _sub(sub, "verify", "check every compiled function against sympy's own evaluation "
+             "of the model at random states; exit 1 on a mismatch",
+             "eomgen verify examples/seed_pendulum.py --samples 50 --sources out/pend", common)
+    v.add_argument("file", help="model file (FILE.py or FILE.py:function)")
+    v.add_argument("--samples", type=int, default=20, help="random states (default 20)")
+    v.add_argument("--backend", default="c", choices=["c", "eigen", "both"])
+    v.add_argument("--sources", help="check the sources in this generated folder instead")
+    v.add_argument("--tol", type=float, help="relative tolerance (default 1e-9; float 2e-4)")
+    v.add_argument("--seed", type=int, default=0, help="random seed")
+    _add_real(v)
+    v.set_defaults(fn=cmd_verify)
+
+    rp = _sub(sub, "report", "flash and worst-case stack of the embedded library",
+              "eomgen report examples/seed_pendulum.py --target cortex-m4f -o footprint.txt",
+              common)
+    rp.add_argument("file", help="model file (FILE.py or FILE.py:function)")
+    _add_real(rp, default="both", both=True)
+    rp.add_argument("--target", default="cortex-m4f", choices=["cortex-m4f", "host"])
+    rp.add_argument("--stack-limit", type=int, default=8192, metavar="BYTES",
+                    help="-Wstack-usage bound on every function frame (default 8192)")
+    rp.add_argument("--build-dir", help="keep the build here (default: a temporary directory)")
+    rp.add_argument("-o", "--output", help="write the table to this file (footprint.txt)")
+    rp.add_argument("--json", metavar="FILE", help="also write the reports as JSON")
+    rp.set_defaults(fn=cmd_report)
     return ap
 
 
 def main(argv=None):
     ap = build_parser()
     a = ap.parse_args(argv)
-    try:
-        return a.fn(a)
-    except UsageError as e:
-        print(f"eomgen: {e}", file=sys.stderr)
+    if getattr(a, "samples", 1) is not None and getattr(a, "samples", 1) < 1:
+        print("eomgen verify: --samples must be at least 1", file=sys.stderr)
         return 2
-    except EomgenError as e:
+    progress = Progress(quiet=a.quiet, verbose=a.verbose)
+    try:
+        rc = a.fn(a, progress)
+        progress.summary()
+        return rc
+    except UsageError as e:
         if a.debug:
             raise
-        print(f"eomgen: {e}", file=sys.stderr)
+        print(f"eomgen {a.cmd}: {e}", file=sys.stderr)
+        return 2
+    except (EomgenError, OSError) as e:
+        if a.debug:
+            raise
+        text = str(e)
+        first, _, rest = text.partition("\n")
+        print(f"eomgen {a.cmd}: {first}", file=sys.stderr)
+        if rest and (a.verbose or "compiler log" in text or "CMake" in first):
+            print(rest, file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        print("eomgen: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,181 @@
+"""Issue 9: the command line, driven as a subprocess on the seed models;
+and the README's command-line tour, run exactly as written."""
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import require_tool
+
+ROOT = Path(__file__).resolve().parent.parent
+SEED = str(ROOT / "examples" / "seed_pendulum.py")
+
+
+def eomgen(*args, cwd=None, check_rc=None):
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
+    proc = subprocess.run([sys.executable, "-m", "gen", *args], capture_output=True, text=True,
+                          cwd=cwd, env=env)
+    if check_rc is not None:
+        assert proc.returncode == check_rc, (args, proc.returncode, proc.stdout, proc.stderr)
+    return proc
+
+
+def _matrix(text, label):
+    """Rows of a labelled matrix printed by `eomgen linearize`."""
+    lines = text.splitlines()
+    i = lines.index(label)
+    rows = []
+    for ln in lines[i + 2:]:
+        parts = ln.split()
+        if len(parts) < 2 or not re.match(r"^-?[\d.]", parts[1]):
+            break
+        rows.append([float(v) for v in parts[1:]])
+    return np.array(rows)
+
+
+def test_generate_writes_the_project(tmp_path):
+    out = tmp_path / "pend"
+    p = eomgen("generate", SEED, "-o", str(out), check_rc=0)
+    assert "wrote" in p.stdout
+    names = {f.name for f in out.iterdir()}
+    assert {"pendulum_kane.h", "pendulum_kane.c", "main.c", "CMakeLists.txt",
+            "gen_rt.h"} <= names
+    p = eomgen("generate", SEED + ":lagrange_model", "-o", str(tmp_path / "pf"), "--real",
+               "float", "--name", "pl", check_rc=0)
+    assert "typedef float pl_real;" in (tmp_path / "pf" / "pl.h").read_text()
+
+
+def test_build_prints_a_working_binary(tmp_path):
+    require_tool("cmake")
+    p = eomgen("build", SEED, "-o", str(tmp_path / "pend"), check_rc=0)
+    exe = Path(p.stdout.strip().splitlines()[-1])
+    assert exe.is_file()
+    r = subprocess.run([str(exe), "--t-end", "0.1", "--x0", "q2=0.5", "--x0", "q1=0.8"],
+                       capture_output=True, text=True, check=True)
+    assert r.stdout.splitlines()[0].startswith("t,q2,q1,u2,u1")
+
+
+def test_linearize_prints_labelled_A_and_eigenvalues():
+    p = eomgen("linearize", SEED, "--at", "q1=1", check_rc=0)
+    A = _matrix(p.stdout, "A =")
+    assert np.allclose(A, [[0, 1], [-9.81, 0]], atol=1e-12)
+    assert "q2" in p.stdout.splitlines()[2] and "u2" in p.stdout.splitlines()[2]
+    assert re.search(r"eigenvalues of A: .*-3\.13209195j", p.stdout)
+    p = eomgen("linearize", SEED + ":lagrange_model", "--at", "q1=-1", "--param", "g=4",
+               check_rc=0)
+    assert np.allclose(_matrix(p.stdout, "A ="), [[0, 1], [4, 0]], atol=1e-12)
+    assert "B = (no inputs)" in p.stdout
+
+
+def test_simulate_csv_and_plot(tmp_path):
+    csv = tmp_path / "run.csv"
+    png = tmp_path / "plots" / "run.png"
+    eomgen("simulate", SEED, "--t-end", "2", "--dt", "0.01", "--x0", "q2=0.5", "--x0",
+           "q1=0.8", "--method", "dopri5", "--csv", str(csv), "--plot", str(png), check_rc=0)
+    header = csv.read_text().splitlines()[0].split(",")
+    assert header == ["t", "q2", "q1", "u2", "u1", "lam0", "fc0", "fv0", "energy"]
+    data = np.loadtxt(csv, delimiter=",", skiprows=1)
+    assert data.shape == (201, 9)
+    assert np.allclose(data[:, 1] ** 2 + data[:, 2] ** 2, 1.0, atol=1e-9)   # on the circle
+    E = data[:, -1]
+    assert np.max(np.abs(E - E[0])) < 1e-6 * abs(E[0])
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10000
+
+
+def test_verify_passes_then_catches_tampering(tmp_path):
+    p = eomgen("verify", SEED, "--samples", "5", check_rc=0)
+    assert "all functions agree" in p.stdout and "eval_rhs" in p.stdout
+    out = tmp_path / "pend"
+    eomgen("generate", SEED, "-o", str(out), check_rc=0)
+    src = out / "pendulum_kane.c"
+    src.write_text(src.read_text().replace("sqrt(", "fabs(", 1))
+    p = eomgen("verify", SEED, "--samples", "5", "--sources", str(out), check_rc=1)
+    assert "MISMATCH" in p.stdout and "FAIL" in p.stdout
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["simulate", "missing.py", "--t-end", "1"], "model file not found"),
+    (["simulate", "NOMODEL", "--t-end", "1"], "defines no function model()"),
+    (["simulate", SEED, "--t-end", "1", "--x0", "theta=1"], "unknown state name 'theta'"),
+    (["simulate", SEED, "--t-end", "1", "--param", "mass=2"], "unknown constant name 'mass'"),
+    (["simulate", SEED, "--t-end", "1", "--x0", "q2=half"], "'half' is not a number"),
+    (["simulate", SEED, "--t-end", "soon"], "invalid float value"),
+    (["generate", SEED, "-o", "x", "--backend", "fortran"], "invalid choice: 'fortran'"),
+    (["linearize", SEED, "--at", "q2"], "must be NAME=VALUE"),
+    (["frobnicate"], "invalid choice"),
+])
+def test_bad_arguments_one_line_exit_2(tmp_path, args, needle):
+    nomodel = tmp_path / "nomodel.py"
+    nomodel.write_text("x = 1\n")
+    args = [str(nomodel) if a == "NOMODEL" else a for a in args]
+    p = eomgen(*args, cwd=tmp_path, check_rc=2)
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1, p.stderr
+    assert needle in lines[0] and lines[0].startswith("eomgen")
+    assert "Traceback" not in p.stderr
+
+
+def test_failures_exit_1_without_traceback(tmp_path):
+    bad = tmp_path / "bad.py"
+    bad.write_text("import seed_pendulum as sp\n"
+                   "def model():\n"
+                   "    KM, s = sp.derive_kane()\n"
+                   "    import gen\n"
+                   "    return gen.Model.from_kanes(KM, constants={s['L']: 1.0}, name='bad')\n")
+    env_path = str(ROOT / "examples")
+    p = subprocess.run([sys.executable, "-m", "gen", "generate", str(bad), "-o",
+                        str(tmp_path / "o")], capture_output=True, text=True,
+                       env={**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{env_path}"})
+    assert p.returncode == 1
+    assert "neither coordinates" in p.stderr and "Traceback" not in p.stderr
+    assert not (tmp_path / "o").exists()
+    p = subprocess.run([sys.executable, "-m", "gen", "--debug", "generate", str(bad), "-o",
+                        str(tmp_path / "o")], capture_output=True, text=True,
+                       env={**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{env_path}"})
+    assert p.returncode != 0 and "Traceback" in p.stderr
+
+
+def test_help_has_examples():
+    p = eomgen("--help", check_rc=0)
+    assert "examples:" in p.stdout and "eomgen verify" in p.stdout
+    for cmd in ("generate", "build", "simulate", "linearize", "verify", "report"):
+        p = eomgen(cmd, "--help", check_rc=0)
+        assert "example:" in p.stdout and f"eomgen {cmd}" in p.stdout
+
+
+def test_progress_quiet_off_a_terminal_and_verbose_timings():
+    p = eomgen("linearize", SEED, "--at", "q1=1", check_rc=0)
+    assert p.stderr == ""                          # not a terminal: no progress
+    p = eomgen("linearize", SEED, "--at", "q1=1", "--verbose", check_rc=0)
+    for stage in ("derive the model", "kernels, printing, templates", "compile", "total"):
+        assert stage in p.stderr
+
+
+# --------------------------------------------------------------- README tour
+def _tour_commands():
+    text = (ROOT / "README.md").read_text()
+    block = text.split("<!-- tour:begin -->", 1)[1].split("<!-- tour:end -->", 1)[0]
+    cmds = [ln.strip() for ln in block.splitlines() if ln.strip().startswith("eomgen ")]
+    assert len(cmds) >= 6
+    return cmds
+
+
+def test_readme_tour_runs_as_written(tmp_path):
+    require_tool("cmake")
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
+    for cmd in _tour_commands():
+        args = cmd.split()[1:]
+        expect = 1 if "# fails" in cmd else 0
+        args = args[:args.index("#")] if "#" in args else args
+        p = eomgen(*args, cwd=tmp_path, check_rc=expect)
+        if args[0] == "linearize" and "--at" in args and "q1=1" in args:
+            assert np.allclose(_matrix(p.stdout, "A ="), [[0, 1], [-9.81, 0]], atol=1e-12)
+    pngs = list(tmp_path.rglob("*.png"))
+    assert pngs, "the tour writes a plot"
+    committed = ROOT / "docs" / pngs[0].name
+    assert committed.is_file(), f"the README's plot {committed} is committed"
