@@ -1,0 +1,202 @@
+"""Helpers of bench/bench_peers.py: the C timing driver (eomgen's
+<prefix>_eval_rhs against CasADi's generated function, in one executable,
+interleaved repeats) and a floating-point operation count of printed,
+straight-line C."""
+from __future__ import annotations
+
+import re
+import statistics
+import subprocess
+import textwrap
+from pathlib import Path
+
+# ------------------------------------------------------------ op counting
+_FLOAT = re.compile(r"(?<![\w\]])(\d+\.\d*|\.\d+|\d+)([eE][+-]?\d+)?")
+_BINARY_MINUS = re.compile(r"(?<=[\w\)\]])\s*-(?!=|-|>)")
+
+
+def function_body(c_text, name):
+    """The text between the braces of the C function `name` (first definition)."""
+    m = re.search(r"\b" + re.escape(name) + r"\s*\([^;{]*\)\s*\{", c_text)
+    if m is None:
+        raise ValueError(f"function {name} not found")
+    i, depth = m.end(), 1
+    while depth:
+        ch = c_text[i]
+        depth += ch == "{"
+        depth -= ch == "}"
+        i += 1
+    return c_text[m.end():i - 1]
+
+
+def count_flops(body):
+    """Floating-point operations of straight-line C: binary + - * /, with
+    sin/cos/tan/exp/log/sqrt/pow and CasADi's casadi_sq counted apart.
+    Index arithmetic inside [...] and pointer offsets are ignored."""
+    text = re.sub(r"/\*.*?\*/", " ", body, flags=re.S)
+    text = re.sub(r"//[^\n]*", " ", text)
+    text = re.sub(r"\[[^\[\]]*\]", "[]", text)           # a[i*n+j] -> a[]
+    text = _FLOAT.sub("1", text)                          # 1.5e-3 -> 1 (no '-' inside)
+    # only the right-hand sides of assignments (casadi's `if (res[0]!=0) ...`)
+    rhs = []
+    for stmt in text.split(";"):
+        if "=" in stmt:
+            lhs, _, r = stmt.partition("=")
+            if r.startswith("="):  # '==' comparison, not an assignment
+                continue
+            rhs.append(r.replace("!=", " ").replace("?", " ").replace(":", " "))
+    t = "\n".join(rhs)
+    funcs = {f: len(re.findall(r"\b" + f + r"\s*\(", t))
+             for f in ("sin", "cos", "tan", "exp", "log", "sqrt", "pow", "casadi_sq", "fabs")}
+    adds = t.count("+") - 2 * t.count("++")
+    subs = len(_BINARY_MINUS.findall(t))
+    muls = t.count("*")
+    divs = t.count("/")
+    return {"add": adds, "sub": subs, "mul": muls + funcs["casadi_sq"], "div": divs,
+            "sin": funcs["sin"], "cos": funcs["cos"],
+            "other_fn": funcs["tan"] + funcs["exp"] + funcs["log"] + funcs["sqrt"] + funcs["pow"],
+            "arith": adds + subs + muls + funcs["casadi_sq"] + divs}
+
+
+def cpu_info():
+    """(model name, MHz, logical cores) from /proc/cpuinfo (None where unknown)."""
+    name, mhz, cores = None, None, 0
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            k, _, v = line.partition(":")
+            k, v = k.strip(), v.strip()
+            if k == "model name" and name is None:
+                name = v
+            elif k == "cpu MHz" and mhz is None:
+                mhz = float(v)
+            elif k == "processor":
+                cores += 1
+    except OSError:
+        pass
+    return name, mhz, cores or None
+
+
+# ------------------------------------------------------------ the driver
+DRIVER = textwrap.dedent("""\
+    #define _POSIX_C_SOURCE 199309L
+    #include <stdio.h>
+    #include <stdlib.h>
+    #include <math.h>
+    #include <time.h>
+    #include "{p}.h"
+    {cas_include}
+    static double now(void) {{
+        struct timespec ts; clock_gettime(CLOCK_MONOTONIC, &ts);
+        return ts.tv_sec + 1e-9 * ts.tv_nsec;
+    }}
+    int main(void) {{
+        static const double x0[{P}_NX] = {{ {x0} }};
+        static const double p[{np}] = {{ {pvals} }};
+        double x[{P}_NX], r[1] = {{0.0}}, d_eom[{P}_NX], d_cas[{P}_NX];
+        volatile double sink = 0;
+        int i, rep, n = {iters};
+        {cas_setup}
+        for (i = 0; i < {P}_NX; ++i) x[i] = x0[i];
+        if ({p}_eval_rhs(0.0, x, r, p, d_eom, NULL) != 0) return 2;
+        {cas_check}
+        for (rep = 0; rep < {reps}; ++rep) {{
+            double t0, t1;
+            for (i = 0; i < {P}_NX; ++i) x[i] = x0[i];
+            t0 = now();
+            for (i = 0; i < n; ++i) {{
+                x[1] += 1e-12;
+                if ({p}_eval_rhs(0.0, x, r, p, d_eom, NULL) != 0) return 1;
+                sink += d_eom[{P}_NX - 1];
+            }}
+            t1 = now();
+            printf("eomgen %.9g\\n", (t1 - t0) / n);
+            {cas_loop}
+        }}
+        return sink == 12345.0;
+    }}
+""")
+
+CAS_SETUP = """
+    casadi_int sz_arg, sz_res, sz_iw, sz_w;
+    const casadi_real **arg; casadi_real **res; casadi_int *iw; casadi_real *w;
+    double maxdiff = 0;
+    {f}_work(&sz_arg, &sz_res, &sz_iw, &sz_w);
+    arg = malloc(sizeof(*arg) * (sz_arg > 3 ? sz_arg : 3));
+    res = malloc(sizeof(*res) * (sz_res > 1 ? sz_res : 1));
+    iw = malloc(sizeof(*iw) * (sz_iw > 0 ? sz_iw : 1));
+    w = malloc(sizeof(*w) * (sz_w > 0 ? sz_w : 1));
+    arg[0] = x; arg[1] = r; arg[2] = p; res[0] = d_cas;
+"""
+CAS_CHECK = """
+    if ({f}(arg, res, iw, w, 0) != 0) return 3;
+    for (i = 0; i < {P}_NX; ++i) {{
+        double dd = fabs(d_cas[i] - d_eom[i]) / (1.0 + fabs(d_eom[i]));
+        if (dd > maxdiff) maxdiff = dd;
+    }}
+    printf("maxreldiff %.3g\\n", maxdiff);
+"""
+CAS_LOOP = """
+            for (i = 0; i < {P}_NX; ++i) x[i] = x0[i];
+            t0 = now();
+            for (i = 0; i < n; ++i) {{
+                x[1] += 1e-12;
+                if ({f}(arg, res, iw, w, 0) != 0) return 1;
+                sink += d_cas[{P}_NX - 1];
+            }}
+            t1 = now();
+            printf("casadi %.9g\\n", (t1 - t0) / n);
+"""
+
+
+def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=21,
+                  iters=None, cc="gcc", runs=3):
+    """Build one driver from eomgen's generated sources (and CasADi's
+    generated .c if given) and return {'eomgen': s, 'casadi': s,
+    'maxreldiff': d} (median seconds per call; interleaved repeats)."""
+    eom_dir = Path(eom_dir)
+    nx = len(x0)
+    if iters is None:
+        iters = max(500, int(2e6 / nx ** 2))
+    P = prefix.upper()
+    fmt = dict(p=prefix, P=P, f=cas_fname)
+    src = DRIVER.format(
+        p=prefix, P=P, np=len(pvals), iters=iters, reps=reps,
+        x0=", ".join(repr(float(v)) for v in x0),
+        pvals=", ".join(repr(float(v)) for v in pvals),
+        cas_include=f'#include "{Path(cas_c).with_suffix(".h").name}"' if cas_c else "",
+        cas_setup=CAS_SETUP.format(**fmt) if cas_c else "",
+        cas_check=CAS_CHECK.format(**fmt) if cas_c else "",
+        cas_loop=CAS_LOOP.format(**fmt) if cas_c else "")
+    drv = eom_dir / "bench_driver.c"
+    drv.write_text(src)
+    exe = eom_dir / "bench_driver"
+    srcs = [str(drv), str(eom_dir / f"{prefix}.c")] + sorted(str(f) for f in eom_dir.glob("gen_rt_*.c"))
+    incs = ["-I", str(eom_dir)]
+    if cas_c:
+        srcs.append(str(cas_c))
+        incs += ["-I", str(Path(cas_c).parent)]
+    cmd = [cc, "-std=c99", "-O2", *incs, *srcs, "-o", str(exe), "-lm"]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError("driver build failed:\n$ " + " ".join(cmd) + "\n" + proc.stderr[-4000:])
+    text = ""
+    for _ in range(runs):          # separate runs, samples pooled (noisy machines)
+        res = subprocess.run([str(exe)], capture_output=True, text=True)
+        if res.returncode != 0:
+            raise RuntimeError(f"driver exited with {res.returncode}: {res.stdout[-2000:]}")
+        text += res.stdout
+    vals = {"eomgen": [], "casadi": []}
+    out = {"iters": iters, "reps": reps, "runs": runs}
+    for line in text.split("\n"):
+        if not line.strip():
+            continue
+        k, v = line.split()
+        if k == "maxreldiff":
+            out["maxreldiff"] = float(v)
+        else:
+            vals[k].append(float(v))
+    for k, v in vals.items():
+        if v:
+            out[k] = statistics.median(v)
+            out[k + "_min"] = min(v)
+    return out
