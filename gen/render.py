@@ -252,13 +252,24 @@ def build_context(model, real="double", kernels=None, timings=None, backend="c")
     lin_names = {"Kqd": "Kqd", "Ku": "Ku", "M": "M", "A": "A", "Kq": "Kq", "Rq": "Rq",
                  "Ru": "Ru", "Rr": "Rr", "Sq": "Sq", "Su": "Su", "Vq": "Vq", "Jc": "Jc"}
     lin_call = ", ".join(lin_names[o.name] for o in kernels["lin_terms"].outputs)
+    def sympy_name(names, labels, i):
+        """' (sympy: <label>)' when the C name differs, safe inside a C comment."""
+        lab = labels[i] if i < len(labels) else names[i]
+        if lab == names[i]:
+            return ""
+        lab = (lab.replace("*/", "*\\/").replace("/*", "/\\*").replace("??", "?\\?")
+               .replace("\\\n", " ").replace("\n", " ").replace("\r", " "))
+        return f"; sympy: {lab}"
+
     roles = []
     for i in range(nq):
         roles.append((i, m.state_names[i],
-                      "coordinate, independent" if i in m.q_ind else "coordinate, dependent"))
+                      ("coordinate, independent" if i in m.q_ind else "coordinate, dependent")
+                      + sympy_name(m.state_names, m.state_labels, i)))
     for j in range(nu):
         roles.append((nq + j, m.state_names[nq + j],
-                      "speed, independent" if j in m.u_ind else "speed, dependent"))
+                      ("speed, independent" if j in m.u_ind else "speed, dependent")
+                      + sympy_name(m.state_names, m.state_labels, nq + j)))
     ctx = {
         "name": p, "p": p, "P": p.upper(), "version": __version__, "real": real,
         "method": m.method,
@@ -269,9 +280,12 @@ def build_context(model, real="double", kernels=None, timings=None, backend="c")
         "has_energy": 1 if m.energy is not None else 0,
         "statuses": STATUSES,
         "state_doc": roles,
-        "inputs_doc": list(enumerate(m.input_names)),
-        "params_doc": [(i, n, _fmt_real(v, "double")) for i, (n, v) in
-                       enumerate(zip(m.constant_names, m.p_values))],
+        "inputs_doc": [(i, n + (f"  ({sympy_name(m.input_names, m.input_labels, i)[2:]})"
+                                if sympy_name(m.input_names, m.input_labels, i) else ""))
+                       for i, n in enumerate(m.input_names)],
+        "params_doc": [(i, n, _fmt_real(v, "double")
+                        + sympy_name(m.constant_names, m.constant_labels, i))
+                       for i, (n, v) in enumerate(zip(m.constant_names, m.p_values))],
         "ind_doc": list(enumerate(m.independent_state_names)),
         "functions": _fn_entries(p),
         "kernels": kctx,

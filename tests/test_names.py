@@ -80,3 +80,14 @@ def test_hostile_names_compile_and_compute(hostile, tmp_path):
     assert list(x1) == [0.3, -0.2, 0.0, 1.0]
     A, _ = sim.linearize({"x[0]": 0.0, "u03b8": 0.0}, r_op=[0.0])
     assert np.allclose(sorted(np.linalg.eigvals(A).real), [-0.125] * 4, atol=1e-12)
+
+
+def test_header_documents_the_name_mapping(hostile, tmp_path):
+    _, model, _, _ = hostile
+    gen.generate(model, tmp_path)
+    h = (tmp_path / "hostile.h").read_text()
+    assert "x[0] = x_0  (coordinate, independent; sympy: x[0])" in h
+    assert "x[3] = theta_p  (speed, independent; sympy: theta')" in h
+    assert "u03b8" in h and "sympy: θ" in h
+    assert "a_b_3" in h and "sympy: a*\\/b" in h           # no comment terminator
+    assert "r[0] = int" in h
