@@ -208,3 +208,49 @@ def test_solver_error_carries_status_time_state(kane_sim):
     assert err.status == -8 and err.status_name == "ERR_NONFINITE_MODEL" and err.time == 0.5
     assert list(err.state) == [1.0, 0.0, 0.0, 0.0]
     assert "q2=1" in str(err) and "t = 0.5" in str(err)
+
+
+# ------------------------------------------------------------ the binary
+@pytest.fixture(scope="module")
+def binary(tmp_path_factory, kane_model):
+    import subprocess
+    from conftest import require_tool
+    require_tool("cmake")
+    out = tmp_path_factory.mktemp("catalogue_bin")
+    gen.generate(kane_model, out / "src")
+    subprocess.run(["cmake", "-S", str(out / "src"), "-B", str(out / "b"),
+                    "-DCMAKE_BUILD_TYPE=Release"], check=True, capture_output=True)
+    subprocess.run(["cmake", "--build", str(out / "b")], check=True, capture_output=True)
+    return out / "b" / "pendulum_kane_sim"
+
+
+BINARY_CASES = [
+    (["--x0", "q2=nan"], 2, "not a finite number: q2=nan"),
+    (["--x0", "q2=1e400"], 2, "not a finite number"),
+    (["--x0", "theta=1"], 2, "unknown"),
+    (["--param", "mass=1"], 2, "unknown constant name"),
+    (["--dt", "-1"], 2, "--dt needs a positive number"),
+    (["--t-end", "soon"], 2, "--t-end needs a number"),
+    (["--method", "euler"], 2, "--method must be rk4 or dopri5"),
+    (["--frobnicate"], 2, "frobnicate"),
+]
+
+
+@pytest.mark.parametrize("args,code,needle", BINARY_CASES, ids=[c[2] for c in BINARY_CASES])
+def test_binary_bad_arguments(binary, args, code, needle):
+    import subprocess
+    r = subprocess.run([str(binary), *args], capture_output=True, text=True)
+    assert r.returncode == code and needle in r.stderr, (r.returncode, r.stderr)
+    assert r.stdout == ""                          # no CSV at all
+
+
+def test_binary_failed_step_says_the_csv_is_truncated(binary, tmp_path):
+    import subprocess
+    out = tmp_path / "run.csv"
+    r = subprocess.run([str(binary), "--t-end", "2", "--x0", "q2=0.5", "--x0", "q1=0.8",
+                        "--method", "dopri5", "--rtol", "1e-30", "--atol", "1e-30",
+                        "--output", str(out)], capture_output=True, text=True)
+    assert r.returncode == 1
+    assert "step failed at t=" in r.stderr and "CSV truncated after 1 rows" in r.stderr
+    assert "last good state: q2=0.5" in r.stderr
+    assert len(out.read_text().splitlines()) == 2   # header + the one good row
