@@ -128,8 +128,11 @@ def build_cffi(model, real="double", verbose=False, timings=None, files=None, ba
             raise BuildError(f"internal error: the cffi declarations do not parse: {e}", cdef) from e
         if backend == "c":
             own = [f"{model.name}.c"] + RUNTIME_SOURCES
-            ffi.set_source(modname, wrapper,
-                           sources=[str(src / s) for s in own],
+            # the model and the runtime as objects, compiled in parallel (the
+            # runtime's objects are shared by every model with the same runtime
+            # sources, scalar type and flags); cffi then compiles its wrapper
+            objects = _c_objects(model, src, tmp)
+            ffi.set_source(modname, wrapper, extra_objects=[str(o) for o in objects],
                            include_dirs=[str(src)], extra_compile_args=list(C_FLAGS),
                            libraries=["m"])
         else:
@@ -172,6 +175,68 @@ def build_cffi(model, real="double", verbose=False, timings=None, files=None, ba
         timings["compile"] = time.perf_counter() - t1
         timings["cached"] = False
     return so, modname
+
+
+def _cc_object(cc, src: Path, obj: Path, include: Path):
+    cmd = [cc, *C_FLAGS, "-fPIC", "-I", str(include), "-c", str(src), "-o", str(obj)]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise BuildError(f"compiling {src.name} failed",
+                         "$ " + " ".join(cmd) + "\n" + proc.stdout + proc.stderr)
+    return obj
+
+
+def _runtime_objects(src: Path, cc: str):
+    """The runtime's object files, from a cache shared by every model: keyed
+    by the runtime sources, the scalar-type header, the flags and the
+    compiler. Returns (objects ready, sources still to compile into dir)."""
+    h = hashlib.sha256()
+    h.update(__version__.encode() + b"\0" + " ".join([cc, *C_FLAGS, "-fPIC"]).encode())
+    try:
+        h.update(subprocess.run([cc, "--version"], capture_output=True, text=True).stdout.encode())
+    except OSError as e:
+        raise BuildError(f"the C compiler {cc!r} cannot be run: {e}") from None
+    for name in sorted(RUNTIME_SOURCES) + ["gen_rt.h", "gen_rt_config.h"]:
+        h.update(name.encode() + b"\0" + (src / name).read_bytes() + b"\0")
+    folder = cache_dir() / f"runtime_{h.hexdigest()[:16]}"
+    objs = [folder / (Path(s).stem + ".o") for s in RUNTIME_SOURCES]
+    if all(o.is_file() for o in objs):
+        return objs, None
+    return None, folder
+
+
+def _c_objects(model, src: Path, tmp: Path):
+    """Compile the model's C file and (unless cached) the runtime, two at a
+    time; return the object files to link."""
+    from concurrent.futures import ThreadPoolExecutor
+    cc = _compiler()
+    objdir = tmp / "obj"
+    objdir.mkdir()
+    runtime, rt_folder = _runtime_objects(src, cc)
+    jobs = [(src / f"{model.name}.c", objdir / f"{model.name}.o")]
+    if runtime is None:
+        rt_tmp = tmp / "runtime"
+        rt_tmp.mkdir()
+        jobs += [(src / s, rt_tmp / (Path(s).stem + ".o")) for s in RUNTIME_SOURCES]
+    with ThreadPoolExecutor(max_workers=max(1, min(len(jobs), os.cpu_count() or 1))) as ex:
+        futures = [ex.submit(_cc_object, cc, s, o, src) for s, o in jobs]
+        try:
+            results = [f.result() for f in futures]
+        except BuildError:
+            ok, log = _compile_log(src, [f"{model.name}.c"] + RUNTIME_SOURCES)
+            raise BuildError(f"compiling the model '{model.name}' failed", log) from None
+    if runtime is None:
+        # publish the runtime objects for the next model (atomic rename; a
+        # concurrent builder that got there first wins, both are identical)
+        rt_folder.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            os.rename(rt_tmp, rt_folder)
+            runtime = [rt_folder / Path(o).name for o in results[1:]]
+        except OSError:
+            runtime = results[1:]
+            if all((rt_folder / Path(o).name).is_file() for o in runtime):
+                runtime = [rt_folder / Path(o).name for o in runtime]
+    return [results[0], *runtime]
 
 
 def _find_module(folder: Path, modname: str):
