@@ -27,6 +27,7 @@ import pytest
 import sympy as sm
 
 import chaplygin_sleigh as cs
+import double_pendulum as dp
 import four_bar as fb
 import gen
 import n_link_cart as nl
@@ -49,6 +50,7 @@ MODELS = {
     "cart": nl.model,
     "four_bar": fb.model,
     "rolling_disc": rd.model,
+    "double_pendulum": dp.model,
 }
 
 
@@ -153,7 +155,7 @@ def _states(key, sim, rng):
             x = np.array([rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1.2, 1.2),
                           rng.uniform(-2, 2), rng.uniform(-2, 2), 0.0])
             x = sim.consistent_state(x)
-        elif key == "cart":
+        elif key in ("cart", "double_pendulum"):
             x = np.concatenate([rng.uniform(-1, 1, sim.nq), rng.uniform(-2, 2, sim.nu)])
         elif key == "rolling_disc":
             x = np.concatenate([rng.uniform(-0.5, 0.5, sim.nq), rng.uniform(-2, 2, 3),

@@ -91,3 +91,57 @@ def test_header_documents_the_name_mapping(hostile, tmp_path):
     assert "u03b8" in h and "sympy: θ" in h
     assert "a_b_3" in h and "sympy: a*\\/b" in h           # no comment terminator
     assert "r[0] = int" in h
+
+
+def _double_pendulum(names):
+    """A double pendulum (point masses, rods, a torsional spring at the
+    pivot) with every symbol named as given."""
+    q1, q2 = me.dynamicsymbols(f"{names['q1']} {names['q2']}")
+    u1, u2 = me.dynamicsymbols(f"{names['u1']} {names['u2']}")
+    m1, m2, l1, l2, g, k = (sm.Symbol(names[s]) for s in ("m1", "m2", "l1", "l2", "g", "k"))
+    N = me.ReferenceFrame("N")
+    A = N.orientnew("A", "Axis", [q1, N.z])
+    B = N.orientnew("B", "Axis", [q2, N.z])
+    A.set_ang_vel(N, u1 * N.z)
+    B.set_ang_vel(N, u2 * N.z)
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P1 = O.locatenew("P1", -l1 * A.y)
+    P1.v2pt_theory(O, N, A)
+    P2 = P1.locatenew("P2", -l2 * B.y)
+    P2.v2pt_theory(P1, N, B)
+    KM = me.KanesMethod(N, q_ind=[q1, q2], u_ind=[u1, u2],
+                        kd_eqs=[q1.diff() - u1, q2.diff() - u2])
+    KM.kanes_equations([me.Particle("p1", P1, m1), me.Particle("p2", P2, m2)],
+                       [(P1, -m1 * g * N.y), (P2, -m2 * g * N.y), (A, -k * q1 * N.z)])
+    vals = {m1: 1.0, m2: 0.7, l1: 1.2, l2: 0.8, g: 9.81, k: 2.5}
+    return gen.Model.from_kanes(KM, constants=vals, name=names["name"])
+
+
+def test_double_pendulum_with_hostile_names_linearizes_like_plain():
+    """Issue 8: int, double, y0, j1, gamma, lambda, E, I, x[0], theta'."""
+    hostile = dict(q1="x[0]", q2="theta'", u1="int", u2="double", m1="y0", m2="j1",
+                   l1="gamma", l2="lambda", g="E", k="I", name="dp_hostile")
+    plain = dict(q1="q1", q2="q2", u1="u1", u2="u2", m1="m1", m2="m2", l1="l1", l2="l2",
+                 g="g", k="k", name="dp_plain")
+    mh, mp = _double_pendulum(hostile), _double_pendulum(plain)
+    assert mh.state_names == ["x_0", "theta_p", "int", "double"]
+    assert mh.constant_names == ["y0", "j1", "gamma", "lambda", "E", "I"]
+    sh, sp_ = gen.compile(mh), gen.compile(mp)
+    rng = np.random.default_rng(3)
+    for x in [np.zeros(4)] + [rng.uniform(-1, 1, 4) for _ in range(5)]:
+        Ah, _ = sh.linearize(x)
+        Ap, _ = sp_.linearize(x)
+        assert np.array_equal(Ah, Ap)
+        assert np.array_equal(sh.rhs(0.0, x), sp_.rhs(0.0, x))
+    # and it is the physics: hanging at rest, small-oscillation frequencies
+    # from the 2x2 generalized eigenproblem of K and M
+    A, _ = sh.linearize(np.zeros(4))
+    m1, m2, l1, l2, g, k = 1.0, 0.7, 1.2, 0.8, 9.81, 2.5
+    M = np.array([[(m1 + m2) * l1**2, m2 * l1 * l2], [m2 * l1 * l2, m2 * l2**2]])
+    K = np.array([[(m1 + m2) * g * l1 + k, 0.0], [0.0, m2 * g * l2]])
+    w2 = np.sort(np.linalg.eigvals(np.linalg.solve(M, K)).real)
+    lam = np.linalg.eigvals(A)
+    assert np.max(np.abs(lam.real)) < 1e-9
+    w2_A = np.sort(lam.imag[lam.imag > 0] ** 2)
+    assert np.allclose(w2_A, w2, rtol=1e-9)

@@ -31,7 +31,7 @@ typedef P(real) real;
 #define MC PU(MC)
 #define MV PU(MV)
 #define NS PU(NS)
-#define ROWS 16
+#define ROWS 4
 
 static void fail(const char *what, const char *why, int st)
 {
@@ -60,7 +60,7 @@ static void unchanged(const char *what, int st, const real *before, const real *
         fail(what, "failed but changed x", st);
 }
 
-static void exercise(const real *x, const real *r, const real *p, real t, real h)
+static void exercise(const real *x, const real *r, const real *p, real t, real h, int sim)
 {
     real dx[NX], lam[MV + 1], M[NU * NU], f[NU], qd[NQ], xc[NX], E[1];
     real A[NS * NS + 1], B[NS * NR + 1];
@@ -101,14 +101,15 @@ static void exercise(const real *x, const real *r, const real *p, real t, real h
     check("linearize (A)", st, A, NS * NS);
     check("linearize (B)", st, B, NS * NR);
 
+    if (!sim) return;
     P(sim_options_default)(&o);
-    o.max_steps = 200;
+    o.max_steps = 20;
     o.method = (h < 0) ? PU(METHOD_DOPRI5) : PU(METHOD_RK4);
-    rows = P(simulate_rows)(t, t + 5 * fabs(h), fabs(h));
+    rows = P(simulate_rows)(t, t + 2 * fabs(h), fabs(h));
     if (rows < -9) fail("simulate_rows", "unknown status", rows);
     if (rows > 0 && rows <= ROWS) {
         memset(&s, 0, sizeof s);
-        st = P(simulate)(x, t, t + 5 * fabs(h), fabs(h), r, p, &o, ROWS, tout, xout, lout, &s);
+        st = P(simulate)(x, t, t + 2 * fabs(h), fabs(h), r, p, &o, ROWS, tout, xout, lout, &s);
         check("simulate", st, NULL, 0);
         if (s.n_out < 0 || s.n_out > ROWS) fail("simulate", "n_out out of range", s.n_out);
         if (!finite_all(xout, s.n_out * NX) || !finite_all(tout, s.n_out))
@@ -162,7 +163,7 @@ static void run_bytes(const uint8_t *d, size_t n)
     real x[NX], r[NR + 1], p[NP + 1], t, h;
     const real *pp = NULL;
     size_t pos = 0;
-    int i;
+    int i, sim = n > 0 && (d[0] & 7) == 0;   /* simulate() on one input in eight */
     for (i = 0; i < NX; ++i) x[i] = value(d, n, &pos);
     for (i = 0; i < NR; ++i) r[i] = value(d, n, &pos);
     if (pos < n && (d[pos++] & 1)) {
@@ -171,7 +172,7 @@ static void run_bytes(const uint8_t *d, size_t n)
     }
     t = value(d, n, &pos);
     h = value(d, n, &pos);
-    exercise(x, r, pp, t, h);
+    exercise(x, r, pp, t, h, sim);
 }
 
 #ifdef FUZZ
