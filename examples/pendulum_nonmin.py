@@ -67,7 +67,7 @@ def main(argv=None):
         print(f"\n{label}: model '{model.name}' ({t1 - t0:.2f} s to form), generated and compiled "
               f"in {t2 - t1:.2f} s -> {out / model.name}")
         print("  state layout:", sim.state_names, " independent:", sim.independent_state_names)
-        print("  compiled linearize at hanging rest: A =", A.tolist(), " B shape", B.shape)
+        print("  compiled linearize at hanging rest: A =", (A + 0.0).tolist(), " B shape", B.shape)
         A_ref = (A_k if model.method == "kane" else A_l).subs({s["g"]: g, s["L"]: L,
                                                                s2["g"]: g, s2["L"]: L})
         print("  sympy's A at the same numbers:      ", np.array(A_ref.evalf(), dtype=float).tolist())
