@@ -88,6 +88,7 @@ def test_libfuzzer_bounded_run(tmp_path, key):
     budget = ["-runs=1000000", "-max_total_time=600"] if key == "kane" else \
         ["-max_total_time=15"]
     r = subprocess.run([str(exe), str(corpus), *budget, "-seed=7", "-max_len=256",
+                        f"-artifact_prefix={tmp_path}/",        # crash files stay out of cwd
                         "-print_final_stats=1", "-rss_limit_mb=2048"],
                        capture_output=True, text=True, timeout=900)
     assert r.returncode == 0, r.stderr[-4000:]
