@@ -127,6 +127,8 @@ int gen_rt_accel_partitioned(int n, int m, const int *ind, const int *dep,
         if (st) return st;
         st = gen_rt_lu_solve(m, AAt, iwork, 1, y);
         if (st) return st;
+        /* accelerations can be finite while M ud - f overflows (found by the fuzzer) */
+        if (!gen_rt_all_finite(m, y)) return GEN_RT_ERR_SINGULAR;
         for (i = 0; i < m; ++i) lam[i] = y[i];
     }
     return GEN_RT_OK;

@@ -3,7 +3,9 @@ UndefinedBehaviorSanitizer with hostile inputs (a seeded sweep of extreme
 values and NULL pointers), and a coverage-guided libFuzzer run for a
 bounded time. Rules checked by tests/fuzz/harness.c: known statuses only,
 status 0 means finite outputs, a failed call leaves x unchanged, NULL is
-refused."""
+refused. tests/fuzz/regressions holds inputs that once broke a rule (the
+rolling disc's multipliers overflowing while its accelerations stayed
+finite); they seed the corpus of every run."""
 import re
 import subprocess
 from pathlib import Path
@@ -83,6 +85,9 @@ def test_libfuzzer_bounded_run(tmp_path, key):
                                                   "-fno-sanitize-recover=all"], ["-DFUZZ"])
     corpus = tmp_path / "corpus"
     corpus.mkdir()
+    # inputs that once failed start the corpus (regressions)
+    for seed in (HARNESS.parent / "regressions").glob(f"{key}-*.bin"):
+        (corpus / seed.name).write_bytes(seed.read_bytes())
     # the seed pendulum: a million inputs (the acceptance bar); the rolling disc
     # (velocity constraints, an input): a bounded time
     budget = ["-runs=1000000", "-max_total_time=600"] if key == "kane" else \
