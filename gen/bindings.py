@@ -224,18 +224,13 @@ class Simulator:
         if np.ndim(x) == 2:
             return self.rhs_batch(t, x, r, p, out=out)
         x = self._vec(x, self.nx, "state x")
-        if out is not None:
-            if (type(out) is not np.ndarray or out.dtype is not self._dt
-                    or out.shape != (self.nx,) or not out.flags.c_contiguous):
-                raise ValueError(f"out must be a C-contiguous {self.dtype.__name__} array of "
-                                 f"shape ({self.nx},)")
-            r = None if r is None else self._vec(r, self.nr, "inputs r")
-            st = self._fn("eval_rhs")(t, self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
-                                      self._ptr(out), self._ffi.NULL)
-            self._check(st, "eval_rhs", t, x)
-            return out
+        if out is None:
+            out = np.empty(self.nx, dtype=self.dtype)
+        elif (type(out) is not np.ndarray or out.dtype is not self._dt
+                or out.shape != (self.nx,) or not out.flags.c_contiguous):
+            raise ValueError(f"out must be a C-contiguous {self.dtype.__name__} array of "
+                             f"shape ({self.nx},)")
         r = None if r is None else self._vec(r, self.nr, "inputs r")
-        out = np.empty(self.nx, dtype=self.dtype)
         st = self._fn("eval_rhs")(t, self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
                                   self._ptr(out), self._ffi.NULL)
         self._check(st, "eval_rhs", t, x)

@@ -164,8 +164,7 @@ def _compile(model, a, progress):
     with progress.stage("kernels, printing, templates"):
         files = render_files(model, real=a.real, backend=backend, timings=timings)
     with progress.stage("compile (cffi, cached)"):
-        kw = {"backend": backend} if backend != "c" else {}
-        so, modname = build_cffi(model, real=a.real, files=files, **kw)
+        so, modname = build_cffi(model, real=a.real, files=files, backend=backend)
     for k in ("kernels", "printing", "templates"):
         if k in timings and progress.verbose:
             print(f"eomgen:   {k:<32} {timings[k]:8.2f} s", file=progress.stream)

@@ -280,9 +280,9 @@ def build_context(model, real="double", kernels=None, timings=None, backend="c")
         "has_energy": 1 if m.energy is not None else 0,
         "statuses": STATUSES,
         "state_doc": roles,
-        "inputs_doc": [(i, n + (f"  ({sympy_name(m.input_names, m.input_labels, i)[2:]})"
-                                if sympy_name(m.input_names, m.input_labels, i) else ""))
-                       for i, n in enumerate(m.input_names)],
+        "inputs_doc": [(i, n + (f"  ({lab[2:]})" if lab else ""))
+                       for i, n in enumerate(m.input_names)
+                       for lab in [sympy_name(m.input_names, m.input_labels, i)]],
         "params_doc": [(i, n, _fmt_real(v, "double")
                         + sympy_name(m.constant_names, m.constant_labels, i))
                        for i, (n, v) in enumerate(zip(m.constant_names, m.p_values))],

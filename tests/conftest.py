@@ -26,6 +26,17 @@ def require_tool(name):
     return path
 
 
+def require_eigen():
+    """The Eigen 3.4 include dir; skip with a reason when missing, fail under CI."""
+    from gen.eigen import find_eigen
+    d, why = find_eigen()
+    if d is None:
+        if os.environ.get("CI") == "true":
+            pytest.fail(f"Eigen 3.4 is required under CI=true: {why}")
+        pytest.skip(why)
+    return d
+
+
 @pytest.fixture(scope="session")
 def kane_model():
     return seed_pendulum.kane_model()

@@ -34,8 +34,8 @@ import n_link_cart as nl
 import rolling_disc as rd
 import seed_pendulum as sp
 from gen.build import build_cffi
-from gen.eigen import find_eigen
 from gen.render import RUNTIME_SOURCES
+from conftest import require_eigen
 from helpers import pendulum_state, rel_err
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -52,16 +52,6 @@ MODELS = {
     "rolling_disc": rd.model,
     "double_pendulum": dp.model,
 }
-
-
-def require_eigen():
-    """The Eigen include dir; skip with a reason when missing, fail under CI."""
-    d, why = find_eigen()
-    if d is None:
-        if os.environ.get("CI") == "true":
-            pytest.fail(f"Eigen 3.4 is required under CI=true: {why}")
-        pytest.skip(why)
-    return d
 
 
 def rel(a, b):

@@ -16,7 +16,7 @@ import four_bar
 import gen
 import rolling_disc
 import seed_pendulum as sp
-from conftest import require_tool
+from conftest import require_eigen, require_tool
 
 HARNESS = Path(__file__).resolve().parent / "fuzz" / "harness.c"
 MODELS = {"kane": sp.kane_model, "lagrange": sp.lagrange_model,
@@ -51,12 +51,7 @@ def test_hostile_inputs_under_sanitizers(tmp_path, key):
 @pytest.mark.parametrize("key", ["rolling_disc"])
 def test_eigen_backend_under_sanitizers(tmp_path, key):
     """The C++/Eigen backend's extern "C" layer obeys the same rules."""
-    from gen.eigen import find_eigen
-    inc, why = find_eigen()
-    if inc is None:
-        if __import__("os").environ.get("CI") == "true":
-            pytest.fail(f"Eigen is required under CI=true: {why}")
-        pytest.skip(why)
+    inc = require_eigen()
     model = MODELS[key]()
     out = tmp_path
     gen.generate(model, out, backend="eigen")
