@@ -28,17 +28,13 @@ typedef double gen_rt_real;
 #define GEN_RT_C(x) x
 #endif
 
-/* Status codes, shared by the runtime and every generated model. */
-#define GEN_RT_OK 0
-#define GEN_RT_ERR_NULL (-1)            /* a required pointer argument is NULL */
-#define GEN_RT_ERR_NONFINITE_INPUT (-2) /* an input holds NaN or inf */
-#define GEN_RT_ERR_SINGULAR (-3)        /* matrix singular or too badly conditioned */
-#define GEN_RT_ERR_NO_CONVERGENCE (-4)  /* Newton projection / consistency did not converge */
-#define GEN_RT_ERR_STEP_UNDERFLOW (-5)  /* adaptive step size fell below its minimum */
-#define GEN_RT_ERR_MAX_STEPS (-6)       /* step budget exhausted */
-#define GEN_RT_ERR_BAD_ARG (-7)         /* an argument is out of range (size, tolerance, step) */
-#define GEN_RT_ERR_NONFINITE_MODEL (-8) /* the model expressions evaluate to NaN/inf here */
-#define GEN_RT_ERR_OUTPUT_FULL (-9)     /* caller's output buffer too small */
+/* Status codes, shared by the runtime and every generated model: one enum
+ * constant per line of the table in gen_rt_status.h (GEN_RT_OK = 0,
+ * GEN_RT_ERR_NULL = -1, ...). */
+#include "gen_rt_status.h"
+#define GEN_RT_STATUS_ENUM_(name, value, text) GEN_RT_##name = (value),
+enum gen_rt_status { GEN_RT_STATUS_TABLE(GEN_RT_STATUS_ENUM_) GEN_RT_STATUS_END_ = 1 };
+#undef GEN_RT_STATUS_ENUM_
 #define GEN_RT_STATUS_MIN (-9)
 
 /* A human-readable message for a status code (static storage, never NULL). */
@@ -188,6 +184,198 @@ typedef struct {
 int gen_rt_linearize(const gen_rt_lin_dims *d, const gen_rt_lin_blocks *b,
                      gen_rt_real *work, int *iwork, gen_rt_real *A_lin,
                      gen_rt_real *B_lin);
+
+/* ---- a model, and everything done with it (gen_rt_model.c) -----------
+ * A generated model is a gen_rt_model: its sizes, its coordinate partition,
+ * its kernels (straight-line code printed by the generator) and which
+ * acceleration solve it uses (decided by the generator). The functions
+ * below are the model-agnostic algorithms of the public API; the generated
+ * wrappers check the arguments, put the work arrays on their stack (sized
+ * by the GEN_RT_MODEL_*_WORK macros: constant expressions, no VLAs) and
+ * call them. Inputs are assumed checked (non-NULL, finite). */
+
+/* which solve gives u' from M u' = f + A^T lam (the generator decides) */
+#define GEN_RT_ACCEL_PARTITIONED 0 /* Kane: dependent speeds eliminated (gen_rt_accel_partitioned) */
+#define GEN_RT_ACCEL_KKT 1         /* Lagrange: KKT system with the multipliers */
+#define GEN_RT_ACCEL_LDLT 2        /* no constraints, symmetric M: the model's unrolled LDL^T */
+#define GEN_RT_ACCEL_LU 3          /* no constraints, general M: pivoted LU */
+
+/* outputs of the linearization kernel (the blocks of gen_rt_lin_blocks);
+ * the kernel writes the blocks the model has */
+typedef struct {
+    gen_rt_real *Kqd, *Ku, *M, *A, *Kq, *Rq, *Ru, *Rr, *Sq, *Su, *Vq, *Jc;
+} gen_rt_lin_out;
+
+typedef struct gen_rt_model {
+    int nq, nu, nr, np, mc, mv;     /* nx = nq + nu, ns = nq - mc + nu - mv */
+    int explicit_kinematics;        /* 1: kinematics gives q'; 0: Kqd q' = kr */
+    int accel;                      /* GEN_RT_ACCEL_* */
+    const int *q_ind, *q_dep, *u_ind, *u_dep;
+    /* kernels; a kernel the model does not have (no constraints, no
+     * energy) is NULL. Kqd is written only with implicit kinematics, A and a
+     * only when mv > 0. */
+    void (*mass_matrix)(const gen_rt_real *q, const gen_rt_real *p, gen_rt_real t,
+                        gen_rt_real *M);
+    void (*forcing)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
+                    const gen_rt_real *p, gen_rt_real t, gen_rt_real *f);
+    void (*kinematics)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *p,
+                       gen_rt_real t, gen_rt_real *Kqd, gen_rt_real *qd);
+    void (*rhs_terms)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
+                      const gen_rt_real *p, gen_rt_real t, gen_rt_real *Kqd,
+                      gen_rt_real *qd, gen_rt_real *M, gen_rt_real *f, gen_rt_real *A,
+                      gen_rt_real *a);
+    void (*constraints)(const gen_rt_real *q, const gen_rt_real *p, gen_rt_real t,
+                        gen_rt_real *fc);
+    void (*constraint_jacobian)(const gen_rt_real *q, const gen_rt_real *p, gen_rt_real t,
+                                gen_rt_real *fc, gen_rt_real *Jc);
+    void (*velocity_constraints)(const gen_rt_real *q, const gen_rt_real *u,
+                                 const gen_rt_real *p, gen_rt_real t, gen_rt_real *fv);
+    void (*velocity_constraint_matrix)(const gen_rt_real *q, const gen_rt_real *p,
+                                       gen_rt_real t, gen_rt_real *A, gen_rt_real *b);
+    void (*energy)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *p,
+                   gen_rt_real t, gen_rt_real *E);
+    void (*lin_terms)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *qd,
+                      const gen_rt_real *ud, const gen_rt_real *lam, const gen_rt_real *r,
+                      const gen_rt_real *p, gen_rt_real t, const gen_rt_lin_out *o);
+    /* M x = f for GEN_RT_ACCEL_LDLT (a status; x written only on success) */
+    int (*mass_solve)(const gen_rt_real *M, const gen_rt_real *f, gen_rt_real *x);
+} gen_rt_model;
+
+/* integration methods (gen_rt_sim_options.method) */
+#define GEN_RT_METHOD_RK4 0
+#define GEN_RT_METHOD_DOPRI5 1
+
+/* the options and statistics of advance/simulate; the generated
+ * <p>_sim_options and <p>_sim_stats carry the same fields (gen/abi.py) */
+typedef struct {
+    int method, project;
+    gen_rt_real rtol, atol, h_init, h_min, h_max;
+    long max_steps;
+    gen_rt_real proj_tol;
+    int proj_max_iter;
+} gen_rt_sim_options;
+
+typedef struct {
+    long n_accepted, n_rejected, n_rhs;
+    int n_out;
+    gen_rt_real t_last, h_next;
+    gen_rt_real *x_last;            /* nx reals: the last good state */
+} gen_rt_sim_stats;
+
+/* Work arrays, by function: every macro takes the same arguments, the
+ * model's sizes and its two solver choices:
+ *   (nq, nu, mc, mv, nr, explicit_kinematics, accel)                     */
+#define GEN_RT_MAX_(a, b) ((a) > (b) ? (a) : (b))
+#define GEN_RT_NX_(nq, nu) ((nq) + (nu))
+#define GEN_RT_MODEL_KIN_WORK(nq, nu, mc, mv, nr, ek, acc) ((ek) ? 1 : (nq) * (nq) + 1)
+#define GEN_RT_MODEL_KIN_IWORK(nq, nu, mc, mv, nr, ek, acc) ((nq) + 1)
+#define GEN_RT_MODEL_RHS_WORK(nq, nu, mc, mv, nr, ek, acc)                      \
+    ((nu) * (nu) + (nu) + (mv) * (nu) + (mv) + ((ek) ? 0 : (nq) * (nq)) +        \
+     ((acc) == GEN_RT_ACCEL_LDLT ? 0 : GEN_RT_ACCEL_WORK(nu, mv)) + 1)
+#define GEN_RT_MODEL_RHS_IWORK(nq, nu, mc, mv, nr, ek, acc) ((nq) + (nu) + (mv) + 1)
+/* eval_rhs also keeps x' apart until it succeeds */
+#define GEN_RT_MODEL_EVAL_RHS_WORK(nq, nu, mc, mv, nr, ek, acc)                 \
+    (GEN_RT_NX_(nq, nu) + GEN_RT_MODEL_RHS_WORK(nq, nu, mc, mv, nr, ek, acc))
+#define GEN_RT_MODEL_EVAL_RHS_IWORK(nq, nu, mc, mv, nr, ek, acc)                \
+    GEN_RT_MODEL_RHS_IWORK(nq, nu, mc, mv, nr, ek, acc)
+#define GEN_RT_MODEL_JAC_WORK(nq, nu, mc, mv, nr, ek, acc) ((mc) + 1)
+#define GEN_RT_MODEL_PROJECT_WORK(nq, nu, mc, mv, nr, ek, acc)                  \
+    (GEN_RT_NX_(nq, nu) + GEN_RT_MAX_((mc) * (mc) + (mc), (mv) * (mv) + (mv)) + 1 + \
+     (mc) + (mc) * (nq) + (nq) + (mv) * (nu) + 2 * (mv))
+#define GEN_RT_MODEL_CONSISTENT_WORK(nq, nu, mc, mv, nr, ek, acc)               \
+    (GEN_RT_NX_(nq, nu) + (mc) + (mc) * (nq) + (mc) * (mc) + (mv) * (nu) + 2 * (mv) + \
+     (mv) * (mv) + 1)
+#define GEN_RT_MODEL_CONSISTENT_IWORK(nq, nu, mc, mv, nr, ek, acc) ((mc) + (mv) + 1)
+/* what a right-hand side or a projection inside an integrator needs */
+#define GEN_RT_MODEL_CB_WORK_(nq, nu, mc, mv, nr, ek, acc)                      \
+    GEN_RT_MAX_(GEN_RT_MODEL_RHS_WORK(nq, nu, mc, mv, nr, ek, acc),             \
+                GEN_RT_MODEL_PROJECT_WORK(nq, nu, mc, mv, nr, ek, acc))
+#define GEN_RT_MODEL_STEP_WORK(nq, nu, mc, mv, nr, ek, acc)                     \
+    (GEN_RT_RK4_WORK(GEN_RT_NX_(nq, nu)) + GEN_RT_NX_(nq, nu) +                 \
+     GEN_RT_MODEL_CB_WORK_(nq, nu, mc, mv, nr, ek, acc))
+#define GEN_RT_MODEL_STEP_IWORK(nq, nu, mc, mv, nr, ek, acc)                    \
+    GEN_RT_MODEL_RHS_IWORK(nq, nu, mc, mv, nr, ek, acc)
+#define GEN_RT_MODEL_ADVANCE_WORK(nq, nu, mc, mv, nr, ek, acc)                  \
+    (GEN_RT_MAX_(GEN_RT_RK4_WORK(GEN_RT_NX_(nq, nu)) + GEN_RT_NX_(nq, nu),       \
+                 GEN_RT_DOPRI5_WORK(GEN_RT_NX_(nq, nu))) +                      \
+     GEN_RT_MODEL_CB_WORK_(nq, nu, mc, mv, nr, ek, acc))
+#define GEN_RT_MODEL_ADVANCE_IWORK(nq, nu, mc, mv, nr, ek, acc)                 \
+    GEN_RT_MODEL_RHS_IWORK(nq, nu, mc, mv, nr, ek, acc)
+#define GEN_RT_MODEL_SIMULATE_WORK(nq, nu, mc, mv, nr, ek, acc)                 \
+    (2 * GEN_RT_NX_(nq, nu) + (mv) + 1 +                                        \
+     GEN_RT_MODEL_ADVANCE_WORK(nq, nu, mc, mv, nr, ek, acc))
+#define GEN_RT_MODEL_SIMULATE_IWORK(nq, nu, mc, mv, nr, ek, acc)                \
+    GEN_RT_MODEL_RHS_IWORK(nq, nu, mc, mv, nr, ek, acc)
+#define GEN_RT_MODEL_LINEARIZE_WORK(nq, nu, mc, mv, nr, ek, acc)                \
+    ((nq) + (nu) + (mv) + 1 + (nu) * (nu) + (nu) + (mv) * (nu) + (mv) +          \
+     2 * (nq) * (nq) + (nq) * (nu) + (nu) * (nq) + (nu) * (nu) + (nu) * (nr) +   \
+     2 * (mv) * (nq) + (mv) * (nu) + (mc) * (nq) +                               \
+     GEN_RT_MAX_(GEN_RT_MAX_(GEN_RT_ACCEL_WORK(nu, mv), GEN_RT_MODEL_KIN_WORK(nq, nu, mc, mv, nr, ek, acc)), \
+                 (nq) + (nu) * (nu) + (nu) + (nq) * (nq)) +                      \
+     GEN_RT_LIN_WORK(nq, nu, mc, mv, nr) + 8)
+#define GEN_RT_MODEL_LINEARIZE_IWORK(nq, nu, mc, mv, nr, ek, acc)               \
+    GEN_RT_MAX_(GEN_RT_LIN_IWORK(nq, nu, mc, mv), GEN_RT_ACCEL_IWORK(nu, mv) + (nq))
+
+int gen_rt_model_eval_mass_matrix(const gen_rt_model *m, const gen_rt_real *q,
+                                  const gen_rt_real *p, gen_rt_real t, gen_rt_real *M);
+int gen_rt_model_eval_forcing(const gen_rt_model *m, const gen_rt_real *q,
+                              const gen_rt_real *u, const gen_rt_real *r,
+                              const gen_rt_real *p, gen_rt_real t, gen_rt_real *f);
+/* q' from the kinematic equations (an LU solve when they are implicit) */
+int gen_rt_model_eval_kinematics(const gen_rt_model *m, const gen_rt_real *q,
+                                 const gen_rt_real *u, const gen_rt_real *p, gen_rt_real t,
+                                 gen_rt_real *work, int *iwork, gen_rt_real *qdot);
+int gen_rt_model_eval_constraints(const gen_rt_model *m, const gen_rt_real *q,
+                                  const gen_rt_real *p, gen_rt_real t, gen_rt_real *fc);
+int gen_rt_model_eval_constraint_jacobian(const gen_rt_model *m, const gen_rt_real *q,
+                                          const gen_rt_real *p, gen_rt_real t,
+                                          gen_rt_real *work, gen_rt_real *Jc);
+int gen_rt_model_eval_velocity_constraints(const gen_rt_model *m, const gen_rt_real *q,
+                                           const gen_rt_real *u, const gen_rt_real *p,
+                                           gen_rt_real t, gen_rt_real *fv);
+int gen_rt_model_eval_velocity_constraint_matrix(const gen_rt_model *m,
+                                                 const gen_rt_real *q,
+                                                 const gen_rt_real *p, gen_rt_real t,
+                                                 gen_rt_real *A, gen_rt_real *b);
+/* GEN_RT_ERR_BAD_ARG (and E = 0) when the model has no energy */
+int gen_rt_model_eval_energy(const gen_rt_model *m, const gen_rt_real *q,
+                             const gen_rt_real *u, const gen_rt_real *p, gen_rt_real t,
+                             gen_rt_real *E);
+/* x' (and the multipliers when lam != NULL) written straight into dxdt,
+ * which holds garbage on failure: the integrators' right-hand side */
+int gen_rt_model_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                     const gen_rt_real *r, const gen_rt_real *p, gen_rt_real *work,
+                     int *iwork, gen_rt_real *dxdt, gen_rt_real *lam);
+/* the same, dxdt written only on success */
+int gen_rt_model_eval_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                          const gen_rt_real *r, const gen_rt_real *p, gen_rt_real *work,
+                          int *iwork, gen_rt_real *dxdt, gen_rt_real *lam);
+/* x onto f_c = 0 (Gauss-Newton, minimum norm) and A u + b = 0; x unchanged
+ * on failure; tol <= 0 and max_iter <= 0 mean 16 eps and 10 */
+int gen_rt_model_project(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *p,
+                         gen_rt_real tol, int max_iter, gen_rt_real *work, gen_rt_real *x);
+/* dependent coordinates (Newton) and speeds (linear solve) from the
+ * independent ones; x unchanged on failure; defaults 16 eps and 50 */
+int gen_rt_model_consistent_state(const gen_rt_model *m, gen_rt_real t,
+                                  const gen_rt_real *p, gen_rt_real tol, int max_iter,
+                                  gen_rt_real *work, int *iwork, gen_rt_real *x);
+int gen_rt_model_step_rk4(const gen_rt_model *m, gen_rt_real t, gen_rt_real h,
+                          const gen_rt_real *r, const gen_rt_real *p, int project,
+                          gen_rt_real *work, int *iwork, gen_rt_real *x);
+int gen_rt_model_advance(const gen_rt_model *m, gen_rt_real t0, gen_rt_real t1,
+                         const gen_rt_real *r, const gen_rt_real *p,
+                         const gen_rt_sim_options *o, gen_rt_real *work, int *iwork,
+                         gen_rt_sim_stats *s, gen_rt_real *x);
+int gen_rt_simulate_rows(gen_rt_real t0, gen_rt_real t_end, gen_rt_real dt);
+int gen_rt_model_simulate(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,
+                          gen_rt_real t_end, gen_rt_real dt, const gen_rt_real *r,
+                          const gen_rt_real *p, const gen_rt_sim_options *o, int capacity,
+                          gen_rt_real *work, int *iwork, gen_rt_real *t_out,
+                          gen_rt_real *x_out, gen_rt_real *lam_out, gen_rt_sim_stats *s);
+int gen_rt_model_linearize(const gen_rt_model *m, const gen_rt_real *x_op,
+                           const gen_rt_real *r_op, const gen_rt_real *p, gen_rt_real t,
+                           gen_rt_real *work, int *iwork, gen_rt_real *A_lin,
+                           gen_rt_real *B_lin);
 
 #ifdef __cplusplus
 }

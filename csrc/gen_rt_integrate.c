@@ -1,6 +1,7 @@
 /* gen_rt_integrate.c - classic RK4 and Dormand-Prince 5(4). */
 #include <math.h>
 #include "gen_rt.h"
+#include "gen_rt_dopri5.h"
 
 #ifdef GEN_RT_REAL_FLOAT
 #define RT_POW powf
@@ -34,37 +35,10 @@ int gen_rt_rk4_step(gen_rt_rhs_fn f, void *ctx, int nx, gen_rt_real t,
     return GEN_RT_OK;
 }
 
-/* Dormand-Prince coefficients */
-#define C2 GEN_RT_C(0.2)
-#define C3 GEN_RT_C(0.3)
-#define C4 GEN_RT_C(0.8)
-#define C5 (GEN_RT_C(8.0) / GEN_RT_C(9.0))
-#define A21 GEN_RT_C(0.2)
-#define A31 (GEN_RT_C(3.0) / GEN_RT_C(40.0))
-#define A32 (GEN_RT_C(9.0) / GEN_RT_C(40.0))
-#define A41 (GEN_RT_C(44.0) / GEN_RT_C(45.0))
-#define A42 (-GEN_RT_C(56.0) / GEN_RT_C(15.0))
-#define A43 (GEN_RT_C(32.0) / GEN_RT_C(9.0))
-#define A51 (GEN_RT_C(19372.0) / GEN_RT_C(6561.0))
-#define A52 (-GEN_RT_C(25360.0) / GEN_RT_C(2187.0))
-#define A53 (GEN_RT_C(64448.0) / GEN_RT_C(6561.0))
-#define A54 (-GEN_RT_C(212.0) / GEN_RT_C(729.0))
-#define A61 (GEN_RT_C(9017.0) / GEN_RT_C(3168.0))
-#define A62 (-GEN_RT_C(355.0) / GEN_RT_C(33.0))
-#define A63 (GEN_RT_C(46732.0) / GEN_RT_C(5247.0))
-#define A64 (GEN_RT_C(49.0) / GEN_RT_C(176.0))
-#define A65 (-GEN_RT_C(5103.0) / GEN_RT_C(18656.0))
-#define B1 (GEN_RT_C(35.0) / GEN_RT_C(384.0))
-#define B3 (GEN_RT_C(500.0) / GEN_RT_C(1113.0))
-#define B4 (GEN_RT_C(125.0) / GEN_RT_C(192.0))
-#define B5 (-GEN_RT_C(2187.0) / GEN_RT_C(6784.0))
-#define B6 (GEN_RT_C(11.0) / GEN_RT_C(84.0))
-#define E1 (GEN_RT_C(71.0) / GEN_RT_C(57600.0))
-#define E3 (-GEN_RT_C(71.0) / GEN_RT_C(16695.0))
-#define E4 (GEN_RT_C(71.0) / GEN_RT_C(1920.0))
-#define E5 (-GEN_RT_C(17253.0) / GEN_RT_C(339200.0))
-#define E6 (GEN_RT_C(22.0) / GEN_RT_C(525.0))
-#define E7 (-GEN_RT_C(1.0) / GEN_RT_C(40.0))
+/* Dormand-Prince coefficients (the tableau of gen_rt_dopri5.h) */
+#define GEN_RT_DP_COEF_(name, num, den) static const gen_rt_real name = GEN_RT_C(num) / GEN_RT_C(den);
+GEN_RT_DOPRI5_TABLEAU(GEN_RT_DP_COEF_)
+#undef GEN_RT_DP_COEF_
 
 static gen_rt_real rt_max(gen_rt_real a, gen_rt_real b) { return a > b ? a : b; }
 static gen_rt_real rt_min(gen_rt_real a, gen_rt_real b) { return a < b ? a : b; }

@@ -7,7 +7,7 @@ verified C simulators.
     A, B = sim.linearize(x_op)
     A, B = gen.linearize_symbolic(model, {q1: L, q2: 0})   # sympy matrices
 """
-__version__ = "0.1.0"
+from ._version import __version__
 
 from .errors import (BuildError, ConvergenceError, EomgenError, ModelError,  # noqa: E402
                      SingularError, SolverError)

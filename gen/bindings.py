@@ -1,57 +1,86 @@
 """The numpy-facing simulator over a compiled model. C status codes become
 exceptions from gen.errors; wrong shapes raise ValueError naming the
-expected shape. Every call returns fresh arrays (safe with solve_ivp)."""
+expected shape. Every call returns fresh arrays (safe with solve_ivp).
+
+A Simulator is made from the compiled cffi module and the model's interface
+description (gen.abi.Interface): it needs no sympy object."""
 from __future__ import annotations
 
 import numpy as np
 
+from .abi import METHODS, STATUSES, status_name
 from .errors import ConvergenceError, SingularError, SolverError
 
-__all__ = ["Simulator"]
+__all__ = ["Simulator", "EXCEPTIONS"]
 
-_STATUS_NAMES = {
-    -1: "ERR_NULL", -2: "ERR_NONFINITE_INPUT", -3: "ERR_SINGULAR", -4: "ERR_NO_CONVERGENCE",
-    -5: "ERR_STEP_UNDERFLOW", -6: "ERR_MAX_STEPS", -7: "ERR_BAD_ARG",
-    -8: "ERR_NONFINITE_MODEL", -9: "ERR_OUTPUT_FULL",
+# the exception each failure status raises (every status of gen/abi.py has
+# one: tests/test_abi.py checks it)
+EXCEPTIONS = {
+    "ERR_NULL": SolverError,
+    "ERR_NONFINITE_INPUT": ValueError,
+    "ERR_SINGULAR": SingularError,
+    "ERR_NO_CONVERGENCE": ConvergenceError,
+    "ERR_STEP_UNDERFLOW": ConvergenceError,
+    "ERR_MAX_STEPS": ConvergenceError,
+    "ERR_BAD_ARG": ValueError,
+    "ERR_NONFINITE_MODEL": SingularError,
+    "ERR_OUTPUT_FULL": SolverError,
 }
-_METHODS = {"rk4": 0, "dopri5": 1}
+_METHODS = METHODS
 
 
 class Simulator:
     """A compiled model. Attributes: nq, nu, nx, nr, np, mc, mv, ns,
     state_names, input_names, constant_names, independent_state_names,
-    constants (default values)."""
+    constants (default values), has_energy, interface (gen.abi.Interface)."""
 
-    def __init__(self, model, module, real="double"):
-        self.model = model
+    def __init__(self, module, interface):
+        iface = interface
+        self.interface = iface
         self._mod = module
         self._ffi = module.ffi
         self._lib = module.lib
-        self._p = model.name
-        self.real = real
-        self.dtype = np.float64 if real == "double" else np.float32
-        self._ctype = f"{model.name}_real"
-        self.name = model.name
-        self.method = model.method
-        self.nq, self.nu, self.nx = model.nq, model.nu, model.nx
-        self.nr, self.np, self.mc, self.mv = model.nr, model.np, model.mc, model.mv
-        self.ns = model.ns
-        self.state_names = list(model.state_names)
-        self.input_names = list(model.input_names)
-        self.constant_names = list(model.constant_names)
-        self.independent_state_names = list(model.independent_state_names)
-        self.constants = np.array(model.p_values, dtype=float)
-        self.q_ind, self.q_dep = list(model.q_ind), list(model.q_dep)
-        self.u_ind, self.u_dep = list(model.u_ind), list(model.u_dep)
+        self._p = iface.name
+        self.real = iface.real
+        self.dtype = np.float64 if iface.real == "double" else np.float32
+        self._ctype = f"{iface.name}_real"
+        self.name = iface.name
+        self.method = iface.method
+        self.nq, self.nu, self.nx = iface.nq, iface.nu, iface.nx
+        self.nr, self.np, self.mc, self.mv = iface.nr, iface.np, iface.mc, iface.mv
+        self.ns = iface.ns
+        self.has_energy = iface.has_energy
+        self.state_names = list(iface.state_names)
+        self.input_names = list(iface.input_names)
+        self.constant_names = list(iface.constant_names)
+        self.independent_state_names = list(iface.independent_state_names)
+        self._labels = {"state": list(iface.state_labels), "inputs": list(iface.input_labels),
+                        "constants": list(iface.constant_labels)}
+        self.constants = np.array(iface.constants, dtype=float)
+        self.q_ind, self.q_dep = list(iface.q_ind), list(iface.q_dep)
+        self.u_ind, self.u_dep = list(iface.u_ind), list(iface.u_dep)
         # per-call overhead: typed buffers without casts, functions looked up
         # once, the default constants converted once
         self._arr_t = f"{self._ctype}[]"
         self._dt = np.dtype(self.dtype)
         self._fns = {}
+        self._outs = {}
         self._p_default = np.ascontiguousarray(self.constants, dtype=self.dtype)
         self._p_default_c = self._ffi.from_buffer(self._arr_t, self._p_default)
         self._xshape = (self.nx,)
         self._rhs_c = self._fn("eval_rhs")
+
+    @property
+    def state_labels(self):
+        return list(self._labels["state"])
+
+    @property
+    def input_labels(self):
+        return list(self._labels["inputs"])
+
+    @property
+    def constant_labels(self):
+        return list(self._labels["constants"])
 
     # ------------------------------------------------------------ helpers
     def _fn(self, name):
@@ -59,6 +88,27 @@ class Simulator:
         if f is None:
             f = self._fns[name] = getattr(self._lib, f"{self._p}_{name}")
         return f
+
+    def _out_sizes(self, verb):
+        """The true sizes of a function's array outputs (interface description)."""
+        sizes = self._outs.get(verb)
+        if sizes is None:
+            fn = self.interface.function(verb)
+            sizes = self._outs[verb] = [self.interface.size(a.size) for a in fn.params
+                                        if a.role in ("out", "out?")]
+        return sizes
+
+    def _call(self, verb, *args, t=None, state=None):
+        """Call <p>_<verb> with the inputs (arrays become pointers, None
+        NULL, numbers pass as they are) followed by fresh arrays for its
+        outputs (sizes from the interface description); raise on a failure
+        status; return the outputs, each of its true length."""
+        outs = [np.zeros(max(1, n), dtype=self.dtype) for n in self._out_sizes(verb)]
+        conv = [self._ptr(a) if a is None or isinstance(a, np.ndarray) else a for a in args]
+        st = self._fn(verb)(*conv, *[self._ptr(o) for o in outs])
+        if st:
+            self._check(st, verb, t, state)
+        return [o[:n] for o, n in zip(outs, self._out_sizes(verb))]
 
     def _vec(self, v, n, what, default=None):
         if (type(v) is np.ndarray and v.dtype is self._dt and v.shape == (n,)
@@ -84,10 +134,9 @@ class Simulator:
                  "constants": self.constant_names}.get(kind)
         if names is None:
             raise ValueError(f"{what} cannot be given as a dict")
-        labels = {"state": self.model.state_labels, "inputs": self.model.input_labels,
-                  "constants": self.model.constant_labels}[kind]
+        labels = self._labels[kind]
         base = {"state": np.zeros(self.nx), "inputs": np.zeros(self.nr),
-                "constants": self.constants.copy()}[what.split()[0]]
+                "constants": self.constants.copy()}[kind]
         for k, v in d.items():
             k = str(k)
             if k in names:
@@ -107,19 +156,15 @@ class Simulator:
         if status == 0:
             return
         msg = self._ffi.string(self._fn("status_message")(status)).decode()
-        name = _STATUS_NAMES.get(status, str(status))
+        name = status_name(status)
         text = f"{self._p}_{where}: {msg} [{name}]"
         if t is not None:
             text += f" at t = {float(t):.17g}"
         if state is not None:
             pairs = ", ".join(f"{n}={float(v):.12g}" for n, v in zip(self.state_names, state))
             text += f", state: {pairs}"
-        cls = SolverError
-        if status in (-3, -8):
-            cls = SingularError
-        elif status in (-4, -5, -6):
-            cls = ConvergenceError
-        elif status in (-2, -7):
+        cls = EXCEPTIONS.get(name, SolverError)
+        if cls is ValueError:
             raise ValueError(text)
         raise cls(text, status=status, status_name=name, time=t,
                   state=None if state is None else np.array(state, dtype=float))
@@ -129,83 +174,63 @@ class Simulator:
             return self._p_default
         return self._vec(p, self.np, "constants p", default=self.constants)
 
+    def _inputs(self, r):
+        return None if r is None else self._vec(r, self.nr, "inputs r")
+
     # ------------------------------------------------------- evaluation
     def mass_matrix(self, q, p=None, t=0.0):
         """M(q), shape (nu, nu): unconstrained mass matrix."""
         q = self._vec(q, self.nq, "coordinates q")
-        out = np.empty(self.nu * self.nu, dtype=self.dtype)
-        st = self._fn("eval_mass_matrix")(self._ptr(q), self._ptr(self._params(p)), t, self._ptr(out))
-        self._check(st, "eval_mass_matrix", t)
-        return out.reshape(self.nu, self.nu)
+        (M,) = self._call("eval_mass_matrix", q, self._params(p), t, t=t)
+        return M.reshape(self.nu, self.nu)
 
     def forcing(self, q, u, r=None, p=None, t=0.0):
         """f(q, u, r, t), shape (nu,): M u' = f + A^T lam."""
         q = self._vec(q, self.nq, "coordinates q")
         u = self._vec(u, self.nu, "speeds u")
-        r = None if r is None else self._vec(r, self.nr, "inputs r")
-        out = np.empty(self.nu, dtype=self.dtype)
-        st = self._fn("eval_forcing")(self._ptr(q), self._ptr(u), self._ptr(r),
-                                      self._ptr(self._params(p)), t, self._ptr(out))
-        self._check(st, "eval_forcing", t)
-        return out
+        (f,) = self._call("eval_forcing", q, u, self._inputs(r), self._params(p), t, t=t)
+        return f
 
     def kinematics(self, q, u, p=None, t=0.0):
         """q' from the kinematic equations, shape (nq,)."""
         q = self._vec(q, self.nq, "coordinates q")
         u = self._vec(u, self.nu, "speeds u")
-        out = np.empty(self.nq, dtype=self.dtype)
-        st = self._fn("eval_kinematics")(self._ptr(q), self._ptr(u), self._ptr(self._params(p)),
-                                         t, self._ptr(out))
-        self._check(st, "eval_kinematics", t)
-        return out
+        (qd,) = self._call("eval_kinematics", q, u, self._params(p), t, t=t)
+        return qd
 
     def constraints(self, q, p=None, t=0.0):
         """Configuration-constraint residuals f_c(q), shape (mc,)."""
         q = self._vec(q, self.nq, "coordinates q")
-        out = np.zeros(max(1, self.mc), dtype=self.dtype)
-        st = self._fn("eval_constraints")(self._ptr(q), self._ptr(self._params(p)), t, self._ptr(out))
-        self._check(st, "eval_constraints", t)
-        return out[:self.mc].copy()
+        (fc,) = self._call("eval_constraints", q, self._params(p), t, t=t)
+        return fc.copy()
 
     def constraint_jacobian(self, q, p=None, t=0.0):
         """d f_c / dq, shape (mc, nq)."""
         q = self._vec(q, self.nq, "coordinates q")
-        out = np.zeros(max(1, self.mc * self.nq), dtype=self.dtype)
-        st = self._fn("eval_constraint_jacobian")(self._ptr(q), self._ptr(self._params(p)), t,
-                                                  self._ptr(out))
-        self._check(st, "eval_constraint_jacobian", t)
-        return out[:self.mc * self.nq].reshape(self.mc, self.nq).copy()
+        (J,) = self._call("eval_constraint_jacobian", q, self._params(p), t, t=t)
+        return J.reshape(self.mc, self.nq).copy()
 
     def velocity_constraints(self, q, u, p=None, t=0.0):
         """A(q) u + b, shape (mv,)."""
         q = self._vec(q, self.nq, "coordinates q")
         u = self._vec(u, self.nu, "speeds u")
-        out = np.zeros(max(1, self.mv), dtype=self.dtype)
-        st = self._fn("eval_velocity_constraints")(self._ptr(q), self._ptr(u),
-                                                   self._ptr(self._params(p)), t, self._ptr(out))
-        self._check(st, "eval_velocity_constraints", t)
-        return out[:self.mv].copy()
+        (fv,) = self._call("eval_velocity_constraints", q, u, self._params(p), t, t=t)
+        return fv.copy()
 
     def velocity_constraint_matrix(self, q, p=None, t=0.0):
         """(A, b): A shape (mv, nu), b shape (mv,)."""
         q = self._vec(q, self.nq, "coordinates q")
-        A = np.zeros(max(1, self.mv * self.nu), dtype=self.dtype)
-        b = np.zeros(max(1, self.mv), dtype=self.dtype)
-        st = self._fn("eval_velocity_constraint_matrix")(self._ptr(q), self._ptr(self._params(p)),
-                                                         t, self._ptr(A), self._ptr(b))
-        self._check(st, "eval_velocity_constraint_matrix", t)
-        return A[:self.mv * self.nu].reshape(self.mv, self.nu).copy(), b[:self.mv].copy()
+        A, b = self._call("eval_velocity_constraint_matrix", q, self._params(p), t, t=t)
+        return A.reshape(self.mv, self.nu).copy(), b.copy()
 
     def energy(self, x, p=None, t=0.0):
         """Total energy at state x (models given an energy expression)."""
-        if self.model.energy is None:
+        if not self.has_energy:
             raise ValueError(f"model '{self.name}' was built without energy=...")
         x = self._vec(x, self.nx, "state x")
-        out = np.zeros(1, dtype=self.dtype)
-        st = self._fn("eval_energy")(self._ptr(x[:self.nq]), self._ptr(x[self.nq:]),
-                                     self._ptr(self._params(p)), t, self._ptr(out))
-        self._check(st, "eval_energy", t, x)
-        return float(out[0])
+        (E,) = self._call("eval_energy", x[:self.nq].copy(), x[self.nq:].copy(),
+                          self._params(p), t, t=t, state=x)
+        return float(E[0])
 
     def rhs(self, t, x, r=None, p=None, out=None):
         """x' (shape (nx,)), usable as solve_ivp's fun: rhs(t, x). An
@@ -239,13 +264,8 @@ class Simulator:
     def multipliers(self, t, x, r=None, p=None):
         """Multipliers lam of the velocity constraints, shape (mv,)."""
         x = self._vec(x, self.nx, "state x")
-        r = None if r is None else self._vec(r, self.nr, "inputs r")
-        out = np.empty(self.nx, dtype=self.dtype)
-        lam = np.zeros(max(1, self.mv), dtype=self.dtype)
-        st = self._fn("eval_rhs")(t, self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
-                                  self._ptr(out), self._ptr(lam))
-        self._check(st, "eval_rhs", t, x)
-        return lam[:self.mv].copy()
+        _, lam = self._call("eval_rhs", t, x, self._inputs(r), self._params(p), t=t, state=x)
+        return lam.copy()
 
     # ---------------------------------------------------- the manifold
     def project(self, x, p=None, t=0.0, tol=0.0, max_iter=0):

@@ -17,15 +17,16 @@ import sys
 import sysconfig
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
-from . import __version__
+from ._version import __version__
 from .errors import BuildError, ModelError
 from .eigen import eigen_version, find_eigen
-from .batch import batch_cdef, batch_source
-from .render import EIGEN_SOURCES, RUNTIME_SOURCES, cdef_text, render_files
+from .ir import plan as make_plan
+from .render import EIGEN_SOURCES, RUNTIME_SOURCES, Rendered, render
 
-__all__ = ["compile", "cache_dir", "build_cffi"]
+__all__ = ["compile", "cache_dir", "build", "load", "Built"]
 
 C_FLAGS = ["-std=c99", "-O2", "-fno-strict-aliasing"]
 STRICT_FLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"]
@@ -76,20 +77,25 @@ def eigen_include_dir():
     return d
 
 
-def build_cffi(model, real="double", verbose=False, timings=None, files=None, backend="c"):
-    """Generate and build; return the path of the extension module and its
-    module name."""
+@dataclass
+class Built:
+    """A compiled cffi module: where it is, its name, its interface."""
+    path: Path
+    modname: str
+    interface: object
+
+
+def build(rendered: Rendered, verbose=False, timings=None):
+    """Compile a Rendered (gen.render.render) into a cffi extension in the
+    cache, keyed by the content of everything compiled; return a Built.
+    Nothing is rendered here."""
+    iface = rendered.interface
+    name, backend, files = iface.name, rendered.backend, rendered.files
     if backend not in BACKENDS:
         raise ModelError(f"unknown backend {backend!r}: choose one of {list(BACKENDS)}")
-    t0 = time.perf_counter()
-    eigen_dir = eigen_include_dir() if backend == "eigen" else None
-    if files is None:
-        files = render_files(model, real=real, backend=backend, timings=timings)
     t1 = time.perf_counter()
-    cdef = cdef_text(model, real=real) + batch_cdef(model.name)
-    # cffi's wrapper: the model header and the batch loops over its public API
-    wrapper = (f'#include "{model.name}.h"\n'
-               + batch_source(model.name, model.nu, model.nx, model.ns, model.nr))
+    eigen_dir = eigen_include_dir() if backend == "eigen" else None
+    cdef, wrapper = rendered.cdef, rendered.module_source
     h = hashlib.sha256()
     h.update(__version__.encode())
     h.update(sys.version.encode())
@@ -99,20 +105,20 @@ def build_cffi(model, real="double", verbose=False, timings=None, files=None, ba
         h.update(f"\0backend={backend}\0{' '.join(CXX_FLAGS)}\0eigen={eigen_dir}:"
                  f"{eigen_version(eigen_dir)}\0".encode())
     h.update(cdef.encode())
+    h.update(wrapper.encode())
     for k in sorted(files):
         h.update(k.encode() + b"\0" + files[k].encode() + b"\0")
     key = h.hexdigest()[:16]
-    modname = (f"_eomgen_{model.name}_{key}" if backend == "c"
-               else f"_eomgen_{model.name}_{backend}_{key}")
+    modname = (f"_eomgen_{name}_{key}" if backend == "c"
+               else f"_eomgen_{name}_{backend}_{key}")
     root = cache_dir()
     final = root / modname
     so = _find_module(final, modname)
     if so is not None:
         if timings is not None:
-            timings["generate"] = t1 - t0
             timings["compile"] = 0.0
             timings["cached"] = True
-        return so, modname
+        return Built(so, modname, iface)
     root.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{modname}.", dir=root))
     try:
@@ -127,33 +133,33 @@ def build_cffi(model, real="double", verbose=False, timings=None, files=None, ba
         except Exception as e:  # cffi's CDefError and parse errors
             raise BuildError(f"internal error: the cffi declarations do not parse: {e}", cdef) from e
         if backend == "c":
-            own = [f"{model.name}.c"] + RUNTIME_SOURCES
+            own = [f"{name}.c"] + RUNTIME_SOURCES
             # the model and the runtime as objects, compiled in parallel (the
             # runtime's objects are shared by every model with the same runtime
             # sources, scalar type and flags); cffi then compiles its wrapper
-            objects = _c_objects(model, src, tmp)
+            objects = _c_objects(name, src, tmp)
             ffi.set_source(modname, wrapper, extra_objects=[str(o) for o in objects],
                            include_dirs=[str(src)], extra_compile_args=list(C_FLAGS),
                            libraries=["m"])
         else:
             # all C++: the extern "C" layer over the typed API, and cffi's wrapper
-            own = [s.format(name=model.name) for s in EIGEN_SOURCES]
+            own = [s.format(name=name) for s in EIGEN_SOURCES]
             ffi.set_source(modname, wrapper,
                            sources=[str(src / s) for s in own], source_extension=".cpp",
                            include_dirs=[str(src)],
                            extra_compile_args=[*CXX_FLAGS, "-isystem", str(eigen_dir)],
                            libraries=["stdc++", "m"])
-        build = tmp / "build"
-        build.mkdir()
+        bdir = tmp / "build"
+        bdir.mkdir()
         try:
-            so_path = ffi.compile(tmpdir=str(build), verbose=verbose)
+            so_path = ffi.compile(tmpdir=str(bdir), verbose=verbose)
         except Exception as e:
             if backend == "c":
                 ok, log = _compile_log(src, own)
             else:
                 ok, log = _compile_log(src, own, ["-isystem", str(eigen_dir)],
                                        compiler=_cxx_compiler(), flags=CXX_STRICT_FLAGS)
-            raise BuildError(f"compiling the model '{model.name}' failed ({type(e).__name__}: {e})",
+            raise BuildError(f"compiling the model '{name}' failed ({type(e).__name__}: {e})",
                              log or str(e)) from None
         dest_tmp = tmp / modname
         dest_tmp.mkdir()
@@ -169,12 +175,11 @@ def build_cffi(model, real="double", verbose=False, timings=None, files=None, ba
         shutil.rmtree(tmp, ignore_errors=True)
     so = _find_module(final, modname)
     if so is None:
-        raise BuildError(f"the built module for '{model.name}' is missing from {final}")
+        raise BuildError(f"the built module for '{name}' is missing from {final}")
     if timings is not None:
-        timings["generate"] = t1 - t0
         timings["compile"] = time.perf_counter() - t1
         timings["cached"] = False
-    return so, modname
+    return Built(so, modname, iface)
 
 
 def _cc_object(cc, src: Path, obj: Path, include: Path):
@@ -196,7 +201,8 @@ def _runtime_objects(src: Path, cc: str):
         h.update(subprocess.run([cc, "--version"], capture_output=True, text=True).stdout.encode())
     except OSError as e:
         raise BuildError(f"the C compiler {cc!r} cannot be run: {e}") from None
-    for name in sorted(RUNTIME_SOURCES) + ["gen_rt.h", "gen_rt_config.h"]:
+    for name in sorted(RUNTIME_SOURCES) + ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h",
+                                           "gen_rt_config.h"]:
         h.update(name.encode() + b"\0" + (src / name).read_bytes() + b"\0")
     folder = cache_dir() / f"runtime_{h.hexdigest()[:16]}"
     objs = [folder / (Path(s).stem + ".o") for s in RUNTIME_SOURCES]
@@ -205,7 +211,7 @@ def _runtime_objects(src: Path, cc: str):
     return None, folder
 
 
-def _c_objects(model, src: Path, tmp: Path):
+def _c_objects(name, src: Path, tmp: Path):
     """Compile the model's C file and (unless cached) the runtime, two at a
     time; return the object files to link."""
     from concurrent.futures import ThreadPoolExecutor
@@ -213,7 +219,7 @@ def _c_objects(model, src: Path, tmp: Path):
     objdir = tmp / "obj"
     objdir.mkdir()
     runtime, rt_folder = _runtime_objects(src, cc)
-    jobs = [(src / f"{model.name}.c", objdir / f"{model.name}.o")]
+    jobs = [(src / f"{name}.c", objdir / f"{name}.o")]
     if runtime is None:
         rt_tmp = tmp / "runtime"
         rt_tmp.mkdir()
@@ -223,8 +229,8 @@ def _c_objects(model, src: Path, tmp: Path):
         try:
             results = [f.result() for f in futures]
         except BuildError:
-            ok, log = _compile_log(src, [f"{model.name}.c"] + RUNTIME_SOURCES)
-            raise BuildError(f"compiling the model '{model.name}' failed", log) from None
+            ok, log = _compile_log(src, [f"{name}.c"] + RUNTIME_SOURCES)
+            raise BuildError(f"compiling the model '{name}' failed", log) from None
     if runtime is None:
         # publish the runtime objects for the next model (atomic rename; a
         # concurrent builder that got there first wins, both are identical)
@@ -248,7 +254,9 @@ def _find_module(folder: Path, modname: str):
     return None
 
 
-def _load(so: Path, modname: str):
+def load(built: Built):
+    """Import a Built's extension module (once per process)."""
+    so, modname = built.path, built.modname
     if modname in sys.modules:
         return sys.modules[modname]
     spec = importlib.util.spec_from_file_location(modname, str(so))
@@ -258,18 +266,45 @@ def _load(so: Path, modname: str):
     return mod
 
 
-def compile(model, backend="c", real="double", verbose=False):  # noqa: A001
-    """Generate, build through cffi (cached) and return a Simulator.
-    backend="c" (C99 model + C runtime) or "eigen" (C++17 over Eigen 3.4,
-    through its extern "C" layer: the same API, the same Simulator)."""
+def compile(model, backend="c", real="double", verbose=False, sources=None,  # noqa: A001
+            timings=None):
+    """Generate, build through cffi (cached) and return a Simulator: the one
+    path from a model to compiled code (the CLI and gen.verify call it).
+
+    backend: "c" (C99 model + C runtime) or "eigen" (C++17 over Eigen 3.4,
+    through its extern "C" layer: the same API, the same Simulator).
+    real: "double" or "float".
+    sources: a folder written by gen.generate (possibly edited since): its
+    files are compiled instead of freshly generated ones.
+    timings: a dict that receives the time of each stage (kernels, printing,
+    templates, compile) and whether the build was cached."""
     from .bindings import Simulator
     if backend not in BACKENDS:
         raise ModelError(f"unknown backend {backend!r}: choose one of {list(BACKENDS)}")
-    timings = {}
-    so, modname = build_cffi(model, real=real, verbose=verbose, timings=timings, backend=backend)
-    mod = _load(so, modname)
-    sim = Simulator(model, mod, real=real)
-    sim.build_info = {"module": str(so), **timings}
+    timings = {} if timings is None else timings
+    t0 = time.perf_counter()
+    plan = make_plan(model)
+    timings["kernels"] = time.perf_counter() - t0
+    rendered = render(plan, real=real, backend=backend, timings=timings)
+    if sources is not None:
+        rendered.files = _read_sources(sources, rendered.files, model.name)
+    built = build(rendered, verbose=verbose, timings=timings)
+    sim = Simulator(load(built), built.interface)
+    sim.build_info = {"module": str(built.path), **timings}
     if backend != "c":
         sim.build_info["backend"] = backend
     return sim
+
+
+def _read_sources(folder, expected, name):
+    """The files of a generated folder, by the names rendering produces."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise ModelError(f"sources folder {folder} does not exist")
+    files = {}
+    for fname in expected:
+        path = folder / fname
+        if not path.is_file():
+            raise ModelError(f"{path} is missing: {folder} is not a generated '{name}' project")
+        files[fname] = path.read_text()
+    return files

@@ -13,10 +13,11 @@ import argparse
 import importlib.util
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 from . import __version__
+from .cli_output import (MissingDependency, Progress, plot_simulation, print_csv,
+                         print_linearization, write_csv)
 from .errors import EomgenError
 
 EXAMPLES = """examples:
@@ -35,54 +36,6 @@ Exit codes: 0 ok, 1 failure, 2 usage error. --debug shows Python tracebacks.
 
 class UsageError(Exception):
     """Wrong arguments: exit code 2, one line."""
-
-
-# --------------------------------------------------------------- progress
-class Progress:
-    """Stage lines on stderr: shown while running on a terminal, silent
-    when stderr is not a terminal or with --quiet; --verbose prints every
-    stage with its time (even when not a terminal)."""
-
-    def __init__(self, quiet=False, verbose=False, stream=None):
-        self.stream = stream or sys.stderr
-        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
-        self.quiet = quiet
-        self.verbose = verbose and not quiet
-        self.live = self.tty and not quiet
-        self.times = []
-
-    def stage(self, name):
-        return _Stage(self, name)
-
-    def record(self, name, seconds):
-        self.times.append((name, seconds))
-        if self.verbose:
-            print(f"eomgen: {name:<34} {seconds:8.2f} s", file=self.stream)
-
-    def summary(self):
-        if self.verbose and self.times:
-            total = sum(t for _, t in self.times)
-            print(f"eomgen: {'total':<34} {total:8.2f} s", file=self.stream)
-
-
-class _Stage:
-    def __init__(self, progress, name):
-        self.p = progress
-        self.name = name
-
-    def __enter__(self):
-        self.t0 = time.perf_counter()
-        if self.p.live and not self.p.verbose:
-            print(f"\reomgen: {self.name} ...\033[K", end="", file=self.p.stream, flush=True)
-        return self
-
-    def __exit__(self, *exc):
-        dt = time.perf_counter() - self.t0
-        if self.p.live and not self.p.verbose:
-            print("\r\033[K", end="", file=self.p.stream, flush=True)
-        if exc[0] is None:
-            self.p.record(self.name, dt)
-        return False
 
 
 # ------------------------------------------------------------ model files
@@ -155,25 +108,21 @@ def _pairs(items, names, what, labels=()):
 
 
 def _compile(model, a, progress):
-    """generate + compile through cffi, each stage shown/timed."""
-    from .build import build_cffi, _load
-    from .bindings import Simulator
-    from .render import render_files
+    """gen.compile, shown as one stage; --verbose adds the time of each."""
+    from .build import compile as compile_model
     backend = getattr(a, "backend", "c") or "c"
     timings = {}
-    with progress.stage("kernels, printing, templates"):
-        files = render_files(model, real=a.real, backend=backend, timings=timings)
-    with progress.stage("compile (cffi, cached)"):
-        so, modname = build_cffi(model, real=a.real, files=files, backend=backend)
-    for k in ("kernels", "printing", "templates"):
+    with progress.stage("kernels, printing, templates, compile (cffi, cached)"):
+        sim = compile_model(model, backend=backend, real=a.real, timings=timings)
+    for k in ("kernels", "printing", "templates", "compile"):
         if k in timings and progress.verbose:
             print(f"eomgen:   {k:<32} {timings[k]:8.2f} s", file=progress.stream)
-    return Simulator(model, _load(so, modname), real=a.real)
+    return sim
 
 
 def _state(sim, a, items):
     import numpy as np
-    m = sim.model
+    m = sim
     x = np.zeros(sim.nx)
     for i, v in _pairs(items, sim.state_names, "state", m.state_labels).items():
         x[i] = v
@@ -227,33 +176,13 @@ def cmd_build(a, progress):
     return 0
 
 
-def _table(rows, cols, M, w):
-    out = [" " * w + "".join(f"{c:>16}" for c in cols)]
-    for name, row in zip(rows, M):
-        out.append(f"{name:<{w}}" + "".join(f"{v + 0.0:16.9g}" for v in row))  # no -0
-    return "\n".join(out)
-
-
 def cmd_linearize(a, progress):
-    import numpy as np
     m = load_model(a.file, progress)
     sim = _compile(m, a, progress)
     x, p, r = _state(sim, a, a.at)
     with progress.stage("linearize"):
         A, B = sim.linearize(x, r_op=r, p=p)
-    names = sim.independent_state_names
-    w = max(len(n) for n in names + sim.input_names + ["x"]) + 2
-    print("operating point:", ", ".join(f"{n}={v:.12g}" for n, v in zip(sim.state_names, x)))
-    if sim.nr:
-        print("inputs:", ", ".join(f"{n}={v:.12g}" for n, v in zip(sim.input_names, r)))
-    print("A =")
-    print(_table(names, names, A, w))
-    print("B =" + (" (no inputs)" if sim.nr == 0 else ""))
-    if sim.nr:
-        print(_table(names, sim.input_names, B, w))
-    ev = np.linalg.eigvals(A)
-    ev = ev[np.lexsort((ev.imag, ev.real))]
-    print("eigenvalues of A:", "  ".join(f"{e.real + 0.0:.9g}{e.imag + 0.0:+.9g}j" for e in ev))
+    print_linearization(sim, x, r, A, B)
     return 0
 
 
@@ -288,65 +217,18 @@ def cmd_simulate(a, progress):
             Path(out).resolve().parent.mkdir(parents=True, exist_ok=True)
     if a.csv:
         with progress.stage(f"write {a.csv}"):
-            extra = [lam] if sim.mv else []
-            table = np.hstack(data + extra + res + ([E[:, None]] if E is not None else []))
-            header = cols + [f"lam{i}" for i in range(sim.mv)] + res_names + \
-                (["energy"] if E is not None else [])
-            with open(a.csv, "w") as fh:
-                fh.write(",".join(header) + "\n")
-                for row in table:
-                    fh.write(",".join(f"{v:.17g}" for v in row) + "\n")
+            write_csv(a.csv, sim, cols, data, lam, res_names, res, E)
         print(f"wrote {len(t)} rows to {a.csv}")
     if a.plot:
         with progress.stage(f"plot {a.plot}"):
-            _plot(a.plot, m, sim, t, X, res_names, res, E)
+            try:
+                plot_simulation(a.plot, m, sim, t, X, res_names, res, E)
+            except MissingDependency as e:
+                raise UsageError(str(e)) from None
         print(f"wrote {a.plot}")
     if not a.csv and not a.plot:
-        print(",".join(cols))
-        for row in np.hstack(data):
-            print(",".join(f"{v:.17g}" for v in row))
+        print_csv(cols, np.hstack(data))
     return 0
-
-
-def _plot(path, m, sim, t, X, res_names, res, E):
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        raise UsageError("--plot needs matplotlib: pip install 'eomgen[plot]'") from None
-    import numpy as np
-    panels = 1 + bool(res) + (E is not None)
-    fig, axes = plt.subplots(panels, 1, figsize=(8, 2.6 * panels + 0.6), sharex=True,
-                             squeeze=False)
-    axes = axes[:, 0]
-    ax = axes[0]
-    for i, n in enumerate(sim.state_names):
-        ax.plot(t, X[:, i], label=n, lw=1.2, ls="-" if i < sim.nq else "--")
-    ax.set_ylabel("state")
-    ax.legend(loc="upper right", ncol=min(4, sim.nx), fontsize=8)
-    ax.set_title(f"{m.name}: simulation ({m.method}, nq={sim.nq}, nu={sim.nu}, "
-                 f"{sim.mc} configuration / {sim.mv} velocity constraints)", fontsize=10)
-    k = 1
-    if res:
-        ax = axes[k]
-        k += 1
-        R = np.hstack(res)
-        floor = 1e-17                      # exact zeros drawn at the floor
-        for i, n in enumerate(res_names):
-            ax.semilogy(t, np.maximum(np.abs(R[:, i]), floor), label=f"|{n}|", lw=1)
-        ax.set_ylim(floor / 2, max(1e-12, 10 * float(np.max(np.abs(R)))))
-        ax.set_ylabel("constraint residual")
-        ax.legend(loc="upper right", ncol=4, fontsize=8)
-    if E is not None:
-        ax = axes[k]
-        scale = max(abs(E[0]), 1e-300)
-        ax.plot(t, (E - E[0]) / scale, lw=1, color="k")
-        ax.set_ylabel("(E - E0) / |E0|")
-    axes[-1].set_xlabel("t [s]")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def cmd_verify(a, progress):

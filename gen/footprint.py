@@ -15,10 +15,12 @@ anything it calls, along the deepest path of the call graph. The generated
 code has no recursion and no dynamic stack: a cycle or a function with a
 ``dynamic`` (unbounded) frame is an error (FootprintError), never a number;
 ``dynamic,bounded`` (stack realignment on x86-64) counts with GCC's bound. The only
-indirect calls are the integrators calling the model's right-hand side and
-projection callbacks (``<name>_rhs_cb``, ``<name>_post_cb``, the only
-functions whose address the generated code takes); an indirect call counts
-as the deeper of the two. Calls into the C library (sinf, cosf, sqrtf,
+indirect calls are the integrators calling the runtime's right-hand side and
+projection callbacks (``rhs_cb``, ``post_cb`` in gen_rt_model.c) and the
+runtime calling the model's kernels through its ``gen_rt_model`` (the
+``<name>_k_*`` kernels, their adapters and the unrolled mass solve, the
+only other functions whose address is taken); an indirect call counts as
+the deepest of its possible targets. Calls into the C library (sinf, cosf, sqrtf,
 powf, memset, the EABI's software double helpers) are listed per function
 as ``libc``; the C library is not compiled with -fstack-usage, so for a
 microcontroller target their stack is estimated from the disassembly of an
@@ -29,20 +31,25 @@ Flash is ``.text`` + ``.rodata`` of the library's objects, before the
 linker's ``--gc-sections`` drops the functions a firmware does not call;
 ``section_sizes`` gives the same numbers for a linked image.
 
+This module generates, builds and reports; the analysis of the compiler's
+output (.su, .ci, disassembly, section sizes) is gen.stack.
+
     rep = gen.footprint.report(model, real="float", target="cortex-m4f")
     print(rep["table"])
 """
 from __future__ import annotations
 
 import json
-import re
 import shutil
 import subprocess
 import tempfile
 from pathlib import Path
 
-from .errors import BuildError, EomgenError
-from .render import api_functions, generate
+from .errors import BuildError
+from .abi import FUNCTIONS
+from .render import generate
+from .stack import (FootprintError, analyze, display_name, find_tool, image_stack,
+                    parse_callgraph, parse_su, section_sizes)
 
 __all__ = ["report", "report_many", "build_library", "analyze", "parse_callgraph", "section_sizes",
            "image_stack", "format_table", "FootprintError", "TARGETS", "DEFAULT_STACK_LIMIT"]
@@ -60,230 +67,6 @@ LIBC_LINK = {
     "cortex-m4f": ["-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard",
                    "--specs=nano.specs", "--specs=nosys.specs", "-nostartfiles"],
 }
-
-
-class FootprintError(EomgenError):
-    """The stack bound cannot be computed: recursion, a dynamic frame, a
-    missing tool or missing stack-usage output."""
-
-
-# --------------------------------------------------------------------------
-# call graph (.ci) and frames (.su)
-# --------------------------------------------------------------------------
-
-_NODE = re.compile(r'node:\s*\{\s*title:\s*"([^"]*)"\s*label:\s*"([^"]*)"')
-_EDGE = re.compile(r'edge:\s*\{\s*sourcename:\s*"([^"]*)"\s*targetname:\s*"([^"]*)"')
-_BYTES = re.compile(r"(\d+) bytes \(([a-z,]+)\)")
-
-
-def display_name(title):
-    """'dir/file.c:foo.constprop.0.isra.0' -> 'foo'."""
-    name = title.rsplit(":", 1)[-1]
-    return name.split(".", 1)[0]
-
-
-def parse_callgraph(ci_texts):
-    """Merge GCC .ci files: ({title: (frame bytes, qualifier)}, {title: set of
-    callee titles}). Nodes without a frame are declarations of functions
-    defined elsewhere (another file, or the C library)."""
-    frames, edges = {}, {}
-    for text in ci_texts:
-        for title, label in _NODE.findall(text):
-            m = _BYTES.search(label.replace("\\n", "\n"))
-            if m:
-                frames[title] = (int(m.group(1)), m.group(2))
-        for src, dst in _EDGE.findall(text):
-            edges.setdefault(src, set()).add(dst)
-    return frames, edges
-
-
-def parse_su(su_texts):
-    """GCC .su lines 'file:line:col:name<TAB>bytes<TAB>qualifier' ->
-    {name: (bytes, qualifier)} (the largest frame when a name repeats)."""
-    out = {}
-    for text in su_texts:
-        for line in text.splitlines():
-            parts = line.split("\t")
-            if len(parts) != 3:
-                continue
-            name = display_name(parts[0])
-            b, q = int(parts[1]), parts[2].strip()
-            if name not in out or b > out[name][0]:
-                out[name] = (b, q)
-    return out
-
-
-def analyze(frames, edges, roots, indirect_targets=(), external=None):
-    """Worst-case stack of each root along the deepest path of the call
-    graph. external: {C library function: worst-case stack} for callees
-    outside the graph (else they count 0). Returns {root: {"frame",
-    "stack", "path", "libc"}}; raises FootprintError on recursion, a
-    dynamic frame or an unresolvable indirect call."""
-    external = external or {}
-    # 'dynamic,bounded' (stack realignment) prints an upper bound: accepted
-    dynamic = sorted(display_name(t) for t, (_, q) in frames.items()
-                     if q not in ("static", "dynamic,bounded"))
-    if dynamic:
-        raise FootprintError("functions with an unbounded dynamic stack frame (VLA or "
-                             "alloca): " + ", ".join(dynamic))
-    by_name = {}
-    for t in frames:
-        by_name.setdefault(display_name(t), []).append(t)
-    ind = [t for n in indirect_targets for t in by_name.get(n, [])]
-    memo = {}
-    state = {}
-
-    def callees(t):
-        for c in sorted(edges.get(t, ())):
-            if c == "__indirect_call":
-                if not ind:
-                    raise FootprintError(f"{display_name(t)} makes an indirect call and no "
-                                         "indirect call target is known")
-                yield from ind
-            else:
-                yield c
-
-    def visit(t, chain):
-        if t in memo:
-            return memo[t]
-        if state.get(t) == "open":
-            cyc = chain[chain.index(t):] + [t]
-            raise FootprintError("recursion in the call graph: "
-                                 + " -> ".join(display_name(c) for c in cyc))
-        state[t] = "open"
-        frame = frames[t][0]
-        best, best_path, libc = 0, [], set()
-        for c in callees(t):
-            if c in frames:
-                s, p, lc = visit(c, chain + [t])
-                libc |= lc
-                if s > best:
-                    best, best_path = s, p
-            else:
-                libc.add(display_name(c))
-                s = external.get(display_name(c), 0)
-                if s > best:
-                    best, best_path = s, [display_name(c) + " (libc)"]
-        state[t] = "done"
-        memo[t] = (frame + best, [display_name(t)] + best_path, libc)
-        return memo[t]
-
-    out = {}
-    for r in roots:
-        ts = by_name.get(r)
-        if not ts:
-            raise FootprintError(f"no stack-usage entry for the public function {r} "
-                                 "(was the library built with -fcallgraph-info=su?)")
-        res = [(visit(t, []), t) for t in ts]
-        (s, p, lc), t = max(res, key=lambda v: v[0][0])
-        out[r] = {"frame": frames[t][0], "stack": s, "path": p, "libc": sorted(lc)}
-    return out
-
-
-# --------------------------------------------------------------------------
-# sizes
-# --------------------------------------------------------------------------
-
-def _tool(prefix, name):
-    exe = shutil.which(prefix + name)
-    if exe is None:
-        raise FootprintError(f"{prefix + name} not found on PATH")
-    return exe
-
-
-def section_sizes(path, prefix=""):
-    """Section sizes of an object, archive or linked image (``size -A``):
-    {"text", "rodata", "data", "bss", "flash", "functions": {name: code bytes}}.
-    flash = text (with .isr_vector) + rodata; a linked image also keeps the
-    initial values of .data in flash."""
-    r = subprocess.run([_tool(prefix, "size"), "-A", str(path)], capture_output=True,
-                       text=True)
-    if r.returncode != 0:
-        raise FootprintError(f"size -A {path} failed: {r.stderr}")
-    tot = {"text": 0, "rodata": 0, "data": 0, "bss": 0}
-    funcs = {}
-    for line in r.stdout.splitlines():
-        parts = line.split()
-        if len(parts) < 2 or not parts[1].isdigit() or not parts[0].startswith("."):
-            continue
-        sec, n = parts[0], int(parts[1])
-        if sec.startswith(".text") or sec == ".isr_vector":
-            tot["text"] += n
-            if sec.startswith(".text."):
-                fn = sec[len(".text."):]
-                funcs[fn] = funcs.get(fn, 0) + n
-        elif sec.startswith(".rodata"):
-            tot["rodata"] += n
-        elif sec.startswith(".data"):
-            tot["data"] += n
-        elif sec.startswith(".bss"):
-            tot["bss"] += n
-    tot["flash"] = tot["text"] + tot["rodata"]
-    tot["functions"] = funcs
-    return tot
-
-
-_FUNC = re.compile(r"^([0-9a-f]+) <([^>]+)>:$")
-_PUSH = re.compile(r"\b(push|stmdb|vpush)(?:\.w)?\s+(?:sp!,\s*)?\{([^}]*)\}")
-_SUB = re.compile(r"\bsub(?:w|\.w)?\s+sp,\s*(?:sp,\s*)?#(\d+)")
-_CALL = re.compile(r"\b(bl|b\.w|b)\s+[0-9a-f]+ <([^>+]+)>")
-
-
-def _reg_count(regs):
-    n = 0
-    for part in regs.split(","):
-        part = part.strip()
-        if "-" in part:
-            a, b = part.split("-")
-            n += int(b[1:]) - int(a[1:]) + 1
-        elif part:
-            n += 1
-    return n, regs.strip().startswith("d")
-
-
-def image_stack(elf, prefix="arm-none-eabi-"):
-    """Estimated worst-case stack of every function of a linked Thumb image,
-    from its disassembly: frame = push/vpush + 'sub sp, #n' in the body,
-    callees from 'bl' and tail branches to another symbol. For the C library
-    functions (sinf, ...) that are not built with -fstack-usage. Recursive
-    library functions keep their own frame once (the estimate says so)."""
-    r = subprocess.run([_tool(prefix, "objdump"), "-d", "--no-show-raw-insn", str(elf)],
-                       capture_output=True, text=True)
-    if r.returncode != 0:
-        raise FootprintError(f"objdump -d {elf} failed: {r.stderr}")
-    frames, edges, cur = {}, {}, None
-    for line in r.stdout.splitlines():
-        m = _FUNC.match(line.strip())
-        if m:
-            cur = m.group(2)
-            frames[cur] = 0
-            edges[cur] = set()
-            continue
-        if cur is None or ":" not in line:
-            continue
-        ins = line.split(":", 1)[1]
-        m = _PUSH.search(ins)
-        if m:
-            n, dregs = _reg_count(m.group(2))
-            frames[cur] += n * (8 if dregs else 4)
-        m = _SUB.search(ins)
-        if m:
-            frames[cur] += int(m.group(1))
-        m = _CALL.search(ins)
-        if m and m.group(2) != cur:
-            edges[cur].add(m.group(2))
-    memo = {}
-
-    def visit(f, seen):
-        if f in memo:
-            return memo[f]
-        if f in seen:
-            return 0
-        best = max((visit(c, seen | {f}) for c in edges.get(f, ()) if c in frames), default=0)
-        memo[f] = frames.get(f, 0) + best
-        return memo[f]
-
-    return {f: {"frame": frames[f], "stack": visit(f, frozenset())} for f in frames}
 
 
 # --------------------------------------------------------------------------
@@ -306,7 +89,7 @@ def _prepare(model, real, target, build_dir, stack_limit, jobs):
     if shutil.which("cmake") is None:
         raise FootprintError("cmake not found on PATH")
     if target != "host":
-        _tool(prefix, "gcc")
+        find_tool(prefix, "gcc")
     root = Path(build_dir) if build_dir else Path(tempfile.mkdtemp(prefix="eomgen-footprint-"))
     src, bld = root / "src", root / "build"
     generate(model, src, real=real)
@@ -367,11 +150,11 @@ def _measure(job):
         if s is not None and s[1] != q:
             raise FootprintError(f"{display_name(t)}: .su says {s}, .ci says {(n, q)}")
     p = model.name
-    public = [f[0] for f in api_functions(p)]
+    public = [f"{p}_{f.verb}" for f in FUNCTIONS]
     called = {display_name(c) for cs in edges.values() for c in cs
               if c not in frames and c != "__indirect_call"}
     libc_stack = _libc_stacks(sorted(called), job["target"], job["prefix"], job["build"])
-    fns = analyze(frames, edges, public, indirect_targets=[f"{p}_rhs_cb", f"{p}_post_cb"],
+    fns = analyze(frames, edges, public, indirect_targets=_indirect_targets(p),
                   external=libc_stack)
     sizes = section_sizes(job["library"], job["prefix"])
     for name, v in fns.items():
@@ -397,7 +180,7 @@ def _libc_stacks(names, target, prefix, workdir):
         return {}
     elf = Path(workdir) / "libc_probe.elf"
     und = ",".join(f"--undefined={n}" for n in names)
-    _run([_tool(prefix, "gcc"), *LIBC_LINK[target], f"-Wl,-e,{names[0]}", f"-Wl,{und}",
+    _run([find_tool(prefix, "gcc"), *LIBC_LINK[target], f"-Wl,-e,{names[0]}", f"-Wl,{und}",
           "-o", elf, "-lm", "-lc", "-lgcc"], f"linking the C library functions {names}")
     st = image_stack(elf, prefix)
     return {n: st[n]["stack"] for n in names if n in st}
@@ -411,6 +194,36 @@ def report(model, real="float", target="cortex-m4f", build_dir=None,
     libc (library functions called, not counted), and table (text)."""
     return _measure(build_library(model, real=real, target=target, build_dir=build_dir,
                                   stack_limit=stack_limit))
+
+
+# Which members of a gen_rt_model each runtime function calls through its
+# pointers (csrc/gen_rt_model.c), and what the integrators call back: the
+# indirect calls of the call graph, resolved per caller.
+_RUNTIME_INDIRECT = {
+    "gen_rt_model_eval_mass_matrix": ["mass_matrix"],
+    "gen_rt_model_eval_forcing": ["forcing"],
+    "gen_rt_model_eval_kinematics": ["kinematics"],
+    "gen_rt_model_eval_constraints": ["constraints"],
+    "gen_rt_model_eval_constraint_jacobian": ["constraint_jacobian"],
+    "gen_rt_model_eval_velocity_constraints": ["velocity_constraints"],
+    "gen_rt_model_eval_velocity_constraint_matrix": ["velocity_constraint_matrix"],
+    "gen_rt_model_eval_energy": ["energy"],
+    "gen_rt_model_rhs": ["rhs_terms", "mass_solve"],
+    "gen_rt_model_project": ["constraint_jacobian", "velocity_constraint_matrix"],
+    "gen_rt_model_consistent_state": ["constraint_jacobian", "velocity_constraint_matrix"],
+    "gen_rt_model_linearize": ["mass_matrix", "forcing", "rhs_terms", "lin_terms", "mass_solve"],
+}
+_CALLBACKS = ["rhs_cb", "post_cb"]
+
+
+def _indirect_targets(p):
+    """{caller: [functions its indirect calls may reach]} for model prefix p."""
+    member = {"kinematics": f"{p}_kinematics", "rhs_terms": f"{p}_rhs_terms",
+              "lin_terms": f"{p}_lin_terms", "mass_solve": f"{p}_mass_solve"}
+    out = {caller: [member.get(k, f"{p}_k_{k}") for k in ks]
+           for caller, ks in _RUNTIME_INDIRECT.items()}
+    out["gen_rt_rk4_step"] = out["gen_rt_dopri5_integrate"] = list(_CALLBACKS)
+    return out
 
 
 def report_many(items, target="cortex-m4f", root=None, stack_limit=DEFAULT_STACK_LIMIT,

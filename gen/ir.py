@@ -11,7 +11,8 @@ from dataclasses import dataclass, field
 
 import sympy as sm
 
-__all__ = ["Arg", "Output", "Kernel", "make_kernel", "differentiate_graph", "build_kernels"]
+__all__ = ["Arg", "Output", "Kernel", "Plan", "plan", "make_kernel", "differentiate_graph",
+           "build_kernels", "mass_structure"]
 
 
 @dataclass(frozen=True)
@@ -237,11 +238,7 @@ def _toposort(assign, known):
 def mass_structure(model):
     """(symmetric, nonzero): whether the mass matrix is symmetric (checked
     numerically at two random points: exact symmetry of the expressions is
-    not needed, only of the values) and its structural nonzero pattern.
-    Cached on the model."""
-    cached = getattr(model, "_mass_structure", None)
-    if cached is not None:
-        return cached
+    not needed, only of the values) and its structural nonzero pattern."""
     import random
     M = model.M
     n = M.shape[0]
@@ -265,14 +262,12 @@ def mass_structure(model):
                     break
             if not symmetric:
                 break
-    model._mass_structure = (symmetric, nonzero)
-    return model._mass_structure
+    return symmetric, nonzero
 
 
-def _mass_for_kernels(model):
+def _mass_for_kernels(model, symmetric):
     """M with its upper triangle taken from the lower one when M is
     symmetric, so each pair is computed once (CSE merges the copies)."""
-    symmetric, _ = mass_structure(model)
     if not symmetric:
         return model.M
     n = model.M.shape[0]
@@ -315,9 +310,11 @@ def collect_constants(mat, variables, cache=None):
     return sm.Matrix(mat.shape[0], mat.shape[1], [walk(x) for x in mat])
 
 
-def build_kernels(model):
-    """Every kernel a model's C code needs, as plain data."""
+def build_kernels(model, mass=None):
+    """Every kernel a model's C code needs, as plain data. mass: the
+    (symmetric, nonzero) structure of M, computed when not given."""
     m = model
+    symmetric, _ = mass if mass is not None else mass_structure(model)
     Aq = Arg("q", tuple(m.q))
     Au = Arg("u", tuple(m.u))
     Ar = Arg("r", tuple(m.r))
@@ -333,7 +330,7 @@ def build_kernels(model):
 
     variables = set(m.q) | set(m.u) | set(m.r) | {m.t}
     cache = {}
-    Msym = collect_constants(_mass_for_kernels(m), variables, cache)
+    Msym = collect_constants(_mass_for_kernels(m, symmetric), variables, cache)
     F = collect_constants(m.f, variables, cache)
     kernels = {}
     kernels["mass_matrix"] = make_kernel("mass_matrix", [Aq, Ap, At], [("M", Msym)])
@@ -378,6 +375,35 @@ def build_kernels(model):
     kernels["lin_terms"] = make_jacobian_kernel(
         "lin_terms", [Aq, Au, Aqd, Aud, Alam, Ar, Ap, At], plain, jacs)
     return kernels
+
+
+@dataclass
+class Plan:
+    """What the generator will write for a model: its kernels, the
+    structure of its mass matrix and the solver its accelerations use
+    (decided here, carried out by the runtime)."""
+    model: object
+    kernels: dict
+    mass_symmetric: bool
+    mass_nonzero: list
+    accel: str          # "partitioned", "kkt", "ldlt" (unrolled for this M) or "lu"
+
+
+def accel_method(model, mass_symmetric):
+    """Kane with velocity constraints: the partitioned solve (dependent
+    speeds eliminated); Lagrange with constraints: the KKT system; no
+    constraints: an LDL^T unrolled over M's pattern when M is symmetric,
+    else pivoted LU."""
+    if model.mv:
+        return "partitioned" if model.method == "kane" else "kkt"
+    return "ldlt" if mass_symmetric else "lu"
+
+
+def plan(model):
+    """The Plan of a canonical model (nothing is stored on the model)."""
+    symmetric, nonzero = mass_structure(model)
+    kernels = build_kernels(model, (symmetric, nonzero))
+    return Plan(model, kernels, symmetric, nonzero, accel_method(model, symmetric))
 
 
 def prune(kernel):

@@ -1,57 +1,59 @@
-"""Render a model to files: kernels -> Jinja2 context (plain strings, ints
-and lists) -> templates. The list of templates is data; writes are atomic
-(a temporary directory moved into place) and deterministic (no
-timestamps)."""
+"""Render a model to files: plan -> Jinja2 context (plain strings, ints,
+lists and the interface description) -> templates. The list of templates
+is data; writes are atomic (a temporary directory moved into place) and
+deterministic (no timestamps).
+
+    plan = gen.ir.plan(model)
+    rendered = render(plan, real="double", backend="c")
+    rendered.files        # {file name: text}: the project (sources, CMake, main.c)
+    rendered.interface    # gen.abi.Interface: what the bindings need
+    rendered.cdef, rendered.module_source   # the cffi declarations and module source
+"""
 from __future__ import annotations
 
+import functools
 import os
 import shutil
 import tempfile
 import time
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import jinja2
 
-from . import __version__
+from ._version import __version__
+from .abi import METHODS, interface
 from .errors import ModelError
-from .ir import build_kernels, mass_structure
-from .solvers import ldlt_solve_c
+from .ir import plan as make_plan
 from .printers import ModelCPrinter, ModelCxxPrinter, print_kernel_body
 from .resources import csrc_dir, templates_dir
+from .solvers import ldlt_program
 
-__all__ = ["generate", "api_functions", "cdef_text", "RUNTIME_SOURCES", "STATUSES", "BACKENDS"]
+__all__ = ["Rendered", "render", "render_files", "generate", "write_atomic", "template_env",
+           "RUNTIME_SOURCES", "RUNTIME_HEADERS", "BACKENDS"]
 
+# the C runtime every C-backend model links (csrc/)
 RUNTIME_SOURCES = ["gen_rt_status.c", "gen_rt_linalg.c", "gen_rt_dynamics.c",
-                   "gen_rt_project.c", "gen_rt_integrate.c", "gen_rt_linearize.c"]
-RUNTIME_HEADERS = ["gen_rt.h"]
+                   "gen_rt_project.c", "gen_rt_integrate.c", "gen_rt_linearize.c",
+                   "gen_rt_model.c"]
+RUNTIME_HEADERS = ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h"]
+# the C++ runtime of the Eigen backend and the tables it shares with the C one
+EIGEN_RUNTIME_HEADERS = ["eigen/gen_rt_eigen.hpp", "gen_rt_status.h", "gen_rt_dopri5.h"]
 
-# (macro suffix, value, message) - mirrors csrc/gen_rt.h
-STATUSES = [
-    ("OK", 0, "ok"),
-    ("ERR_NULL", -1, "a required pointer argument is NULL"),
-    ("ERR_NONFINITE_INPUT", -2, "an input value is NaN or infinite"),
-    ("ERR_SINGULAR", -3, "singular or badly conditioned system at this state"),
-    ("ERR_NO_CONVERGENCE", -4, "constraint Newton iteration did not converge"),
-    ("ERR_STEP_UNDERFLOW", -5, "adaptive step size underflow"),
-    ("ERR_MAX_STEPS", -6, "step budget exhausted"),
-    ("ERR_BAD_ARG", -7, "argument out of range"),
-    ("ERR_NONFINITE_MODEL", -8, "model expressions are NaN/inf at this state"),
-    ("ERR_OUTPUT_FULL", -9, "output buffer too small"),
-]
-
-# (C file name, template) for the C backend: the list is data.
+# (file name, template) for the C backend: the list is data.
 C_TEMPLATES = [
     ("{name}.h", "c/model.h.j2"),
     ("{name}.c", "c/model.c.j2"),
     ("main.c", "c/main.c.j2"),
     ("CMakeLists.txt", "c/CMakeLists.txt.j2"),
     ("arm-none-eabi.cmake", "c/arm-none-eabi.cmake.j2"),   # Cortex-M4F toolchain file
+    ("gen_rt_config.h", "c/gen_rt_config.h.j2"),           # the runtime's scalar type
 ]
 
 # The C++17/Eigen backend: the typed API (header-only templates over the
-# scalar type), an extern "C" layer with the C backend's API (the same
-# header, rendered from the same template and the same api_functions list),
-# and the same standalone simulator main.c linked against that layer.
+# scalar type, on the C++ runtime), an extern "C" layer with the C backend's
+# API (the same header, from the same interface description), and the same
+# standalone simulator main.c linked against that layer.
 EIGEN_TEMPLATES = [
     ("{name}.h", "c/model.h.j2"),
     ("{name}.hpp", "eigen/model.hpp.j2"),
@@ -63,6 +65,8 @@ EIGEN_TEMPLATES = [
 EIGEN_SOURCES = ["{name}.cpp"]
 
 BACKENDS = {"c": C_TEMPLATES, "eigen": EIGEN_TEMPLATES}
+# the cffi module: its declarations and its source (header + batch loops)
+CFFI_TEMPLATES = {"cdef": "cffi/cdef.h.j2", "module_source": "cffi/module.c.j2"}
 
 # the model prefix is also the C++ namespace of the Eigen backend
 CXX_RESERVED = frozenset("""
@@ -74,112 +78,64 @@ mutable namespace new noexcept not not_eq nullptr operator or or_eq private
 protected public register reinterpret_cast requires return short signed sizeof
 static static_assert static_cast struct switch template this thread_local throw
 true try typedef typeid typename union unsigned using virtual void volatile
-wchar_t while xor xor_eq std Eigen eomgen detail
+wchar_t while xor xor_eq std Eigen eomgen detail gen_rt
 """.split())
 
-
-def api_functions(p):
-    """The public C functions: (name, params, doc). Header and cffi cdef are
-    both printed from this list."""
-    R = f"{p}_real"
-    c = f"const {R} *"
-    return [
-        (f"{p}_status_message", "int status", "Message for a status code.", "const char *"),
-        (f"{p}_eval_mass_matrix", f"{c}q, {c}p, {R} t, {R} *M",
-         "Mass matrix M(q) of the unconstrained equations, NU x NU."),
-        (f"{p}_eval_forcing", f"{c}q, {c}u, {c}r, {c}p, {R} t, {R} *f",
-         "Forcing f(q, u, r, t) of the unconstrained equations M u' = f + A^T lam, NU."),
-        (f"{p}_eval_kinematics", f"{c}q, {c}u, {c}p, {R} t, {R} *qdot",
-         "Coordinate rates q' from the kinematic differential equations, NQ."),
-        (f"{p}_eval_constraints", f"{c}q, {c}p, {R} t, {R} *fc",
-         "Configuration-constraint residuals f_c(q), MC."),
-        (f"{p}_eval_constraint_jacobian", f"{c}q, {c}p, {R} t, {R} *Jc",
-         "Configuration-constraint Jacobian d f_c / dq, MC x NQ."),
-        (f"{p}_eval_velocity_constraints", f"{c}q, {c}u, {c}p, {R} t, {R} *fv",
-         "Velocity-constraint residuals A(q) u + b(q, t), MV."),
-        (f"{p}_eval_velocity_constraint_matrix", f"{c}q, {c}p, {R} t, {R} *A, {R} *b",
-         "Velocity-constraint matrix A (MV x NU) and term b (MV)."),
-        (f"{p}_eval_energy", f"{c}q, {c}u, {c}p, {R} t, {R} *E",
-         "Total energy (only when the model was given one; else GEN_RT_ERR_BAD_ARG)."),
-        (f"{p}_eval_rhs", f"{R} t, {c}x, {c}r, {c}p, {R} *dxdt, {R} *lam",
-         "State derivative x' (NX) and, if lam != NULL, the multipliers (MV)."),
-        (f"{p}_project", f"{R} t, {c}p, {R} tol, int max_iter, {R} *x",
-         "Project x onto f_c = 0 (Gauss-Newton, minimum norm) and the velocity constraints; x unchanged on failure."),
-        (f"{p}_consistent_state", f"{R} t, {c}p, {R} tol, int max_iter, {R} *x",
-         "Solve the dependent coordinates and speeds from the independent ones (the dependent entries of x are the starting guess)."),
-        (f"{p}_sim_options_default", f"{p}_sim_options *opts",
-         "Fill opts with the defaults (RK4, projection on, rtol 1e-8, atol 1e-10).", "void"),
-        (f"{p}_step_rk4", f"{R} t, {R} h, {c}r, {c}p, int project, {R} *x",
-         "One classic RK4 step of size h from t, x updated in place (unchanged on failure)."),
-        (f"{p}_advance", f"{R} t0, {R} t1, {c}r, {c}p, const {p}_sim_options *opts, {p}_sim_stats *stats, {R} *x",
-         "Integrate x from t0 to t1 (one RK4 step, or adaptive DOPRI5 steps); stats accumulate."),
-        (f"{p}_simulate_rows", f"{R} t0, {R} t_end, {R} dt",
-         "Number of output rows simulate() writes for these times (or a negative status)."),
-        (f"{p}_simulate", f"{c}x0, {R} t0, {R} t_end, {R} dt, {c}r, {c}p, const {p}_sim_options *opts, int capacity, {R} *t_out, {R} *x_out, {R} *lam_out",
-         "Simulate from x0 with outputs every dt up to t_end (the last interval clipped): rows of t_out, x_out (NX each), lam_out (MV each, may be NULL). On failure the rows written are stats->n_out and stats->x_last holds the last good state.", "int", True),
-        (f"{p}_linearize", f"{c}x_op, {c}r_op, {c}p, {R} t, {R} *A, {R} *B",
-         "Linearize about any operating point: A (NS x NS) and B (NS x NR) for the independent state [q_ind, u_ind]."),
-    ]
+_KERNEL_DOCS = {
+    "mass_matrix": "M(q)",
+    "forcing": "f(q, u, r, t)",
+    "kinematics": "q' (or Kqd and its right-hand side)",
+    "rhs_terms": "everything the right-hand side needs",
+    "constraints": "f_c(q)",
+    "constraint_jacobian": "f_c(q) and d f_c/dq",
+    "velocity_constraint_matrix": "A(q), b(q, t)",
+    "velocity_constraints": "A(q) u + b",
+    "energy": "total energy",
+    "lin_terms": "Jacobian blocks of the linearization",
+}
 
 
-def _fn_entries(p):
+@dataclass
+class Rendered:
+    """The output of rendering: the project's files, the interface
+    description, and what the cffi build compiles (never re-rendered)."""
+    files: dict
+    interface: object
+    backend: str
+    real: str
+    cdef: str
+    module_source: str
+    timings: dict = field(default_factory=dict)
+
+
+@functools.lru_cache(maxsize=None)
+def _env(root):
+    return jinja2.Environment(
+        loader=jinja2.FileSystemLoader(root),
+        trim_blocks=True, lstrip_blocks=True, keep_trailing_newline=True,
+        undefined=jinja2.StrictUndefined, autoescape=False)
+
+
+def template_env():
+    """The Jinja2 environment of templates/ (SymForce's settings: strict
+    undefined, no autoescape, trailing newlines kept)."""
+    return _env(str(templates_dir()))
+
+
+def _kernel_context(kernels, printer, R):
+    """Kernels as data: names, arguments, outputs and the printed body."""
     out = []
-    for entry in api_functions(p):
-        name, params, doc = entry[:3]
-        ret = entry[3] if len(entry) > 3 else "int"
-        if len(entry) > 4 and entry[4]:
-            params = params + f", {p}_sim_stats *stats"
-        out.append({"name": name, "params": params, "doc": doc, "ret": ret})
-    return out
-
-
-def cdef_text(model, real="double"):
-    """The cffi cdef, from the same function list as the header."""
-    p = model.name
-    lines = [f"typedef {real} {p}_real;"]
-    lines.append("typedef struct { int method; int project; %s_real rtol; %s_real atol; "
-                 "%s_real h_init; %s_real h_min; %s_real h_max; long max_steps; "
-                 "%s_real proj_tol; int proj_max_iter; } %s_sim_options;" % ((p,) * 7))
-    lines.append("typedef struct { long n_accepted; long n_rejected; long n_rhs; int n_out; "
-                 "%s_real t_last; %s_real h_next; %s_real x_last[%d]; } %s_sim_stats;"
-                 % (p, p, p, model.nx, p))
-    for fn in _fn_entries(p):
-        lines.append(f"{fn['ret']} {fn['name']}({fn['params']});")
-    return "\n".join(lines) + "\n"
-
-
-def _kernel_context(kernels, printer, p, R=None):
-    R = R or f"{p}_real"
-    out = []
-    docs = {
-        "mass_matrix": "M(q)",
-        "forcing": "f(q, u, r, t)",
-        "kinematics": "q' (or Kqd and its right-hand side)",
-        "rhs_terms": "everything the right-hand side needs",
-        "constraints": "f_c(q)",
-        "constraint_jacobian": "f_c(q) and d f_c/dq",
-        "velocity_constraint_matrix": "A(q), b(q, t)",
-        "velocity_constraints": "A(q) u + b",
-        "energy": "total energy",
-        "lin_terms": "Jacobian blocks of the linearization",
-    }
     for k in kernels.values():
-        params = []
-        voids = []
-        for a in k.args:
-            if a.scalar:
-                params.append(f"{R} {a.name}")
-            else:
-                params.append(f"const {R} *{a.name}")
-            voids.append(a.name)
-        for o in k.outputs:
-            params.append(f"{R} *out_{o.name}")
+        params = [f"{R} {a.name}" if a.scalar else f"const {R} *{a.name}" for a in k.args]
+        params += [f"{R} *out_{o.name}" for o in k.outputs]
         out.append({
             "name": k.name,
-            "params": ", ".join(params),
-            "voids": voids,
+            "args": [{"name": a.name, "scalar": a.scalar} for a in k.args],
+            "outputs": [o.name for o in k.outputs],
+            "params": ", ".join(params),          # the Eigen header's spelling
+            "voids": [a.name for a in k.args],
             "body": print_kernel_body(k, printer),
-            "doc": docs.get(k.name, k.name),
+            "doc": _KERNEL_DOCS.get(k.name, k.name),
             "n_assign": len(k.assignments),
         })
     return out
@@ -214,89 +170,84 @@ def _fmt_real(v, real):
     return s + ("F" if real == "float" else "")
 
 
-def build_context(model, real="double", kernels=None, timings=None, backend="c"):
-    if real not in ("double", "float"):
-        raise ModelError(f"real must be 'double' or 'float', got {real!r}")
-    t0 = time.perf_counter()
-    if kernels is None:
-        kernels = build_kernels(model)
-    t1 = time.perf_counter()
-    if backend == "eigen":
-        printer = ModelCxxPrinter(_symbol_map(model, kernels), "Scalar")
-    else:
-        printer = ModelCPrinter(_symbol_map(model, kernels), real)
-    p = model.name
-    m = model
-    mx = lambda n: max(1, n)  # noqa: E731  C99 has no zero-length arrays
-    nq, nu, nx, nr, np_, mc, mv = m.nq, m.nu, m.nx, m.nr, m.np, m.mc, m.mv
-    sz = {
-        "nqi": mx(nq - mc), "nui": mx(nu - mv), "mc": mx(mc), "mv": mx(mv),
-        "np": mx(np_), "nr": mx(nr),
-        "A": mx(mv * nu), "Rr": mx(nu * nr), "Sq": mx(mv * nq), "Su": mx(mv * nu),
-        "Jc": mx(mc * nq),
-        "accel_work": (nu + mv) * (nu + mv + 1) + 2 * nu * nu + 4 * nu + 1,
-        "accel_iwork": nu + mv + 1,
-        "rk4_work": 5 * nx,
-        "dopri_work": 9 * nx,
-        "minnorm_work": max(mc * mc + mc, mv * mv + mv) + 1,
-    }
-    niq, niu = nq - mc, nu - mv
-    ns = niq + niu
-    sz["lin_work"] = (nq * niq + mc * mc + mc * niq + nu * niu + nu * niq + mv * mv + mv * ns
-                      + 2 * nq * ns + (nu + mv) ** 2 + (nu + mv) * (ns + nr) + nu * ns
-                      + nu * niq + mv * niq + nq * nq + 8)
-    sz["lin_iwork"] = nq + nu + mc + mv + 1
-    kctx = _kernel_context(kernels, printer, p,
-                           "Scalar" if backend == "eigen" else None)
-    t2 = time.perf_counter()
-    lin_names = {"Kqd": "Kqd", "Ku": "Ku", "M": "M", "A": "A", "Kq": "Kq", "Rq": "Rq",
-                 "Ru": "Ru", "Rr": "Rr", "Sq": "Sq", "Su": "Su", "Vq": "Vq", "Jc": "Jc"}
-    lin_call = ", ".join(lin_names[o.name] for o in kernels["lin_terms"].outputs)
-    def sympy_name(names, labels, i):
-        """' (sympy: <label>)' when the C name differs, safe inside a C comment."""
-        lab = labels[i] if i < len(labels) else names[i]
-        if lab == names[i]:
-            return ""
-        lab = (lab.replace("*/", "*\\/").replace("/*", "/\\*").replace("??", "?\\?")
-               .replace("\\\n", " ").replace("\n", " ").replace("\r", " "))
-        return f"; sympy: {lab}"
+def _field_default(f, real):
+    """A struct field's default value as a C literal."""
+    if f.default == "eps16":
+        return "16 * GEN_RT_EPS"
+    if f.ctype == "real":
+        return _fmt_real(f.default, real)
+    return f"{int(f.default)}L" if f.ctype == "long" else str(int(f.default))
 
+
+def _comment_label(names, labels, i):
+    """'; sympy: <label>' when the C name differs, safe inside a C comment."""
+    lab = labels[i] if i < len(labels) else names[i]
+    if lab == names[i]:
+        return ""
+    lab = (lab.replace("*/", "*\\/").replace("/*", "/\\*").replace("??", "?\\?")
+           .replace("\\\n", " ").replace("\n", " ").replace("\r", " "))
+    return f"; sympy: {lab}"
+
+
+def build_context(plan, iface, timings=None, backend="c"):
+    """The Jinja2 context of a plan: plain data and the interface."""
+    t1 = time.perf_counter()
+    m = plan.model
+    kernels = plan.kernels
+    real = iface.real
+    if backend == "eigen":
+        printer = ModelCxxPrinter(_symbol_map(m, kernels), "Scalar")
+    else:
+        printer = ModelCPrinter(_symbol_map(m, kernels), real)
+    p = m.name
+    kctx = _kernel_context(kernels, printer, "Scalar" if backend == "eigen" else f"{p}_real")
+    t2 = time.perf_counter()
+    mx = lambda n: max(1, n)  # noqa: E731  C99 has no zero-length arrays
+    nq, nu, nr, mc, mv = m.nq, m.nu, m.nr, m.mc, m.mv
     roles = []
     for i in range(nq):
         roles.append((i, m.state_names[i],
                       ("coordinate, independent" if i in m.q_ind else "coordinate, dependent")
-                      + sympy_name(m.state_names, m.state_labels, i)))
+                      + _comment_label(m.state_names, m.state_labels, i)))
     for j in range(nu):
         roles.append((nq + j, m.state_names[nq + j],
                       ("speed, independent" if j in m.u_ind else "speed, dependent")
-                      + sympy_name(m.state_names, m.state_labels, nq + j)))
+                      + _comment_label(m.state_names, m.state_labels, nq + j)))
+    opts = iface.struct("sim_options")
     ctx = {
-        "name": p, "p": p, "P": p.upper(), "version": __version__, "real": real,
-        "method": m.method,
+        "iface": iface, "name": p, "p": p, "P": p.upper(), "R": f"{p}_real",
+        "version": __version__, "real": real, "method": m.method,
         "method_doc": ("Kane's method (dependent speeds eliminated numerically)"
                        if m.method == "kane" else
                        "Lagrange's method (multipliers from the KKT system)"),
-        "nq": nq, "nu": nu, "nx": nx, "nr": nr, "np": np_, "mc": mc, "mv": mv, "ns": ns,
+        "methods": sorted(METHODS.items(), key=lambda kv: kv[1]),
+        "nq": nq, "nu": nu, "nx": m.nx, "nr": nr, "np": m.np, "mc": mc, "mv": mv, "ns": m.ns,
         "has_energy": 1 if m.energy is not None else 0,
-        "statuses": STATUSES,
+        "explicit_kinematics": m.qdot is not None,
         "state_doc": roles,
         "inputs_doc": [(i, n + (f"  ({lab[2:]})" if lab else ""))
                        for i, n in enumerate(m.input_names)
-                       for lab in [sympy_name(m.input_names, m.input_labels, i)]],
+                       for lab in [_comment_label(m.input_names, m.input_labels, i)]],
         "params_doc": [(i, n, _fmt_real(v, "double")
-                        + sympy_name(m.constant_names, m.constant_labels, i))
+                        + _comment_label(m.constant_names, m.constant_labels, i))
                        for i, (n, v) in enumerate(zip(m.constant_names, m.p_values))],
         "ind_doc": list(enumerate(m.independent_state_names)),
-        "functions": _fn_entries(p),
         "kernels": kctx,
-        "explicit_kinematics": m.qdot is not None,
+        "lin_outputs": [o.name for o in kernels["lin_terms"].outputs],
+        "p_default": [_fmt_real(v, real) for v in m.p_values],
+        "defaults": {f.name: _field_default(f, real) for f in opts.fields},
+        # the solver choice (made by the plan) as the runtime's constant, and
+        # the arguments of the runtime's work-size macros
+        "accel_c": "GEN_RT_ACCEL_" + plan.accel.upper(),
+        "dims": iface.work_dims(),
+        "mass_solve": (ldlt_program(m.nu, plan.mass_nonzero) if plan.accel == "ldlt" else None),
+        # array sizes (C99 and C++ have no zero-length arrays)
+        "sz": {"nqi": mx(nq - mc), "nui": mx(nu - mv), "mc": mx(mc), "mv": mx(mv),
+               "np": mx(m.np), "nr": mx(nr)},
         "q_ind": ", ".join(map(str, m.q_ind)) or "0",
         "q_dep": ", ".join(map(str, m.q_dep)) or "0",
         "u_ind": ", ".join(map(str, m.u_ind)) or "0",
         "u_dep": ", ".join(map(str, m.u_dep)) or "0",
-        "p_default": ", ".join(_fmt_real(v, real) for v in m.p_values) or "0",
-        "sz": sz,
-        "lin_call_outputs": lin_call,
         "state_names": m.state_names,
         "input_names": m.input_names,
         "constant_names": m.constant_names,
@@ -305,26 +256,12 @@ def build_context(model, real="double", kernels=None, timings=None, backend="c")
         "ind_names": m.independent_state_names,
         "runtime_sources": RUNTIME_SOURCES,
         "p_values_c": [_fmt_real(v, real) for v in m.p_values],
-        "mass_solve": _mass_solve_code(m, real),
     }
     if backend == "eigen":
-        ctx.update(_eigen_context(model, kernels))
+        ctx.update(_eigen_context(m, kernels))
     if timings is not None:
-        timings["kernels"] = t1 - t0
         timings["printing"] = t2 - t1
     return ctx
-
-
-def _mass_solve_code(model, real):
-    """The unrolled LDL^T solve of an unconstrained model with a symmetric
-    mass matrix ("" otherwise: constrained models use the runtime's
-    pivoted LU on the augmented systems)."""
-    if model.mv:
-        return ""
-    symmetric, nonzero = mass_structure(model)
-    if not symmetric:
-        return ""
-    return ldlt_solve_c(model.name, model.nu, nonzero, f"{model.name}_real")
 
 
 # shapes of the linearization blocks (names of the lin_terms kernel outputs)
@@ -346,57 +283,45 @@ def _eigen_context(model, kernels):
         "nqi": m.nq - m.mc, "nui": m.nu - m.mv,
         "p_default_cxx": ", ".join(f"Scalar({_fmt_real(v, 'double')})" for v in m.p_values)
                          or "Scalar(0)",
-        "lin_call_cxx": ", ".join(f"{o.name}.data()" for o in kernels["lin_terms"].outputs),
-        "lin_decls": [(o.name,) + _LIN_SHAPES[o.name]
-                      for o in kernels["lin_terms"].outputs if o.name not in ("M", "A")],
-        "lin_checks": [(o.name,) + _LIN_SHAPES[o.name]
-                       for o in kernels["lin_terms"].outputs if o.name in _LIN_CHECKED],
+        # how gen_rt::Runtime solves the accelerations (the traits' ACCEL)
+        "accel": ("spd" if not m.mv else "partitioned" if m.method == "kane" else "kkt"),
+        # the lin_terms kernel's outputs in its parameter order (gen_rt::LinOut fields)
+        "lin_outputs": [o.name for o in kernels["lin_terms"].outputs],
         "cxx_sources": [f.format(name=m.name) for f in EIGEN_SOURCES],
-        # the C API by verb, so the extern "C" layer prints its signatures from api_functions
-        "fns": {fn["name"][len(m.name) + 1:]: fn for fn in _fn_entries(m.name)},
     }
 
 
-def _env():
-    return jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(templates_dir())),
-        trim_blocks=True, lstrip_blocks=True, keep_trailing_newline=True,
-        undefined=jinja2.StrictUndefined, autoescape=False)
+def render(plan, real="double", backend="c", timings=None):
+    """Render a Plan (gen.ir.plan) to a Rendered: the project's files, the
+    interface description and the cffi declarations and module source.
+    Nothing is written and nothing is stored on the model."""
+    if real not in ("double", "float"):
+        raise ModelError(f"real must be 'double' or 'float', got {real!r}")
+    if backend not in BACKENDS:
+        raise ModelError(f"unknown backend {backend!r}: choose one of {sorted(BACKENDS)}")
+    timings = {} if timings is None else timings
+    iface = interface(plan.model, real=real, accel=plan.accel)
+    ctx = build_context(plan, iface, timings=timings, backend=backend)
+    env = template_env()
+    t0 = time.perf_counter()
+    name = plan.model.name
+    files = {fname.format(name=name): env.get_template(tname).render(**ctx)
+             for fname, tname in BACKENDS[backend]}
+    runtime = (RUNTIME_SOURCES + RUNTIME_HEADERS) if backend == "c" else EIGEN_RUNTIME_HEADERS
+    for src in runtime:
+        files[Path(src).name] = (csrc_dir() / src).read_text()
+    cffi = {k: env.get_template(t).render(**ctx) for k, t in CFFI_TEMPLATES.items()}
+    timings["templates"] = time.perf_counter() - t0
+    return Rendered(files, iface, backend, real, cffi["cdef"], cffi["module_source"], timings)
 
 
 def render_files(model, real="double", backend="c", timings=None):
-    """{file name: text} for a model (nothing written)."""
-    if backend not in BACKENDS:
-        raise ModelError(f"unknown backend {backend!r}: choose one of {sorted(BACKENDS)}")
-    if backend == "eigen":
-        return _render_eigen(model, real, timings)
-    ctx = build_context(model, real=real, timings=timings)
-    env = _env()
-    files = {}
+    """{file name: text} of a model (nothing written)."""
+    timings = {} if timings is None else timings
     t0 = time.perf_counter()
-    for fname, tname in C_TEMPLATES:
-        files[fname.format(name=model.name)] = env.get_template(tname).render(**ctx)
-    for src in RUNTIME_SOURCES + RUNTIME_HEADERS:
-        files[src] = (csrc_dir() / src).read_text()
-    files["gen_rt_config.h"] = (
-        "/* gen_rt_config.h - runtime configuration written by eomgen. Do not edit. */\n"
-        "#ifndef GEN_RT_CONFIG_H\n#define GEN_RT_CONFIG_H\n"
-        + ("#define GEN_RT_REAL_FLOAT\n" if real == "float" else "")
-        + "#endif\n")
-    if timings is not None:
-        timings["templates"] = time.perf_counter() - t0
-    return files
-
-
-def _render_eigen(model, real, timings):
-    ctx = build_context(model, real=real, timings=timings, backend="eigen")
-    env = _env()
-    t0 = time.perf_counter()
-    files = {fname.format(name=model.name): env.get_template(tname).render(**ctx)
-             for fname, tname in EIGEN_TEMPLATES}
-    if timings is not None:
-        timings["templates"] = time.perf_counter() - t0
-    return files
+    plan = make_plan(model)
+    timings["kernels"] = time.perf_counter() - t0
+    return render(plan, real=real, backend=backend, timings=timings).files
 
 
 def write_atomic(files, out_dir):
@@ -436,6 +361,7 @@ def generate(model, out_dir, backend="c", real="double", timings=None):
     """Write the model's sources, a CMake project and a standalone simulator
     into out_dir; return the paths written. backend="c": C99 model and the C
     runtime; backend="eigen": a C++17 header over Eigen 3.4 (scalar type a
-    template parameter) plus an extern "C" layer with the C backend's API."""
+    template parameter) on the C++ runtime, plus an extern "C" layer with the
+    C backend's API."""
     files = render_files(model, real=real, backend=backend, timings=timings)
     return write_atomic(files, out_dir)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import sympy as sm
 
+from .abi import status_value
 from .errors import ModelError, SingularError
 from .model import Model
 
@@ -50,7 +51,7 @@ def _solve(Mat, rhs, what):
         return Mat.LUsolve(rhs).applyfunc(sm.simplify)
     except (ValueError, ZeroDivisionError) as e:
         raise SingularError(f"{what} is singular at this operating point ({e})",
-                            status=-3, status_name="GEN_RT_ERR_SINGULAR") from None
+                            status=status_value("ERR_SINGULAR"), status_name="ERR_SINGULAR") from None
 
 
 def linearize_symbolic(model: Model, op_point=None, r_op=None, constants=None, t=0,
@@ -193,5 +194,5 @@ def linearize_symbolic(model: Model, op_point=None, r_op=None, constants=None, t
         B_lin = B_lin.applyfunc(sm.simplify)
     if any(e.has(sm.nan, sm.zoo, sm.oo, -sm.oo) for e in list(A_lin) + list(B_lin)):
         raise SingularError("the linearization is not finite at this operating point",
-                            status=-3, status_name="GEN_RT_ERR_SINGULAR")
+                            status=status_value("ERR_SINGULAR"), status_name="ERR_SINGULAR")
     return A_lin, B_lin

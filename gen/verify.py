@@ -121,30 +121,14 @@ def verify(model, samples=20, backend="c", real="double", sources=None, seed=0, 
     sources: a folder written by ``gen.generate`` (possibly edited since):
     its sources are compiled and checked instead of freshly generated ones.
     sim: an already compiled Simulator to check instead."""
-    from .build import build_cffi, _load
-    from .bindings import Simulator
-    from .render import render_files
+    from .build import compile as compile_model
     from .symbolic import linearize_symbolic
 
     t_start = time.perf_counter()
     if tol is None:
         tol = 1e-9 if real == "double" else 2e-4
     if sim is None:
-        files = None
-        if sources is not None:
-            folder = Path(sources)
-            if not folder.is_dir():
-                raise ModelError(f"sources folder {folder} does not exist")
-            expected = render_files(model, real=real, backend=backend)
-            files = {}
-            for name in expected:
-                path = folder / name
-                if not path.is_file():
-                    raise ModelError(f"{path} is missing: {folder} is not a generated "
-                                     f"'{model.name}' project")
-                files[name] = path.read_text()
-        so, modname = build_cffi(model, real=real, files=files, backend=backend)
-        sim = Simulator(model, _load(so, modname), real=real)
+        sim = compile_model(model, backend=backend, real=real, sources=sources)
     m = model
     rng = np.random.default_rng(seed)
     ref = _reference(m)

@@ -1,3 +1,6 @@
+# EOMGEN_UPDATE_GOLDEN=1 python -m pytest tests/test_golden_sources.py rewrites the golden
+# generated sources in tests/golden/sources/ instead of comparing (see that test's docstring).
+# Markers (pyproject.toml): slow, eigen, embedded, fuzz; the fast tier is -m "not slow".
 import os
 import shutil
 import sys
@@ -35,6 +38,19 @@ def require_eigen():
             pytest.fail(f"Eigen 3.4 is required under CI=true: {why}")
         pytest.skip(why)
     return d
+
+
+# Markers of whole modules that other work owns, applied here so that those
+# files need no edit: every test of test_eigen.py builds every example model
+# for both backends up front (minutes of C++ compiles).
+MODULE_MARKS = {"test_eigen.py": ("eigen", "slow")}
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        for mark in MODULE_MARKS.get(item.path.name, ()):
+            item.add_marker(getattr(pytest.mark, mark))
 
 
 @pytest.fixture(scope="session")

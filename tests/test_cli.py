@@ -50,6 +50,7 @@ def test_generate_writes_the_project(tmp_path):
     assert "typedef float pl_real;" in (tmp_path / "pf" / "pl.h").read_text()
 
 
+@pytest.mark.slow
 def test_build_prints_a_working_binary(tmp_path):
     require_tool("cmake")
     p = eomgen("build", SEED, "-o", str(tmp_path / "pend"), check_rc=0)
@@ -87,6 +88,7 @@ def test_simulate_csv_and_plot(tmp_path):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10000
 
 
+@pytest.mark.slow
 def test_verify_passes_then_catches_tampering(tmp_path):
     p = eomgen("verify", SEED, "--samples", "5", check_rc=0)
     assert "all functions agree" in p.stdout and "eval_rhs" in p.stdout
@@ -98,16 +100,20 @@ def test_verify_passes_then_catches_tampering(tmp_path):
     assert "MISMATCH" in p.stdout and "FAIL" in p.stdout
 
 
+def _slow(*case):
+    return pytest.param(*case, marks=pytest.mark.slow)
+
+
 @pytest.mark.parametrize("args,needle", [
     (["simulate", "missing.py", "--t-end", "1"], "model file not found"),
-    (["simulate", "NOMODEL", "--t-end", "1"], "defines no function model()"),
+    _slow(["simulate", "NOMODEL", "--t-end", "1"], "defines no function model()"),
     (["simulate", SEED, "--t-end", "1", "--x0", "theta=1"], "unknown state name 'theta'"),
-    (["simulate", SEED, "--t-end", "1", "--param", "mass=2"], "unknown constant name 'mass'"),
+    _slow(["simulate", SEED, "--t-end", "1", "--param", "mass=2"], "unknown constant name 'mass'"),
     (["simulate", SEED, "--t-end", "1", "--x0", "q2=half"], "'half' is not a number"),
-    (["simulate", SEED, "--t-end", "soon"], "invalid float value"),
-    (["generate", SEED, "-o", "x", "--backend", "fortran"], "invalid choice: 'fortran'"),
-    (["linearize", SEED, "--at", "q2"], "must be NAME=VALUE"),
-    (["frobnicate"], "invalid choice"),
+    _slow(["simulate", SEED, "--t-end", "soon"], "invalid float value"),
+    _slow(["generate", SEED, "-o", "x", "--backend", "fortran"], "invalid choice: 'fortran'"),
+    _slow(["linearize", SEED, "--at", "q2"], "must be NAME=VALUE"),
+    _slow(["frobnicate"], "invalid choice"),
 ])
 def test_bad_arguments_one_line_exit_2(tmp_path, args, needle):
     nomodel = tmp_path / "nomodel.py"
@@ -140,6 +146,7 @@ def test_failures_exit_1_without_traceback(tmp_path):
     assert p.returncode != 0 and "Traceback" in p.stderr
 
 
+@pytest.mark.slow
 def test_help_has_examples():
     p = eomgen("--help", check_rc=0)
     assert "examples:" in p.stdout and "eomgen verify" in p.stdout
@@ -148,6 +155,7 @@ def test_help_has_examples():
         assert "example:" in p.stdout and f"eomgen {cmd}" in p.stdout
 
 
+@pytest.mark.slow
 def test_progress_quiet_off_a_terminal_and_verbose_timings():
     p = eomgen("linearize", SEED, "--at", "q1=1", check_rc=0)
     assert p.stderr == ""                          # not a terminal: no progress
@@ -165,6 +173,7 @@ def _tour_commands():
     return cmds
 
 
+@pytest.mark.slow
 def test_readme_tour_runs_as_written(tmp_path):
     require_tool("cmake")
     (tmp_path / "examples").symlink_to(ROOT / "examples")

@@ -58,6 +58,8 @@ def cross(models, tmp_path_factory):
     print("\n" + fp.format_table(reps))
 
 
+@pytest.mark.slow
+@pytest.mark.embedded
 @pytest.mark.parametrize("real", REALS)
 @pytest.mark.parametrize("key", MODELS)
 def test_cross_build_and_footprint(cross, models, key, real):
@@ -76,8 +78,10 @@ def test_cross_build_and_footprint(cross, models, key, real):
         assert v["code"] > 0
         # the C library, and the EABI's software double helpers in double
         assert {f for f in v["libc"] if not f.startswith("__aeabi_")} <= LIBC_OK, v["libc"]
-    # the integrator's indirect call is resolved to the model's callbacks
-    assert f"{p}_rhs_cb" in fns[f"{p}_step_rk4"]["path"]
+    # the integrator's indirect call is resolved to the runtime's callbacks, and
+    # the runtime's calls through the gen_rt_model to the kernels it can reach
+    path = fns[f"{p}_step_rk4"]["path"]
+    assert "rhs_cb" in path and f"{p}_lin_terms" not in path, path
     assert fns[f"{p}_linearize"]["stack"] >= fns[f"{p}_linearize"]["frame"]
     assert rep["max_stack"] < bound(key, real) + 2048
     if key == "cart4":   # sinf/sin: newlib's argument reduction keeps arrays on the stack
@@ -107,6 +111,8 @@ def _link_firmware(rep, model, out):
     return elf
 
 
+@pytest.mark.slow
+@pytest.mark.embedded
 @pytest.mark.parametrize("real", REALS)
 @pytest.mark.parametrize("key", MODELS)
 def test_firmware_links_without_heap_or_stdio(cross, models, key, real, tmp_path):
@@ -189,6 +195,8 @@ def _run_driver(exe, x):
     return out
 
 
+@pytest.mark.slow
+@pytest.mark.embedded
 @pytest.mark.parametrize("key", ["kane", "lagrange"])
 def test_qemu_arm_matches_host(models, kane_sim, lagrange_sim, key, tmp_path):
     require_tool("arm-linux-gnueabihf-gcc")
@@ -249,6 +257,7 @@ def test_analyze_refuses_recursion_and_dynamic_frames():
         fp.analyze(frames, {"a": {"__indirect_call"}}, ["a"])
 
 
+@pytest.mark.embedded
 def test_report_cli_writes_footprint(tmp_path, monkeypatch):
     require_tool("cmake")
     require_tool("arm-none-eabi-gcc")

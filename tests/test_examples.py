@@ -92,7 +92,7 @@ def test_rolling_disc_energy_and_no_slip(disc):
 
 
 # ------------------------------------------------------ n-link on a cart
-@pytest.mark.parametrize("n", [1, 2, 4, 8])
+@pytest.mark.parametrize("n", [1, 2, *(pytest.param(n, marks=pytest.mark.slow) for n in (4, 8))])
 def test_n_link_cart_against_sympy(n):
     KM, s = n_link_cart.derive(n)
     model = n_link_cart.model(n)
@@ -134,7 +134,10 @@ EXAMPLES = {
 }
 
 
-@pytest.mark.parametrize("which", sorted(EXAMPLES))
+# fast tier: cart4 (unconstrained, the unrolled LDL^T); the seeds are also
+# compiled strict by test_seed_pendulum.py
+@pytest.mark.parametrize("which", [w if w == "cart4" else pytest.param(w, marks=pytest.mark.slow)
+                                   for w in sorted(EXAMPLES)])
 def test_every_example_compiles_strict(tmp_path, which):
     model = EXAMPLES[which]()
     paths = gen.generate(model, tmp_path)

@@ -133,6 +133,7 @@ def test_float_rk4_10s_tracks_double(key, float_sims, kane_sim, lagrange_sim):
     assert err < 1e-4
 
 
+@pytest.mark.slow
 def test_cli_float_build_and_binary(kane_sim, tmp_path):
     """--real float through the command line: generate, build the binary
     with CMake, and its linearization agrees with the double simulator."""

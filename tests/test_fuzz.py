@@ -18,6 +18,8 @@ import rolling_disc
 import seed_pendulum as sp
 from conftest import require_eigen, require_tool
 
+pytestmark = pytest.mark.fuzz
+
 HARNESS = Path(__file__).resolve().parent / "fuzz" / "harness.c"
 MODELS = {"kane": sp.kane_model, "lagrange": sp.lagrange_model,
           "rolling_disc": rolling_disc.model, "four_bar": four_bar.model}
@@ -39,7 +41,9 @@ def _build(model, out, cc, flags, extra=()):
 SAN = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
 
 
-@pytest.mark.parametrize("key", sorted(MODELS))
+# the seed Kane pendulum in the fast tier, the other models with the slow tests
+@pytest.mark.parametrize("key", [k if k == "kane" else pytest.param(k, marks=pytest.mark.slow)
+                                 for k in sorted(MODELS)])
 def test_hostile_inputs_under_sanitizers(tmp_path, key):
     exe = _build(MODELS[key](), tmp_path, "gcc", SAN)
     r = subprocess.run([str(exe), "3000"], capture_output=True, text=True, timeout=600)
@@ -48,6 +52,8 @@ def test_hostile_inputs_under_sanitizers(tmp_path, key):
     assert "runtime error" not in r.stderr
 
 
+@pytest.mark.slow
+@pytest.mark.eigen
 @pytest.mark.parametrize("key", ["rolling_disc"])
 def test_eigen_backend_under_sanitizers(tmp_path, key):
     """The C++/Eigen backend's extern "C" layer obeys the same rules."""
@@ -73,6 +79,7 @@ def test_eigen_backend_under_sanitizers(tmp_path, key):
     assert "1500 cases, all rules held" in r.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("key", ["kane", "rolling_disc"])
 def test_libfuzzer_bounded_run(tmp_path, key):
     clang = require_tool("clang")

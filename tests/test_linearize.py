@@ -103,6 +103,7 @@ def sleigh():
     return KM, s, KM.to_linearizer(linear_solver="CRAMER"), gen.compile(model)
 
 
+@pytest.mark.slow
 def test_sleigh_random_points(sleigh):
     KM, s, lin, sim = sleigh
     rng = np.random.default_rng(13)

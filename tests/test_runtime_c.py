@@ -10,8 +10,12 @@ from conftest import require_tool
 ROOT = Path(__file__).resolve().parent.parent
 
 
-@pytest.mark.parametrize("flags", [[], ["-DEOMGEN_SANITIZE=ON"], ["-DEOMGEN_REAL_FLOAT=ON"]],
-                         ids=["double", "asan-ubsan", "float"])
+SANITIZE = pytest.param(["-DEOMGEN_SANITIZE=ON"], marks=[pytest.mark.fuzz, pytest.mark.slow],
+                        id="asan-ubsan")
+
+
+@pytest.mark.parametrize("flags", [pytest.param([], id="double"), SANITIZE,
+                                   pytest.param(["-DEOMGEN_REAL_FLOAT=ON"], id="float")])
 def test_runtime_ctest(tmp_path, flags):
     require_tool("cmake")
     require_tool("ctest")

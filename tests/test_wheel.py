@@ -6,6 +6,8 @@ import sys
 import zipfile
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parent.parent
 
 SCRIPT = r"""
@@ -21,6 +23,7 @@ print("A", A.tolist())
 """
 
 
+@pytest.mark.slow
 def test_wheel_contents_and_install(tmp_path):
     wheels = tmp_path / "wheels"
     r = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation",
@@ -30,7 +33,9 @@ def test_wheel_contents_and_install(tmp_path):
     names = zipfile.ZipFile(whl).namelist()
     for need in ("gen/templates/c/model.c.j2", "gen/templates/c/model.h.j2",
                  "gen/templates/common/macros.j2", "gen/csrc/gen_rt.h",
-                 "gen/csrc/gen_rt_linearize.c", "gen/model.py"):
+                 "gen/csrc/gen_rt_linearize.c", "gen/csrc/gen_rt_model.c",
+                 "gen/csrc/gen_rt_status.h", "gen/csrc/eigen/gen_rt_eigen.hpp",
+                 "gen/templates/cffi/cdef.h.j2", "gen/model.py"):
         assert need in names, need
     assert any(n.endswith("entry_points.txt") for n in names)
     site = tmp_path / "site"

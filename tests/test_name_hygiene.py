@@ -118,6 +118,7 @@ def _double_pendulum(names):
     return gen.Model.from_kanes(KM, constants=vals, name=names["name"])
 
 
+@pytest.mark.slow
 def test_double_pendulum_with_hostile_names_linearizes_like_plain():
     """Issue 8: int, double, y0, j1, gamma, lambda, E, I, x[0], theta'."""
     hostile = dict(q1="x[0]", q2="theta'", u1="int", u2="double", m1="y0", m2="j1",

@@ -1,5 +1,6 @@
 """Issue 2 acceptance: the seed pendulum (Kane and Lagrange) generated as
-C99, compiled with cffi, checked against sympy's own evaluation."""
+C99, compiled with cffi, checked against sympy's own evaluation; and the
+fast tier's one compile of the Eigen backend, checked against the C one."""
 import os
 import subprocess
 
@@ -255,6 +256,27 @@ def test_generation_is_reproducible(tmp_path, kane_model):
     b = gen.generate(seed_pendulum.kane_model(), tmp_path / "b")
     for pa, pb in zip(sorted(a), sorted(b)):
         assert pa.read_text() == pb.read_text(), pa.name
+
+
+# ------------------------------------------------------- Eigen backend
+@pytest.mark.eigen
+def test_eigen_backend_agrees_with_c(kane_model, kane_sim):
+    """The fast tier's compile of the C++/Eigen backend (tests/test_eigen.py,
+    marked slow, checks every model and method): the seed Kane pendulum's
+    mass matrix, rhs, multipliers and linearization agree with the C backend."""
+    from conftest import require_eigen
+    require_eigen()
+    sim = gen.compile(kane_model, backend="eigen")
+    assert sim.build_info["backend"] == "eigen"
+    rng = np.random.default_rng(11)
+    for _ in range(5):
+        x = pendulum_state(rng.uniform(-1.3, 1.3), rng.uniform(-3, 3), 1.0, "kane")
+        q = x[:kane_sim.nq]
+        assert rel_err(sim.mass_matrix(q), kane_sim.mass_matrix(q)) < 1e-13
+        assert rel_err(sim.rhs(0.2, x), kane_sim.rhs(0.2, x)) < 1e-13
+        assert rel_err(sim.multipliers(0.2, x), kane_sim.multipliers(0.2, x)) < 1e-13
+        for a, c in zip(sim.linearize(x), kane_sim.linearize(x)):
+            assert rel_err(a, c) < 1e-13
 
 
 # ----------------------------------------------------------- bad input

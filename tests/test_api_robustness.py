@@ -83,6 +83,7 @@ def _build_in(cache, q):
         q.put(("error", repr(e), 0.0))
 
 
+@pytest.mark.slow
 def test_two_processes_build_the_same_model_at_once():
     cache = tempfile.mkdtemp(prefix="eomgen-race-")
     ctx = multiprocessing.get_context("spawn")

@@ -257,12 +257,14 @@ def test_binary_failed_step_says_the_csv_is_truncated(binary, tmp_path):
 
 
 def test_compile_failure_raises_build_error_with_the_log(kane_model):
-    from gen.build import build_cffi
-    files = render.render_files(kane_model)
+    from gen.build import build
+    from gen.ir import plan
+    rendered = render.render(plan(kane_model))
     name = f"{kane_model.name}.c"
-    files[name] = files[name].replace("return GEN_RT_OK;", "return GEN_RT_OK +;", 1)
+    files = rendered.files
+    files[name] = files[name].replace("return gen_rt_model_", "return +gen_rt_model_ +", 1)
     with pytest.raises(gen.BuildError) as e:
-        build_cffi(kane_model, files=files)
+        build(rendered)
     assert "compiling the model 'pendulum_kane' failed" in str(e.value)
     assert "error" in e.value.log and name in e.value.log
     assert "gcc" in e.value.log or "cc" in e.value.log

@@ -1,0 +1,474 @@
+/* gen_rt_model.c - everything the public API does with a model: evaluation,
+ * the right-hand side, projection and consistent states, integration and
+ * linearization, over the kernels of a gen_rt_model.
+ *
+ * Inputs are assumed checked by the caller (the generated wrappers): the
+ * pointers the sizes call for are non-NULL and every input is finite. Work
+ * arrays are the caller's, sized by the GEN_RT_MODEL_*_WORK macros of
+ * gen_rt.h. The arithmetic is laid out so that a generated model gives the
+ * same numbers, bit for bit, as the code the generator used to inline. */
+#include <stddef.h>
+
+#include "gen_rt.h"
+
+static int finite_n(int n, const gen_rt_real *v)
+{
+    return n <= 0 || gen_rt_all_finite(n, v);
+}
+
+static void copy_n(int n, const gen_rt_real *src, gen_rt_real *dst)
+{
+    int i;
+    for (i = 0; i < n; ++i) dst[i] = src[i];
+}
+
+#define NX_(m) ((m)->nq + (m)->nu)
+
+/* ------------------------------------------------------------------ */
+/* Evaluation                                                         */
+/* ------------------------------------------------------------------ */
+
+int gen_rt_model_eval_mass_matrix(const gen_rt_model *m, const gen_rt_real *q,
+                                  const gen_rt_real *p, gen_rt_real t, gen_rt_real *M)
+{
+    m->mass_matrix(q, p, t, M);
+    return finite_n(m->nu * m->nu, M) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+}
+
+int gen_rt_model_eval_forcing(const gen_rt_model *m, const gen_rt_real *q,
+                              const gen_rt_real *u, const gen_rt_real *r,
+                              const gen_rt_real *p, gen_rt_real t, gen_rt_real *f)
+{
+    m->forcing(q, u, r, p, t, f);
+    return finite_n(m->nu, f) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+}
+
+int gen_rt_model_eval_kinematics(const gen_rt_model *m, const gen_rt_real *q,
+                                 const gen_rt_real *u, const gen_rt_real *p, gen_rt_real t,
+                                 gen_rt_real *work, int *iwork, gen_rt_real *qdot)
+{
+    int nq = m->nq, st;
+    if (m->explicit_kinematics) {
+        m->kinematics(q, u, p, t, NULL, qdot);
+        return finite_n(nq, qdot) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+    }
+    m->kinematics(q, u, p, t, work, qdot);
+    if (!finite_n(nq * nq, work) || !finite_n(nq, qdot)) return GEN_RT_ERR_NONFINITE_MODEL;
+    st = gen_rt_lu_factor(nq, work, iwork, 0);
+    if (st) return st;
+    return gen_rt_lu_solve(nq, work, iwork, 1, qdot);
+}
+
+int gen_rt_model_eval_constraints(const gen_rt_model *m, const gen_rt_real *q,
+                                  const gen_rt_real *p, gen_rt_real t, gen_rt_real *fc)
+{
+    if (!m->mc) return GEN_RT_OK;
+    m->constraints(q, p, t, fc);
+    return finite_n(m->mc, fc) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+}
+
+int gen_rt_model_eval_constraint_jacobian(const gen_rt_model *m, const gen_rt_real *q,
+                                          const gen_rt_real *p, gen_rt_real t,
+                                          gen_rt_real *work, gen_rt_real *Jc)
+{
+    if (!m->mc) return GEN_RT_OK;
+    m->constraint_jacobian(q, p, t, work, Jc);
+    return finite_n(m->mc * m->nq, Jc) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+}
+
+int gen_rt_model_eval_velocity_constraints(const gen_rt_model *m, const gen_rt_real *q,
+                                           const gen_rt_real *u, const gen_rt_real *p,
+                                           gen_rt_real t, gen_rt_real *fv)
+{
+    if (!m->mv) return GEN_RT_OK;
+    m->velocity_constraints(q, u, p, t, fv);
+    return finite_n(m->mv, fv) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+}
+
+int gen_rt_model_eval_velocity_constraint_matrix(const gen_rt_model *m,
+                                                 const gen_rt_real *q,
+                                                 const gen_rt_real *p, gen_rt_real t,
+                                                 gen_rt_real *A, gen_rt_real *b)
+{
+    if (!m->mv) return GEN_RT_OK;
+    m->velocity_constraint_matrix(q, p, t, A, b);
+    return (finite_n(m->mv * m->nu, A) && finite_n(m->mv, b)) ? GEN_RT_OK
+                                                             : GEN_RT_ERR_NONFINITE_MODEL;
+}
+
+int gen_rt_model_eval_energy(const gen_rt_model *m, const gen_rt_real *q,
+                             const gen_rt_real *u, const gen_rt_real *p, gen_rt_real t,
+                             gen_rt_real *E)
+{
+    if (!m->energy) {
+        E[0] = 0;
+        return GEN_RT_ERR_BAD_ARG; /* the model was generated without an energy expression */
+    }
+    m->energy(q, u, p, t, E);
+    return finite_n(1, E) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+}
+
+/* ------------------------------------------------------------------ */
+/* The right-hand side                                                */
+/* ------------------------------------------------------------------ */
+
+int gen_rt_model_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                     const gen_rt_real *r, const gen_rt_real *p, gen_rt_real *work,
+                     int *iwork, gen_rt_real *dxdt, gen_rt_real *lam)
+{
+    int nq = m->nq, nu = m->nu, mv = m->mv, st;
+    const gen_rt_real *q = x, *u = x + nq;
+    gen_rt_real *M = work, *f = M + nu * nu, *A = f + nu, *a = A + mv * nu,
+                *Kqd = a + mv;
+    gen_rt_real *w = Kqd + (m->explicit_kinematics ? 0 : nq * nq);
+    int *kpiv = iwork, *iw = iwork + nq;
+    m->rhs_terms(q, u, r, p, t, m->explicit_kinematics ? NULL : Kqd, dxdt, M, f,
+                 mv ? A : NULL, mv ? a : NULL);
+    if (m->explicit_kinematics) {
+        if (!finite_n(nq, dxdt)) return GEN_RT_ERR_NONFINITE_MODEL;
+    } else {
+        if (!finite_n(nq * nq, Kqd) || !finite_n(nq, dxdt)) return GEN_RT_ERR_NONFINITE_MODEL;
+        if ((st = gen_rt_lu_factor(nq, Kqd, kpiv, 0))) return st;
+        if ((st = gen_rt_lu_solve(nq, Kqd, kpiv, 1, dxdt))) return st;
+    }
+    if (!finite_n(nu * nu, M) || !finite_n(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
+    if (mv) {
+        if (!finite_n(mv * nu, A) || !finite_n(mv, a)) return GEN_RT_ERR_NONFINITE_MODEL;
+        if (m->accel == GEN_RT_ACCEL_PARTITIONED)
+            /* Kane: eliminate the dependent speeds through the partition */
+            return gen_rt_accel_partitioned(nu, mv, m->u_ind, m->u_dep, M, f, A, a, w, iw,
+                                            dxdt + nq, lam);
+        /* Lagrange: accelerations and multipliers from the KKT system */
+        return gen_rt_accel_kkt(nu, mv, M, f, A, a, w, iw, dxdt + nq, lam);
+    }
+    if (m->accel == GEN_RT_ACCEL_LDLT) return m->mass_solve(M, f, dxdt + nq);
+    return gen_rt_accel_kkt(nu, 0, M, f, NULL, NULL, w, iw, dxdt + nq, NULL);
+}
+
+int gen_rt_model_eval_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                          const gen_rt_real *r, const gen_rt_real *p, gen_rt_real *work,
+                          int *iwork, gen_rt_real *dxdt, gen_rt_real *lam)
+{
+    int st = gen_rt_model_rhs(m, t, x, r, p, work + NX_(m), iwork, work, lam);
+    if (st) return st;
+    copy_n(NX_(m), work, dxdt);
+    return GEN_RT_OK;
+}
+
+/* ------------------------------------------------------------------ */
+/* Constraint manifold: projection and consistent states              */
+/* ------------------------------------------------------------------ */
+
+int gen_rt_model_project(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *p,
+                         gen_rt_real tol, int max_iter, gen_rt_real *work, gen_rt_real *x)
+{
+    int nq = m->nq, nu = m->nu, mc = m->mc, mv = m->mv, nx = NX_(m), i, j, st;
+    int nw = (mc * mc + mc > mv * mv + mv ? mc * mc + mc : mv * mv + mv) + 1;
+    gen_rt_real *xc = work, *w = xc + nx, *fc = w + nw, *Jc = fc + mc, *q0 = Jc + mc * nq,
+                *A = q0 + nq, *b = A + mv * nu, *res = b + mv;
+    if (!mc && !mv) return GEN_RT_OK;
+    copy_n(nx, x, xc);
+    if (mc) {
+        int it, converged = 0;
+        if (max_iter <= 0) max_iter = 10;
+        if (!(tol > 0)) tol = 16 * GEN_RT_EPS;
+        for (it = 0; it < max_iter; ++it) {
+            gen_rt_real dmax = 0;
+            m->constraint_jacobian(xc, p, t, fc, Jc);
+            if (!finite_n(mc, fc) || !finite_n(mc * nq, Jc)) return GEN_RT_ERR_NONFINITE_MODEL;
+            copy_n(nq, xc, q0);
+            st = gen_rt_min_norm_correct(mc, nq, Jc, fc, w, xc);
+            if (st) return st;
+            for (i = 0; i < nq; ++i) {
+                gen_rt_real d = xc[i] - q0[i];
+                if (d < 0) d = -d;
+                if (d > dmax) dmax = d;
+            }
+            if (!(dmax == dmax)) return GEN_RT_ERR_NONFINITE_MODEL;
+            if (dmax <= tol * (1 + gen_rt_max_abs(nq, xc))) { converged = 1; break; }
+        }
+        if (!converged) return GEN_RT_ERR_NO_CONVERGENCE;
+    }
+    if (mv) {
+        m->velocity_constraint_matrix(xc, p, t, A, b);
+        if (!finite_n(mv * nu, A) || !finite_n(mv, b)) return GEN_RT_ERR_NONFINITE_MODEL;
+        for (i = 0; i < mv; ++i) {
+            gen_rt_real s = b[i];
+            for (j = 0; j < nu; ++j) s += A[i * nu + j] * xc[nq + j];
+            res[i] = s;
+        }
+        st = gen_rt_min_norm_correct(mv, nu, A, res, w, xc + nq);
+        if (st) return st;
+    }
+    if (!finite_n(nx, xc)) return GEN_RT_ERR_NONFINITE_MODEL;
+    copy_n(nx, xc, x);
+    return GEN_RT_OK;
+}
+
+int gen_rt_model_consistent_state(const gen_rt_model *m, gen_rt_real t,
+                                  const gen_rt_real *p, gen_rt_real tol, int max_iter,
+                                  gen_rt_real *work, int *iwork, gen_rt_real *x)
+{
+    int nq = m->nq, nu = m->nu, mc = m->mc, mv = m->mv, nx = NX_(m), i, j, st;
+    gen_rt_real *xc = work, *fc = xc + nx, *Jc = fc + mc, *Jd = Jc + mc * nq,
+                *A = Jd + mc * mc, *b = A + mv * nu, *Ad = b + mv, *rhs = Ad + mv * mv;
+    int *piv = iwork, *piv2 = iwork + mc;
+    if (!mc && !mv) return GEN_RT_OK;
+    copy_n(nx, x, xc);
+    if (mc) {
+        int it, converged = 0;
+        if (max_iter <= 0) max_iter = 50;
+        if (!(tol > 0)) tol = 16 * GEN_RT_EPS;
+        for (it = 0; it < max_iter; ++it) {
+            gen_rt_real dmax = 0;
+            m->constraint_jacobian(xc, p, t, fc, Jc);
+            if (!finite_n(mc, fc) || !finite_n(mc * nq, Jc)) return GEN_RT_ERR_NONFINITE_MODEL;
+            for (i = 0; i < mc; ++i)
+                for (j = 0; j < mc; ++j) Jd[i * mc + j] = Jc[i * nq + m->q_dep[j]];
+            st = gen_rt_lu_factor(mc, Jd, piv, gen_rt_max_abs(mc * nq, Jc));
+            if (st) return st;
+            st = gen_rt_lu_solve(mc, Jd, piv, 1, fc);
+            if (st) return st;
+            for (j = 0; j < mc; ++j) {
+                gen_rt_real d = fc[j] < 0 ? -fc[j] : fc[j];
+                xc[m->q_dep[j]] -= fc[j];
+                if (d > dmax) dmax = d;
+            }
+            if (!(dmax == dmax)) return GEN_RT_ERR_NONFINITE_MODEL;
+            if (dmax <= tol * (1 + gen_rt_max_abs(nq, xc))) { converged = 1; break; }
+        }
+        if (!converged) return GEN_RT_ERR_NO_CONVERGENCE;
+    }
+    if (mv) {
+        m->velocity_constraint_matrix(xc, p, t, A, b);
+        if (!finite_n(mv * nu, A) || !finite_n(mv, b)) return GEN_RT_ERR_NONFINITE_MODEL;
+        for (i = 0; i < mv; ++i) {
+            gen_rt_real s = -b[i];
+            for (j = 0; j < nu - mv; ++j)
+                s -= A[i * nu + m->u_ind[j]] * xc[nq + m->u_ind[j]];
+            rhs[i] = s;
+            for (j = 0; j < mv; ++j) Ad[i * mv + j] = A[i * nu + m->u_dep[j]];
+        }
+        st = gen_rt_lu_factor(mv, Ad, piv2, gen_rt_max_abs(mv * nu, A));
+        if (st) return st;
+        st = gen_rt_lu_solve(mv, Ad, piv2, 1, rhs);
+        if (st) return st;
+        for (j = 0; j < mv; ++j) xc[nq + m->u_dep[j]] = rhs[j];
+    }
+    if (!finite_n(nx, xc)) return GEN_RT_ERR_NONFINITE_MODEL;
+    copy_n(nx, xc, x);
+    return GEN_RT_OK;
+}
+
+/* ------------------------------------------------------------------ */
+/* Integration                                                        */
+/* ------------------------------------------------------------------ */
+
+/* what the integrators' callbacks see */
+typedef struct {
+    const gen_rt_model *m;
+    const gen_rt_real *r, *p;
+    gen_rt_real proj_tol;
+    int proj_max_iter;
+    gen_rt_real *work;  /* GEN_RT_MODEL_CB_WORK_ reals, shared by rhs and projection */
+    int *iwork;
+} model_ctx;
+
+static int rhs_cb(void *ctx, gen_rt_real t, const gen_rt_real *x, gen_rt_real *dxdt)
+{
+    const model_ctx *c = (const model_ctx *)ctx;
+    return gen_rt_model_rhs(c->m, t, x, c->r, c->p, c->work, c->iwork, dxdt, NULL);
+}
+
+static int post_cb(void *ctx, gen_rt_real t, gen_rt_real *x)
+{
+    const model_ctx *c = (const model_ctx *)ctx;
+    return gen_rt_model_project(c->m, t, c->p, c->proj_tol, c->proj_max_iter, c->work, x);
+}
+
+int gen_rt_model_step_rk4(const gen_rt_model *m, gen_rt_real t, gen_rt_real h,
+                          const gen_rt_real *r, const gen_rt_real *p, int project,
+                          gen_rt_real *work, int *iwork, gen_rt_real *x)
+{
+    int nx = NX_(m), st;
+    gen_rt_real *rk = work, *xn = rk + GEN_RT_RK4_WORK(nx);
+    model_ctx c;
+    c.m = m; c.r = r; c.p = p;
+    c.proj_tol = 16 * GEN_RT_EPS; c.proj_max_iter = 10;
+    c.work = xn + nx; c.iwork = iwork;
+    copy_n(nx, x, xn);
+    st = gen_rt_rk4_step(rhs_cb, &c, nx, t, h, rk, xn);
+    if (st) return st;
+    if (project) {
+        st = gen_rt_model_project(m, t + h, p, c.proj_tol, c.proj_max_iter, c.work, xn);
+        if (st) return st;
+    }
+    copy_n(nx, xn, x);
+    return GEN_RT_OK;
+}
+
+int gen_rt_model_advance(const gen_rt_model *m, gen_rt_real t0, gen_rt_real t1,
+                         const gen_rt_real *r, const gen_rt_real *p,
+                         const gen_rt_sim_options *o, gen_rt_real *work, int *iwork,
+                         gen_rt_sim_stats *s, gen_rt_real *x)
+{
+    int nx = NX_(m), st;
+    int nint = GEN_RT_RK4_WORK(nx) + nx > GEN_RT_DOPRI5_WORK(nx) ? GEN_RT_RK4_WORK(nx) + nx
+                                                                 : GEN_RT_DOPRI5_WORK(nx);
+    model_ctx c;
+    if (!(t1 >= t0)) return GEN_RT_ERR_BAD_ARG;
+    c.m = m; c.r = r; c.p = p;
+    c.proj_tol = o->proj_tol; c.proj_max_iter = o->proj_max_iter;
+    c.work = work + nint; c.iwork = iwork;
+    if (o->method == GEN_RT_METHOD_RK4) {
+        gen_rt_real *rk = work, *xn = rk + GEN_RT_RK4_WORK(nx);
+        copy_n(nx, x, xn);
+        st = gen_rt_rk4_step(rhs_cb, &c, nx, t0, t1 - t0, rk, xn);
+        s->n_rhs += 4;
+        if (!st && o->project)
+            st = gen_rt_model_project(m, t1, p, c.proj_tol, c.proj_max_iter, c.work, xn);
+        if (st) {
+            s->t_last = t0;
+            copy_n(nx, x, s->x_last);
+            return st;
+        }
+        copy_n(nx, xn, x);
+        s->n_accepted += 1;
+    } else if (o->method == GEN_RT_METHOD_DOPRI5) {
+        gen_rt_dopri5_opts d;
+        gen_rt_dopri5_stats ds;
+        gen_rt_real t_reached = t0;
+        d.rtol = o->rtol; d.atol = o->atol; d.h_init = o->h_init;
+        d.h_min = o->h_min; d.h_max = o->h_max; d.max_steps = o->max_steps;
+        ds.n_accepted = 0; ds.n_rejected = 0; ds.n_rhs = 0; ds.h_last = s->h_next;
+        st = gen_rt_dopri5_integrate(rhs_cb, o->project ? post_cb : NULL, &c, nx, t0, t1, &d,
+                                     work, &ds, &t_reached, x);
+        s->n_accepted += ds.n_accepted;
+        s->n_rejected += ds.n_rejected;
+        s->n_rhs += ds.n_rhs;
+        s->h_next = ds.h_last;
+        if (st) {
+            s->t_last = t_reached;
+            copy_n(nx, x, s->x_last);
+            return st;
+        }
+    } else {
+        return GEN_RT_ERR_BAD_ARG;
+    }
+    s->t_last = t1;
+    copy_n(nx, x, s->x_last);
+    return GEN_RT_OK;
+}
+
+int gen_rt_simulate_rows(gen_rt_real t0, gen_rt_real t_end, gen_rt_real dt)
+{
+    long n;
+    if (!(dt > 0) || !(t_end >= t0) || !finite_n(1, &t0) || !finite_n(1, &t_end))
+        return GEN_RT_ERR_BAD_ARG;
+    if ((t_end - t0) / dt > GEN_RT_C(1e9)) return GEN_RT_ERR_BAD_ARG;
+    n = (long)((t_end - t0) / dt);
+    if (t0 + (gen_rt_real)n * dt < t_end - GEN_RT_C(1e-9) * dt) n += 1;
+    return (int)(n + 1);
+}
+
+int gen_rt_model_simulate(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,
+                          gen_rt_real t_end, gen_rt_real dt, const gen_rt_real *r,
+                          const gen_rt_real *p, const gen_rt_sim_options *o, int capacity,
+                          gen_rt_real *work, int *iwork, gen_rt_real *t_out,
+                          gen_rt_real *x_out, gen_rt_real *lam_out, gen_rt_sim_stats *s)
+{
+    int nx = NX_(m), mv = m->mv, ldl = mv > 0 ? mv : 1, rows, k, i, st;
+    gen_rt_real *x = work, *dx = x + nx, *lam = dx + nx, *w = lam + mv + 1;
+    s->n_accepted = 0; s->n_rejected = 0; s->n_rhs = 0;
+    s->n_out = 0; s->t_last = t0; s->h_next = 0;
+    copy_n(nx, x0, x);
+    copy_n(nx, x0, s->x_last);
+    rows = gen_rt_simulate_rows(t0, t_end, dt);
+    if (rows < 0) return rows;
+    if (capacity < rows) return GEN_RT_ERR_OUTPUT_FULL;
+    if (o->project) {
+        st = gen_rt_model_project(m, t0, p, o->proj_tol, o->proj_max_iter, w, x);
+        if (st) return st;
+    }
+    for (k = 0; k < rows; ++k) {
+        gen_rt_real tk = (k == rows - 1) ? t_end : t0 + (gen_rt_real)k * dt;
+        if (k > 0) {
+            st = gen_rt_model_advance(m, t_out[k - 1], tk, r, p, o, w, iwork, s, x);
+            if (st) return st;
+        }
+        st = gen_rt_model_rhs(m, tk, x, r, p, w, iwork, dx, lam);
+        if (st) {
+            s->t_last = tk;
+            copy_n(nx, x, s->x_last);
+            return st;
+        }
+        t_out[k] = tk;
+        copy_n(nx, x, x_out + (long)k * nx);
+        if (lam_out)
+            for (i = 0; i < mv; ++i) lam_out[(long)k * ldl + i] = lam[i];
+        s->n_out = k + 1;
+    }
+    return GEN_RT_OK;
+}
+
+/* ------------------------------------------------------------------ */
+/* Linearization about any operating point                             */
+/* ------------------------------------------------------------------ */
+
+int gen_rt_model_linearize(const gen_rt_model *m, const gen_rt_real *x_op,
+                           const gen_rt_real *r_op, const gen_rt_real *p, gen_rt_real t,
+                           gen_rt_real *work, int *iwork, gen_rt_real *A_lin,
+                           gen_rt_real *B_lin)
+{
+    int nq = m->nq, nu = m->nu, mc = m->mc, mv = m->mv, nr = m->nr, st;
+    const gen_rt_real *q = x_op, *u = x_op + nq;
+    gen_rt_real *qd = work, *ud = qd + nq, *lam = ud + nu, *M = lam + mv + 1, *f = M + nu * nu,
+                *A = f + nu, *a = A + mv * nu, *Kqd = a + mv, *Kq = Kqd + nq * nq,
+                *Ku = Kq + nq * nq, *Rq = Ku + nq * nu, *Ru = Rq + nu * nq, *Rr = Ru + nu * nu,
+                *Sq = Rr + nu * nr, *Su = Sq + mv * nq, *Vq = Su + mv * nu, *Jc = Vq + mv * nq,
+                *scratch = Jc + mc * nq;
+    int sw = GEN_RT_ACCEL_WORK(nu, mv);
+    gen_rt_real Bdummy[1];
+    gen_rt_lin_out o;
+    gen_rt_lin_dims d;
+    gen_rt_lin_blocks b;
+    if (sw < GEN_RT_MODEL_KIN_WORK(nq, nu, mc, mv, nr, m->explicit_kinematics, m->accel))
+        sw = GEN_RT_MODEL_KIN_WORK(nq, nu, mc, mv, nr, m->explicit_kinematics, m->accel);
+    if (sw < nq + nu * nu + nu + nq * nq) sw = nq + nu * nu + nu + nq * nq;
+    /* accelerations and multipliers at the operating point */
+    st = gen_rt_model_eval_kinematics(m, q, u, p, t, scratch, iwork, qd);
+    if (st) return st;
+    m->mass_matrix(q, p, t, M);
+    m->forcing(q, u, r_op, p, t, f);
+    if (!finite_n(nu * nu, M) || !finite_n(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
+    if (mv) {
+        /* A and a from the joint right-hand-side kernel (its other outputs
+         * are not needed here) */
+        gen_rt_real *qdt = scratch, *Mt = qdt + nq, *ft = Mt + nu * nu, *Kt = ft + nu;
+        m->rhs_terms(q, u, r_op, p, t, m->explicit_kinematics ? NULL : Kt, qdt, Mt, ft, A, a);
+        if (!finite_n(mv * nu, A) || !finite_n(mv, a)) return GEN_RT_ERR_NONFINITE_MODEL;
+        st = gen_rt_accel_kkt(nu, mv, M, f, A, a, scratch, iwork, ud, lam);
+        if (st) return st;
+    } else if (m->accel == GEN_RT_ACCEL_LDLT) {
+        if ((st = m->mass_solve(M, f, ud))) return st;
+        lam[0] = 0;
+    } else {
+        st = gen_rt_accel_kkt(nu, 0, M, f, NULL, NULL, scratch, iwork, ud, NULL);
+        if (st) return st;
+        lam[0] = 0;
+    }
+    o.Kqd = Kqd; o.Ku = Ku; o.M = M; o.A = A; o.Kq = Kq; o.Rq = Rq; o.Ru = Ru; o.Rr = Rr;
+    o.Sq = Sq; o.Su = Su; o.Vq = Vq; o.Jc = Jc;
+    m->lin_terms(q, u, qd, ud, lam, r_op, p, t, &o);
+    d.nq = nq; d.nu = nu; d.mc = mc; d.mv = mv; d.nr = nr;
+    d.q_ind = m->q_ind; d.q_dep = m->q_dep; d.u_ind = m->u_ind; d.u_dep = m->u_dep;
+    b.Kqd = Kqd; b.Kq = Kq; b.Ku = Ku; b.M = M; b.Rq = Rq; b.Ru = Ru;
+    b.Rr = nr ? Rr : NULL; b.A = mv ? A : NULL;
+    b.Sq = mv ? Sq : NULL; b.Su = mv ? Su : NULL;
+    b.Vq = mv ? Vq : NULL; b.Jc = mc ? Jc : NULL;
+    if (!finite_n(nq * nq, Kq) || !finite_n(nu * nq, Rq) || !finite_n(nu * nu, Ru) ||
+        !finite_n(mv * nq, Sq) || !finite_n(mv * nu, Su) || !finite_n(mc * nq, Jc) ||
+        !finite_n(mv * nq, Vq) || !finite_n(nu * nr, Rr))
+        return GEN_RT_ERR_NONFINITE_MODEL;
+    return gen_rt_linearize(&d, &b, scratch + sw, iwork, A_lin, nr ? B_lin : Bdummy);
+}

@@ -1,0 +1,31 @@
+/*
+ * gen_rt_status.h - the status table of the eomgen runtime: one line per
+ * code, X(NAME, value, "message"). It is the one source of the codes and
+ * their messages: the C runtime (gen_rt.h, gen_rt_status.c), the C++
+ * runtime (eigen/gen_rt.hpp) and the generator (gen/abi.py reads this file)
+ * all take them from here. Add a code here and nowhere else.
+ */
+#ifndef GEN_RT_STATUS_H
+#define GEN_RT_STATUS_H
+
+#define GEN_RT_STATUS_TABLE(X)                                                          \
+    X(OK, 0, "ok")                                                                      \
+    X(ERR_NULL, -1, "a required pointer argument is NULL")                              \
+    X(ERR_NONFINITE_INPUT, -2, "an input value is NaN or infinite")                     \
+    X(ERR_SINGULAR, -3, "singular system: the matrix to solve is singular or too "      \
+                        "badly conditioned at this state (for a partitioned model: "    \
+                        "the dependent coordinates/speeds are not determined here)")    \
+    X(ERR_NO_CONVERGENCE, -4, "Newton iteration on the configuration constraints did "  \
+                              "not converge")                                           \
+    X(ERR_STEP_UNDERFLOW, -5, "step size underflow: the adaptive integrator could not " \
+                              "meet the tolerance")                                     \
+    X(ERR_MAX_STEPS, -6, "maximum number of integration steps exceeded")                \
+    X(ERR_BAD_ARG, -7, "an argument is out of range (size, step or tolerance)")         \
+    X(ERR_NONFINITE_MODEL, -8, "the model expressions evaluate to NaN or infinity at "  \
+                               "this state (a singular configuration of the model)")    \
+    X(ERR_OUTPUT_FULL, -9, "the output buffer is too small")
+
+/* the message of a code outside the table */
+#define GEN_RT_STATUS_UNKNOWN "unknown status code"
+
+#endif /* GEN_RT_STATUS_H */

@@ -1,0 +1,352 @@
+"""The one description of the generated C interface.
+
+Everything a generated model exposes is described here once, as plain
+data: the public functions (name, parameters with their role and shape,
+return type, documentation), the batch entry points of the Python module,
+the structs (options and statistics of the integrators), the status codes
+with their messages, and the model's plain metadata (names, sizes,
+partition, default constants). The C header, the cffi cdef, the C++
+declarations and the extern "C" layer of the Eigen backend are rendered
+from it; the bindings map status codes to exceptions with it; the footprint
+report lists its public functions from it.
+
+The status table itself is the runtime's (``csrc/gen_rt_status.h``): it is
+read from there, so the C runtime, the C++ runtime and this description
+cannot disagree.
+
+    iface = abi.interface(model, real="double")
+    iface.functions            # [Function], in header order
+    iface.struct("sim_options").fields
+    iface.size("NU*NU")        # 4 for the seed pendulum
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+from .resources import csrc_dir
+
+__all__ = ["Status", "Field", "Struct", "Param", "Function", "Interface", "STATUSES",
+           "STRUCTS", "FUNCTIONS", "BATCH_FUNCTIONS", "METHODS", "status_name", "status_value",
+           "status_message", "interface"]
+
+
+# ------------------------------------------------------------------ statuses
+@dataclass(frozen=True)
+class Status:
+    name: str          # "ERR_SINGULAR" (C: GEN_RT_ERR_SINGULAR, <P>_ERR_SINGULAR)
+    value: int
+    message: str
+
+
+def _read_statuses():
+    """The table of csrc/gen_rt_status.h: X(NAME, value, "message" "...")."""
+    text = (csrc_dir() / "gen_rt_status.h").read_text()
+    body = text[text.index("#define GEN_RT_STATUS_TABLE(X)"):].split("\n\n")[0]
+    body = body.replace("\\\n", " ")
+    out = []
+    for m in re.finditer(r'X\((\w+),\s*(-?\d+),\s*((?:"(?:[^"\\]|\\.)*"\s*)+)\)', body):
+        message = "".join(re.findall(r'"((?:[^"\\]|\\.)*)"', m.group(3)))
+        out.append(Status(m.group(1), int(m.group(2)), message))
+    unknown = re.search(r'#define GEN_RT_STATUS_UNKNOWN "([^"]*)"', text).group(1)
+    return out, unknown
+
+
+STATUSES, STATUS_UNKNOWN = _read_statuses()
+_BY_VALUE = {s.value: s for s in STATUSES}
+
+
+def status_name(code):
+    """'ERR_SINGULAR' for -3 (GEN_RT_ERR_SINGULAR in C); the number as text
+    for a code not in the table."""
+    s = _BY_VALUE.get(code)
+    return s.name if s else str(code)
+
+
+def status_value(name):
+    """-3 for 'ERR_SINGULAR'."""
+    return next(s.value for s in STATUSES if s.name == name)
+
+
+def status_message(code):
+    s = _BY_VALUE.get(code)
+    return s.message if s else STATUS_UNKNOWN
+
+
+# integration methods: name -> value of <P>_METHOD_<NAME> / sim_options.method
+METHODS = {"rk4": 0, "dopri5": 1}
+
+
+# ------------------------------------------------------------------- structs
+@dataclass(frozen=True)
+class Field:
+    name: str
+    ctype: str              # "int", "long" or "real"
+    doc: str
+    default: object = 0     # a number, or "eps16" (16 machine epsilons of the scalar type)
+    count: str | None = None    # an array of this many (a size such as "NX")
+
+
+@dataclass(frozen=True)
+class Struct:
+    name: str               # <p>_<name> in C, a CamelCase template in C++
+    cxx_name: str
+    doc: str
+    fields: tuple
+
+
+STRUCTS = (
+    Struct("sim_options", "SimOptions", "Integration options (fill with <p>_sim_options_default).", (
+        Field("method", "int", "<P>_METHOD_RK4 or <P>_METHOD_DOPRI5", 0),
+        Field("project", "int", "1: project onto the constraints after each step", 1),
+        Field("rtol", "real", "dopri5 relative tolerance", 1e-8),
+        Field("atol", "real", "dopri5 absolute tolerance", 1e-10),
+        Field("h_init", "real", "dopri5 first step, <= 0: automatic", 0.0),
+        Field("h_min", "real", "dopri5 minimum step, <= 0: automatic", 0.0),
+        Field("h_max", "real", "dopri5 maximum step, <= 0: unbounded", 0.0),
+        Field("max_steps", "long", "dopri5 step budget per output interval", 100000),
+        Field("proj_tol", "real", "projection: relative tolerance on the correction", "eps16"),
+        Field("proj_max_iter", "int", "projection: Newton iterations", 10),
+    )),
+    Struct("sim_stats", "SimStats", "Integration statistics (advance accumulates them).", (
+        Field("n_accepted", "long", "accepted steps"),
+        Field("n_rejected", "long", "rejected steps (dopri5)"),
+        Field("n_rhs", "long", "right-hand-side evaluations"),
+        Field("n_out", "int", "output rows written"),
+        Field("t_last", "real", "time of the last good state", 0.0),
+        Field("h_next", "real", "dopri5: step size to continue with", 0.0),
+        Field("x_last", "real", "last good state (on failure: where it failed)", 0.0, "NX"),
+    )),
+)
+
+
+# ----------------------------------------------------------------- functions
+@dataclass(frozen=True)
+class Param:
+    """One parameter. role:
+    in        const real array of `size` values: NULL -> ERR_NULL, NaN/inf -> ERR_NONFINITE_INPUT
+    in?       the same, NULL allowed: replaced by `default` ("p": the default constants,
+              "r": zero inputs) before the checks
+    scalar    a real number checked for NaN/inf
+    value     a plain value passed through unchecked (tolerances, counts, flags)
+    inout     a real array read and written (checked like `in`)
+    out       a real array written; NULL -> ERR_NULL when its size is not zero
+    out?      an optional output (NULL: not computed)
+    struct    const struct pointer: NULL -> ERR_NULL      (ctype: the struct's name)
+    struct?   const struct pointer: NULL -> the defaults
+    struct_out  a struct written: NULL -> ERR_NULL
+    """
+    name: str
+    ctype: str              # "real", "int", or a struct name
+    role: str
+    size: str | None = None  # an expression in NQ, NU, NX, NR, NP, MC, MV, NS ("NU*NU")
+    default: str | None = None
+
+
+@dataclass(frozen=True)
+class Function:
+    verb: str               # the C name is <p>_<verb>
+    params: tuple
+    doc: str
+    ret: str = "int"        # "int" (a status), "void" or "const char *"
+    work: str | None = None  # the runtime's work-size macros: GEN_RT_MODEL_<work>_WORK/_IWORK
+    iwork: bool = False
+
+
+def _params(spec):
+    """'q:in:NQ, p:in?:NP=p, t:scalar, M:out:NU*NU' -> (Param, ...); ctype
+    is real unless given as name:role:size:ctype."""
+    out = []
+    for item in spec.split(","):
+        item = item.strip()
+        if not item:
+            continue
+        head, _, default = item.partition("=")
+        parts = head.split(":")
+        name, role = parts[0], parts[1]
+        size = parts[2] if len(parts) > 2 and parts[2] else None
+        ctype = parts[3].strip() if len(parts) > 3 else "real"
+        out.append(Param(name, ctype, role, size, default or None))
+    return tuple(out)
+
+
+FUNCTIONS = (
+    Function("status_message", _params("status:value::int"), "Message for a status code.",
+             ret="const char *"),
+    Function("eval_mass_matrix", _params("q:in:NQ, p:in?:NP=p, t:scalar, M:out:NU*NU"),
+             "Mass matrix M(q) of the unconstrained equations, NU x NU."),
+    Function("eval_forcing", _params("q:in:NQ, u:in:NU, r:in?:NR=r, p:in?:NP=p, t:scalar, f:out:NU"),
+             "Forcing f(q, u, r, t) of the unconstrained equations M u' = f + A^T lam, NU."),
+    Function("eval_kinematics", _params("q:in:NQ, u:in:NU, p:in?:NP=p, t:scalar, qdot:out:NQ"),
+             "Coordinate rates q' from the kinematic differential equations, NQ.",
+             work="KIN", iwork=True),
+    Function("eval_constraints", _params("q:in:NQ, p:in?:NP=p, t:scalar, fc:out:MC"),
+             "Configuration-constraint residuals f_c(q), MC."),
+    Function("eval_constraint_jacobian", _params("q:in:NQ, p:in?:NP=p, t:scalar, Jc:out:MC*NQ"),
+             "Configuration-constraint Jacobian d f_c / dq, MC x NQ.", work="JAC"),
+    Function("eval_velocity_constraints",
+             _params("q:in:NQ, u:in:NU, p:in?:NP=p, t:scalar, fv:out:MV"),
+             "Velocity-constraint residuals A(q) u + b(q, t), MV."),
+    Function("eval_velocity_constraint_matrix",
+             _params("q:in:NQ, p:in?:NP=p, t:scalar, A:out:MV*NU, b:out:MV"),
+             "Velocity-constraint matrix A (MV x NU) and term b (MV)."),
+    Function("eval_energy", _params("q:in:NQ, u:in:NU, p:in?:NP=p, t:scalar, E:out:1"),
+             "Total energy (only when the model was given one; else GEN_RT_ERR_BAD_ARG)."),
+    Function("eval_rhs", _params("t:scalar, x:in:NX, r:in?:NR=r, p:in?:NP=p, dxdt:out:NX, lam:out?:MV"),
+             "State derivative x' (NX) and, if lam != NULL, the multipliers (MV).",
+             work="EVAL_RHS", iwork=True),
+    Function("project", _params("t:scalar, p:in?:NP=p, tol:value, max_iter:value::int, x:inout:NX"),
+             "Project x onto f_c = 0 (Gauss-Newton, minimum norm) and the velocity constraints; "
+             "x unchanged on failure.", work="PROJECT"),
+    Function("consistent_state",
+             _params("t:scalar, p:in?:NP=p, tol:value, max_iter:value::int, x:inout:NX"),
+             "Solve the dependent coordinates and speeds from the independent ones (the "
+             "dependent entries of x are the starting guess).", work="CONSISTENT", iwork=True),
+    Function("sim_options_default", _params("opts:struct_out::sim_options"),
+             "Fill opts with the defaults (RK4, projection on, rtol 1e-8, atol 1e-10).",
+             ret="void"),
+    Function("step_rk4", _params("t:scalar, h:scalar, r:in?:NR=r, p:in?:NP=p, project:value::int, "
+                                 "x:inout:NX"),
+             "One classic RK4 step of size h from t, x updated in place (unchanged on failure).",
+             work="STEP", iwork=True),
+    Function("advance", _params("t0:scalar, t1:scalar, r:in?:NR=r, p:in?:NP=p, "
+                                "opts:struct::sim_options, stats:struct_out::sim_stats, x:inout:NX"),
+             "Integrate x from t0 to t1 (one RK4 step, or adaptive DOPRI5 steps); stats "
+             "accumulate.", work="ADVANCE", iwork=True),
+    Function("simulate_rows", _params("t0:value, t_end:value, dt:value"),
+             "Number of output rows simulate() writes for these times (or a negative status)."),
+    Function("simulate", _params("x0:in:NX, t0:value, t_end:value, dt:value, r:in?:NR=r, p:in?:NP=p, "
+                                 "opts:struct?::sim_options, capacity:value::int, t_out:rows, "
+                                 "x_out:rows, lam_out:out?, stats:struct_out::sim_stats"),
+             "Simulate from x0 with outputs every dt up to t_end (the last interval clipped): "
+             "rows of t_out, x_out (NX each), lam_out (MV each, may be NULL). On failure the rows "
+             "written are stats->n_out and stats->x_last holds the last good state.",
+             work="SIMULATE", iwork=True),
+    Function("linearize", _params("x_op:in:NX, r_op:in?:NR=r, p:in?:NP=p, t:scalar, "
+                                  "A:out:NS*NS, B:out:NS*NR"),
+             "Linearize about any operating point: A (NS x NS) and B (NS x NR) for the independent "
+             "state [q_ind, u_ind].", work="LINEARIZE", iwork=True),
+)
+
+# Loops over the public API compiled into the Python module (not into the
+# model library): one call evaluates N states with the GIL released. They
+# return the index of the first failing state (its status in *status) or -1.
+# Strides are in elements; 0: the same vector for every state.
+# C types of the batch parameters, over the model's real type
+_CR, _R, _I = "const real *", "real *", "int *"
+BATCH_FUNCTIONS = (
+    Function("rhs_batch", _params(f"n:value::int, t:value::{_CR}, t_stride:value::int, "
+                                  f"x:value::{_CR}, r:value::{_CR}, r_stride:value::int, "
+                                  f"p:value::{_CR}, p_stride:value::int, dxdt:value::{_R}, "
+                                  f"status:value::{_I}"), "x' for n states."),
+    Function("mass_matrix_batch", _params(f"n:value::int, q:value::{_CR}, q_stride:value::int, "
+                                          f"p:value::{_CR}, p_stride:value::int, M:value::{_R}, "
+                                          f"status:value::{_I}"),
+             "M(q) for n configurations."),
+    Function("linearize_batch", _params(f"n:value::int, x:value::{_CR}, r:value::{_CR}, "
+                                        f"r_stride:value::int, p:value::{_CR}, "
+                                        f"p_stride:value::int, t:value, A:value::{_R}, "
+                                        f"B:value::{_R}, status:value::{_I}"),
+             "(A, B) at n operating points."),
+)
+
+
+# ---------------------------------------------------------------- interface
+@dataclass
+class Interface:
+    """The interface of one generated model: the shared description bound to
+    its prefix, scalar type and sizes, plus its metadata. Plain data: what
+    the bindings need at run time, with no sympy object."""
+    name: str
+    real: str
+    method: str                     # "kane" or "lagrange"
+    sizes: dict                     # NQ, NU, NX, NR, NP, MC, MV, NS
+    state_names: list
+    state_labels: list
+    input_names: list
+    input_labels: list
+    constant_names: list
+    constant_labels: list
+    independent_state_names: list
+    q_ind: list
+    q_dep: list
+    u_ind: list
+    u_dep: list
+    constants: list                 # default values
+    has_energy: bool
+    explicit_kinematics: bool
+    accel: str                      # "partitioned", "kkt", "ldlt" or "lu"
+    functions: tuple = FUNCTIONS
+    batch_functions: tuple = BATCH_FUNCTIONS
+    structs: tuple = STRUCTS
+    statuses: tuple = field(default_factory=lambda: tuple(STATUSES))
+
+    # sizes as attributes: iface.nq, iface.nx, ...
+    def __getattr__(self, key):
+        sizes = self.__dict__.get("sizes")
+        if sizes is not None and key.upper() in sizes and key.islower():
+            return sizes[key.upper()]
+        raise AttributeError(key)
+
+    def size(self, expr):
+        """The value of a size expression ("NU*NU", "1", None -> 0)."""
+        if expr is None:
+            return 0
+        return int(eval(expr, {"__builtins__": {}}, dict(self.sizes)))
+
+    def struct(self, name):
+        return next(s for s in self.structs if s.name == name)
+
+    def function(self, verb):
+        return next(f for f in self.functions + self.batch_functions if f.verb == verb)
+
+    @property
+    def public_names(self):
+        """The C names of the public functions (the footprint's list)."""
+        return [f"{self.name}_{f.verb}" for f in self.functions]
+
+    def work_dims(self):
+        """The arguments of the runtime's GEN_RT_MODEL_*_WORK macros."""
+        s = self.sizes
+        accel = {"partitioned": "GEN_RT_ACCEL_PARTITIONED", "kkt": "GEN_RT_ACCEL_KKT",
+                 "ldlt": "GEN_RT_ACCEL_LDLT", "lu": "GEN_RT_ACCEL_LU"}[self.accel]
+        return (f"{s['NQ']}, {s['NU']}, {s['MC']}, {s['MV']}, {s['NR']}, "
+                f"{1 if self.explicit_kinematics else 0}, {accel}")
+
+    def checks(self, fn):
+        """The argument checks of a function in parameter order, as
+        (kind, name, n): kind in default_p, default_r, in, real, out, null."""
+        out = []
+        for a in fn.params:
+            n = self.size(a.size)
+            if a.role == "in?":
+                out.append(("default_" + a.default, a.name, n))
+            if a.role in ("in", "in?", "inout"):
+                out.append(("in", a.name, n))
+            elif a.role == "scalar":
+                out.append(("real", a.name, 0))
+            elif a.role == "out" and n > 0:
+                out.append(("out", a.name, n))
+            elif a.role in ("rows", "struct", "struct_out"):
+                out.append(("null", a.name, 0))
+            elif a.role == "struct?":
+                out.append(("default_opts", a.name, 0))
+        return out
+
+
+def interface(model, real="double", accel="lu"):
+    """The Interface of a canonical model (gen.Model); accel: the Plan's."""
+    m = model
+    sizes = {"NQ": m.nq, "NU": m.nu, "NX": m.nx, "NR": m.nr, "NP": m.np, "MC": m.mc,
+             "MV": m.mv, "NS": m.ns}
+    return Interface(
+        name=m.name, real=real, method=m.method, sizes=sizes,
+        state_names=list(m.state_names), state_labels=list(m.state_labels),
+        input_names=list(m.input_names), input_labels=list(m.input_labels),
+        constant_names=list(m.constant_names), constant_labels=list(m.constant_labels),
+        independent_state_names=list(m.independent_state_names),
+        q_ind=list(m.q_ind), q_dep=list(m.q_dep), u_ind=list(m.u_ind), u_dep=list(m.u_dep),
+        constants=[float(v) for v in m.p_values], has_energy=m.energy is not None,
+        explicit_kinematics=m.qdot is not None,
+        accel=accel, functions=FUNCTIONS, batch_functions=BATCH_FUNCTIONS, structs=STRUCTS,
+        statuses=tuple(STATUSES))
