@@ -1,7 +1,7 @@
 /*
  * gen_rt_dopri5.h - the Dormand-Prince 5(4) tableau, once for both runtimes:
  * X(NAME, numerator, denominator). The C runtime (gen_rt_integrate.c) and
- * the C++ runtime (eigen/gen_rt.hpp) expand it with their own scalar type,
+ * the C++ runtime (eigen/gen_rt_eigen.hpp) expand it with their own scalar type,
  * so the coefficients are written in one place.
  */
 #ifndef GEN_RT_DOPRI5_H

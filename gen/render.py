@@ -122,18 +122,14 @@ def template_env():
     return _env(str(templates_dir()))
 
 
-def _kernel_context(kernels, printer, R):
+def _kernel_context(kernels, printer):
     """Kernels as data: names, arguments, outputs and the printed body."""
     out = []
     for k in kernels.values():
-        params = [f"{R} {a.name}" if a.scalar else f"const {R} *{a.name}" for a in k.args]
-        params += [f"{R} *out_{o.name}" for o in k.outputs]
         out.append({
             "name": k.name,
             "args": [{"name": a.name, "scalar": a.scalar} for a in k.args],
             "outputs": [o.name for o in k.outputs],
-            "params": ", ".join(params),          # the Eigen header's spelling
-            "voids": [a.name for a in k.args],
             "body": print_kernel_body(k, printer),
             "doc": _KERNEL_DOCS.get(k.name, k.name),
             "n_assign": len(k.assignments),
@@ -200,7 +196,7 @@ def build_context(plan, iface, timings=None, backend="c"):
     else:
         printer = ModelCPrinter(_symbol_map(m, kernels), real)
     p = m.name
-    kctx = _kernel_context(kernels, printer, "Scalar" if backend == "eigen" else f"{p}_real")
+    kctx = _kernel_context(kernels, printer)
     t2 = time.perf_counter()
     mx = lambda n: max(1, n)  # noqa: E731  C99 has no zero-length arrays
     nq, nu, nr, mc, mv = m.nq, m.nu, m.nr, m.mc, m.mv
@@ -235,6 +231,7 @@ def build_context(plan, iface, timings=None, backend="c"):
         "kernels": kctx,
         "lin_outputs": [o.name for o in kernels["lin_terms"].outputs],
         "p_default": [_fmt_real(v, real) for v in m.p_values],
+        "p_default_double": [_fmt_real(v, "double") for v in m.p_values],
         "defaults": {f.name: _field_default(f, real) for f in opts.fields},
         # the solver choice (made by the plan) as the runtime's constant, and
         # the arguments of the runtime's work-size macros
@@ -264,14 +261,6 @@ def build_context(plan, iface, timings=None, backend="c"):
     return ctx
 
 
-# shapes of the linearization blocks (names of the lin_terms kernel outputs)
-_LIN_SHAPES = {"Kqd": ("NQ", "NQ"), "Ku": ("NQ", "NU"), "M": ("NU", "NU"), "A": ("MV", "NU"),
-               "Kq": ("NQ", "NQ"), "Rq": ("NU", "NQ"), "Ru": ("NU", "NU"), "Rr": ("NU", "NR"),
-               "Sq": ("MV", "NQ"), "Su": ("MV", "NU"), "Vq": ("MV", "NQ"), "Jc": ("MC", "NQ")}
-# the blocks the C backend checks for NaN/inf before the elimination
-_LIN_CHECKED = ("Kq", "Rq", "Ru", "Sq", "Su", "Jc", "Vq", "Rr")
-
-
 def _eigen_context(model, kernels):
     """What the C++ templates need beyond the C context."""
     m = model
@@ -281,8 +270,6 @@ def _eigen_context(model, kernels):
                          f"(for example 'my_{m.name}')")
     return {
         "nqi": m.nq - m.mc, "nui": m.nu - m.mv,
-        "p_default_cxx": ", ".join(f"Scalar({_fmt_real(v, 'double')})" for v in m.p_values)
-                         or "Scalar(0)",
         # how gen_rt::Runtime solves the accelerations (the traits' ACCEL)
         "accel": ("spd" if not m.mv else "partitioned" if m.method == "kane" else "kkt"),
         # the lin_terms kernel's outputs in its parameter order (gen_rt::LinOut fields)

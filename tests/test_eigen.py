@@ -33,7 +33,9 @@ import gen
 import n_link_cart as nl
 import rolling_disc as rd
 import seed_pendulum as sp
-from gen.build import build_cffi
+from gen.build import build
+from gen.ir import plan
+from gen.render import render
 from gen.render import RUNTIME_SOURCES
 from conftest import require_eigen
 from helpers import pendulum_state, rel_err
@@ -69,7 +71,7 @@ def _build(job):
     kind, arg = job
     if kind == "cffi":
         model, backend = arg
-        build_cffi(model, backend=backend)
+        build(render(plan(model), backend=backend))
         return None
     return _cmake_project(*arg)
 
@@ -182,7 +184,7 @@ def _calls(sim, x, r, rng_pert):
         "step_rk4": sim.step_rk4(0.0, x, 0.01, r=R),
         "linearize": np.concatenate([a.ravel() for a in sim.linearize(x, r_op=R)]),
     }
-    if sim.model.energy is not None:
+    if sim.has_energy:
         out["energy"] = np.array([sim.energy(x)])
     return out
 

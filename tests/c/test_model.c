@@ -1,0 +1,423 @@
+/*
+ * test_model.c - the model layer of the runtime (gen_rt_model.c) on models
+ * written here by hand, no generator involved:
+ *
+ *   pend: a particle of mass m at (x, y) held at distance L from the origin,
+ *         gravity g along +x (the seed document's pendulum), in the
+ *         coordinates q = [x, y], speeds u = [x', y'], with the
+ *         configuration constraint x^2 + y^2 - L^2 = 0 and the velocity
+ *         constraint x x' + y y' = 0; solved by the KKT system (Lagrange
+ *         form) or by the Kane partition (dependent x, x');
+ *   osc:  an unconstrained oscillator m x'' = -k x, solved by an LDL^T
+ *         "mass_solve" or by the runtime's LU.
+ *
+ * References are closed forms: the tangential acceleration g sin(theta),
+ * the small-oscillation matrix [[0, 1], [-g/L, 0]], cos(w t) for the
+ * oscillator, energy conservation. Every work array is the size its
+ * GEN_RT_MODEL_*_WORK macro gives plus guard values that must survive.
+ */
+#include "test_common.h"
+
+#define PM 1.5   /* mass */
+#define PG 9.81  /* gravity */
+#define PL 1.2   /* length */
+#define PK 4.0   /* spring */
+#define GUARD 16
+
+/* ---------------------------------------------------------------- pend */
+static void p_mass(const gen_rt_real *q, const gen_rt_real *p, gen_rt_real t, gen_rt_real *M)
+{
+    (void)q; (void)t;
+    M[0] = p[0]; M[1] = 0; M[2] = 0; M[3] = p[0];
+}
+
+static void p_forcing(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
+                      const gen_rt_real *p, gen_rt_real t, gen_rt_real *f)
+{
+    (void)q; (void)u; (void)r; (void)t;
+    f[0] = p[0] * p[1];
+    f[1] = 0;
+}
+
+static void p_kin(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *p,
+                  gen_rt_real t, gen_rt_real *Kqd, gen_rt_real *qd)
+{
+    (void)q; (void)p; (void)t; (void)Kqd;
+    qd[0] = u[0];
+    qd[1] = u[1];
+}
+
+static void p_rhs_terms(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
+                        const gen_rt_real *p, gen_rt_real t, gen_rt_real *Kqd,
+                        gen_rt_real *qd, gen_rt_real *M, gen_rt_real *f, gen_rt_real *A,
+                        gen_rt_real *a)
+{
+    p_kin(q, u, p, t, Kqd, qd);
+    p_mass(q, p, t, M);
+    p_forcing(q, u, r, p, t, f);
+    A[0] = q[0]; A[1] = q[1];
+    a[0] = u[0] * u[0] + u[1] * u[1];
+}
+
+static void p_constraints(const gen_rt_real *q, const gen_rt_real *p, gen_rt_real t,
+                          gen_rt_real *fc)
+{
+    (void)t;
+    fc[0] = q[0] * q[0] + q[1] * q[1] - p[2] * p[2];
+}
+
+static void p_jac(const gen_rt_real *q, const gen_rt_real *p, gen_rt_real t, gen_rt_real *fc,
+                  gen_rt_real *Jc)
+{
+    p_constraints(q, p, t, fc);
+    Jc[0] = 2 * q[0]; Jc[1] = 2 * q[1];
+}
+
+static void p_vc(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *p,
+                 gen_rt_real t, gen_rt_real *fv)
+{
+    (void)p; (void)t;
+    fv[0] = q[0] * u[0] + q[1] * u[1];
+}
+
+static void p_vcm(const gen_rt_real *q, const gen_rt_real *p, gen_rt_real t, gen_rt_real *A,
+                  gen_rt_real *b)
+{
+    (void)p; (void)t;
+    A[0] = q[0]; A[1] = q[1];
+    b[0] = 0;
+}
+
+static void p_energy(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *p,
+                     gen_rt_real t, gen_rt_real *E)
+{
+    (void)t;
+    E[0] = GEN_RT_C(0.5) * p[0] * (u[0] * u[0] + u[1] * u[1]) - p[0] * p[1] * q[0];
+}
+
+/* the linearization blocks of  q' - u = 0,  M u' - f - A^T lam = 0,
+ * A u' + a = 0,  f_c = 0,  A u + b = 0 */
+static void p_lin(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *qd,
+                  const gen_rt_real *ud, const gen_rt_real *lam, const gen_rt_real *r,
+                  const gen_rt_real *p, gen_rt_real t, const gen_rt_lin_out *o)
+{
+    int i;
+    (void)qd; (void)r; (void)t;
+    for (i = 0; i < 4; ++i) {
+        o->Kqd[i] = (i == 0 || i == 3) ? 1 : 0;
+        o->Ku[i] = (i == 0 || i == 3) ? -1 : 0;
+        o->Kq[i] = 0;
+        o->M[i] = (i == 0 || i == 3) ? p[0] : 0;
+        o->Rq[i] = (i == 0 || i == 3) ? -lam[0] : 0;
+        o->Ru[i] = 0;
+    }
+    o->A[0] = q[0]; o->A[1] = q[1];
+    o->Sq[0] = ud[0]; o->Sq[1] = ud[1];
+    o->Su[0] = 2 * u[0]; o->Su[1] = 2 * u[1];
+    o->Vq[0] = u[0]; o->Vq[1] = u[1];
+    o->Jc[0] = 2 * q[0]; o->Jc[1] = 2 * q[1];
+}
+
+static const int p_q_ind[1] = {1}, p_q_dep[1] = {0}, p_u_ind[1] = {1}, p_u_dep[1] = {0};
+
+static gen_rt_model pend_model(int accel)
+{
+    gen_rt_model m;
+    m.nq = 2; m.nu = 2; m.nr = 0; m.np = 3; m.mc = 1; m.mv = 1;
+    m.explicit_kinematics = 1; m.accel = accel;
+    m.q_ind = p_q_ind; m.q_dep = p_q_dep; m.u_ind = p_u_ind; m.u_dep = p_u_dep;
+    m.mass_matrix = p_mass; m.forcing = p_forcing; m.kinematics = p_kin;
+    m.rhs_terms = p_rhs_terms; m.constraints = p_constraints; m.constraint_jacobian = p_jac;
+    m.velocity_constraints = p_vc; m.velocity_constraint_matrix = p_vcm;
+    m.energy = p_energy; m.lin_terms = p_lin; m.mass_solve = NULL;
+    return m;
+}
+
+/* ----------------------------------------------------------------- osc */
+static void o_mass(const gen_rt_real *q, const gen_rt_real *p, gen_rt_real t, gen_rt_real *M)
+{
+    (void)q; (void)t;
+    M[0] = p[0];
+}
+
+static void o_forcing(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
+                      const gen_rt_real *p, gen_rt_real t, gen_rt_real *f)
+{
+    (void)u; (void)t;
+    f[0] = -p[1] * q[0] + r[0];
+}
+
+static void o_kin(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *p,
+                  gen_rt_real t, gen_rt_real *Kqd, gen_rt_real *qd)
+{
+    (void)q; (void)p; (void)t; (void)Kqd;
+    qd[0] = u[0];
+}
+
+static void o_rhs_terms(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
+                        const gen_rt_real *p, gen_rt_real t, gen_rt_real *Kqd,
+                        gen_rt_real *qd, gen_rt_real *M, gen_rt_real *f, gen_rt_real *A,
+                        gen_rt_real *a)
+{
+    (void)Kqd; (void)A; (void)a;
+    qd[0] = u[0];
+    o_mass(q, p, t, M);
+    o_forcing(q, u, r, p, t, f);
+}
+
+static void o_lin(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *qd,
+                  const gen_rt_real *ud, const gen_rt_real *lam, const gen_rt_real *r,
+                  const gen_rt_real *p, gen_rt_real t, const gen_rt_lin_out *o)
+{
+    (void)q; (void)u; (void)qd; (void)ud; (void)lam; (void)r; (void)t;
+    o->Kqd[0] = 1; o->Ku[0] = -1; o->Kq[0] = 0;
+    o->M[0] = p[0]; o->Rq[0] = p[1]; o->Ru[0] = 0; o->Rr[0] = -1;
+}
+
+static int o_solve(const gen_rt_real *M, const gen_rt_real *f, gen_rt_real *x)
+{
+    if (!(M[0] > 0)) return GEN_RT_ERR_SINGULAR;
+    x[0] = f[0] / M[0];
+    return GEN_RT_OK;
+}
+
+static const int o_ind[1] = {0}, o_none[1] = {0};
+
+static gen_rt_model osc_model(int accel)
+{
+    gen_rt_model m;
+    m.nq = 1; m.nu = 1; m.nr = 1; m.np = 2; m.mc = 0; m.mv = 0;
+    m.explicit_kinematics = 1; m.accel = accel;
+    m.q_ind = o_ind; m.q_dep = o_none; m.u_ind = o_ind; m.u_dep = o_none;
+    m.mass_matrix = o_mass; m.forcing = o_forcing; m.kinematics = o_kin;
+    m.rhs_terms = o_rhs_terms; m.constraints = NULL; m.constraint_jacobian = NULL;
+    m.velocity_constraints = NULL; m.velocity_constraint_matrix = NULL;
+    m.energy = NULL; m.lin_terms = o_lin;
+    m.mass_solve = accel == GEN_RT_ACCEL_LDLT ? o_solve : NULL;
+    return m;
+}
+
+/* ------------------------------------------------------------- helpers */
+#define DIMS_P(acc) 2, 2, 1, 1, 0, 1, acc
+#define DIMS_O(acc) 1, 1, 0, 0, 1, 1, acc
+#define W(f, ...) f(__VA_ARGS__) /* expands DIMS_* into the macro arguments */
+#define BIG 4096
+
+static gen_rt_real work[BIG + GUARD];
+static int iwork[256 + GUARD];
+
+/* fill the work arrays, put guards right after n (reals) and ni (ints) */
+static void guard(int n, int ni)
+{
+    int i;
+    for (i = 0; i < BIG + GUARD; ++i) work[i] = GEN_RT_C(12345.0);
+    for (i = 0; i < 256 + GUARD; ++i) iwork[i] = 12345;
+    CHECK(n < BIG && ni < 256);
+}
+
+static void guards_intact(int n, int ni)
+{
+    int i, ok = 1;
+    for (i = n; i < n + GUARD; ++i) ok = ok && work[i] == GEN_RT_C(12345.0);
+    for (i = ni; i < ni + GUARD; ++i) ok = ok && iwork[i] == 12345;
+    CHECK(ok);
+}
+
+static void pendulum_tests(int accel)
+{
+    const gen_rt_model m = pend_model(accel);
+    const gen_rt_real p[3] = {PM, PG, PL};
+    const double th = 0.4;
+    gen_rt_real x[4], dx[4], lam[1], E0, E1;
+    int st, n, ni, k;
+
+    /* consistent state: x from y (Newton), x' from y' (linear) */
+    x[0] = GEN_RT_C(1.0); x[1] = (gen_rt_real)(PL * sin(th)); x[2] = 0; x[3] = GEN_RT_C(0.3);
+    n = W(GEN_RT_MODEL_CONSISTENT_WORK, DIMS_P(0)); ni = W(GEN_RT_MODEL_CONSISTENT_IWORK, DIMS_P(0));
+    guard(n, ni);
+    st = gen_rt_model_consistent_state(&m, 0, p, 0, 0, work, iwork, x);
+    CHECK_INT(st, GEN_RT_OK);
+    guards_intact(n, ni);
+    CHECK_NEAR(x[0], PL * cos(th), TOL(1e-13, 1e-5));
+    CHECK_NEAR(x[0] * x[2] + x[1] * x[3], 0, TOL(1e-13, 1e-5));
+
+    /* at rest at angle th: u' = g sin(th) along the tangent (-sin, cos) */
+    x[2] = 0; x[3] = 0;
+    n = W(GEN_RT_MODEL_EVAL_RHS_WORK, DIMS_P(accel)); ni = W(GEN_RT_MODEL_EVAL_RHS_IWORK, DIMS_P(accel));
+    guard(n, ni);
+    st = gen_rt_model_eval_rhs(&m, 0, x, NULL, p, work, iwork, dx, lam);
+    CHECK_INT(st, GEN_RT_OK);
+    guards_intact(n, ni);
+    CHECK_NEAR(dx[2], -PG * sin(th) * -sin(th), TOL(1e-12, 1e-4));
+    CHECK_NEAR(dx[3], -PG * sin(th) * cos(th), TOL(1e-12, 1e-4));
+    /* the tension: m u' = f + A^T lam with A = [x, y]: lam = -m g cos(th) / L */
+    CHECK_NEAR(lam[0], -PM * PG * cos(th) / PL, TOL(1e-12, 1e-4));
+
+    /* linearization at the hanging state: [[0, 1], [-g/L, 0]] on [y, y'] */
+    {
+        gen_rt_real xop[4] = {PL, 0, 0, 0}, Al[4], Bl[1];
+        n = W(GEN_RT_MODEL_LINEARIZE_WORK, DIMS_P(accel));
+        ni = W(GEN_RT_MODEL_LINEARIZE_IWORK, DIMS_P(accel));
+        guard(n, ni);
+        st = gen_rt_model_linearize(&m, xop, NULL, p, 0, work, iwork, Al, Bl);
+        CHECK_INT(st, GEN_RT_OK);
+        guards_intact(n, ni);
+        CHECK_NEAR(Al[0], 0, TOL(1e-13, 1e-5));
+        CHECK_NEAR(Al[1], 1, TOL(1e-13, 1e-5));
+        CHECK_NEAR(Al[2], -PG / PL, TOL(1e-12, 1e-4));
+        CHECK_NEAR(Al[3], 0, TOL(1e-13, 1e-5));
+    }
+
+    /* projection: onto the circle and the tangent, and idempotent */
+    {
+        gen_rt_real y[4] = {PL * 0.9, PL * 0.5, 0.2, 0.1}, z[4];
+        n = W(GEN_RT_MODEL_PROJECT_WORK, DIMS_P(accel));
+        guard(n, 0);
+        st = gen_rt_model_project(&m, 0, p, 0, 0, work, y);
+        CHECK_INT(st, GEN_RT_OK);
+        guards_intact(n, 0);
+        CHECK_NEAR(y[0] * y[0] + y[1] * y[1], PL * PL, TOL(1e-13, 1e-5));
+        CHECK_NEAR(y[0] * y[2] + y[1] * y[3], 0, TOL(1e-13, 1e-5));
+        for (k = 0; k < 4; ++k) z[k] = y[k];
+        st = gen_rt_model_project(&m, 0, p, 0, 0, work, z);
+        CHECK_INT(st, GEN_RT_OK);
+        for (k = 0; k < 4; ++k) CHECK_NEAR(z[k], y[k], TOL(1e-14, 1e-6));
+    }
+
+    /* simulate 2 s, RK4 + projection: energy and the constraint hold */
+    {
+        static gen_rt_real t_out[201], x_out[201 * 4], lam_out[201];
+        gen_rt_real last[4];
+        gen_rt_sim_options o;
+        gen_rt_sim_stats s;
+        o.method = GEN_RT_METHOD_RK4; o.project = 1; o.rtol = GEN_RT_C(1e-8);
+        o.atol = GEN_RT_C(1e-10); o.h_init = 0; o.h_min = 0; o.h_max = 0;
+        o.max_steps = 100000L; o.proj_tol = 0; o.proj_max_iter = 10;
+        s.x_last = last;
+        x[0] = (gen_rt_real)(PL * cos(1.0)); x[1] = (gen_rt_real)(PL * sin(1.0));
+        x[2] = 0; x[3] = 0;
+        p_energy(x, x + 2, p, 0, &E0);
+        n = W(GEN_RT_MODEL_SIMULATE_WORK, DIMS_P(accel));
+        ni = W(GEN_RT_MODEL_SIMULATE_IWORK, DIMS_P(accel));
+        guard(n, ni);
+        st = gen_rt_model_simulate(&m, x, 0, 2, GEN_RT_C(0.01), NULL, p, &o, 201, work, iwork,
+                                   t_out, x_out, lam_out, &s);
+        CHECK_INT(st, GEN_RT_OK);
+        guards_intact(n, ni);
+        CHECK_INT(s.n_out, 201);
+        CHECK_NEAR(t_out[200], 2, 0);
+        p_energy(x_out + 800, x_out + 802, p, 0, &E1);
+        CHECK_NEAR(E1, E0, TOL(1e-7, 1e-3) * fabs(E0));
+        CHECK_NEAR(x_out[800] * x_out[800] + x_out[801] * x_out[801], PL * PL, TOL(1e-13, 1e-5));
+        /* the rows are the state: row 0 is x0 */
+        CHECK_NEAR(x_out[0], x[0], 0);
+        /* too small a buffer */
+        st = gen_rt_model_simulate(&m, x, 0, 2, GEN_RT_C(0.01), NULL, p, &o, 200, work, iwork,
+                                   t_out, x_out, NULL, &s);
+        CHECK_INT(st, GEN_RT_ERR_OUTPUT_FULL);
+        /* DOPRI5 to the same end: agrees with RK4 at h = 0.01 to its error */
+        o.method = GEN_RT_METHOD_DOPRI5; o.rtol = (gen_rt_real)TOL(1e-10, 1e-5);
+        o.atol = (gen_rt_real)TOL(1e-12, 1e-6);
+        st = gen_rt_model_simulate(&m, x, 0, 2, GEN_RT_C(0.5), NULL, p, &o, 201, work, iwork,
+                                   t_out, x_out + 4 * 4, NULL, &s);
+        CHECK_INT(st, GEN_RT_OK);
+        CHECK_NEAR(x_out[4 * 4 + 4 * 4 + 1], x_out[801], TOL(1e-7, 1e-3));
+    }
+
+    /* a singular partition: x = 0 makes A_dep = [x] zero (Kane form only) */
+    if (accel == GEN_RT_ACCEL_PARTITIONED) {
+        gen_rt_real xs[4] = {0, PL, 0, 0};
+        st = gen_rt_model_eval_rhs(&m, 0, xs, NULL, p, work, iwork, dx, NULL);
+        CHECK_INT(st, GEN_RT_ERR_SINGULAR);
+    }
+}
+
+static void oscillator_tests(int accel)
+{
+    const gen_rt_model m = osc_model(accel);
+    const gen_rt_real p[2] = {PM, PK}, r[1] = {0};
+    const double w = sqrt(PK / PM);
+    gen_rt_real x[2], E[1], Al[4], Bl[2];
+    double err1, err2;
+    int st, k, n, ni;
+
+    /* RK4 order: error at t = 1 with h and h/2 */
+    n = W(GEN_RT_MODEL_STEP_WORK, DIMS_O(accel)); ni = W(GEN_RT_MODEL_STEP_IWORK, DIMS_O(accel));
+    guard(n, ni);
+    x[0] = 1; x[1] = 0;
+    for (k = 0; k < 20; ++k) {
+        st = gen_rt_model_step_rk4(&m, GEN_RT_C(0.05) * k, GEN_RT_C(0.05), r, p, 1, work, iwork, x);
+        CHECK_INT(st, GEN_RT_OK);
+    }
+    guards_intact(n, ni);
+    err1 = fabs(x[0] - cos(w));
+    x[0] = 1; x[1] = 0;
+    for (k = 0; k < 40; ++k)
+        gen_rt_model_step_rk4(&m, GEN_RT_C(0.025) * k, GEN_RT_C(0.025), r, p, 1, work, iwork, x);
+    err2 = fabs(x[0] - cos(w));
+    if (!TEST_IS_FLOAT) CHECK_NEAR(err1 / err2, 16, 2);
+
+    /* DOPRI5 through advance: cos(w t) to its tolerance, stats add up */
+    {
+        gen_rt_real last[2];
+        gen_rt_sim_options o;
+        gen_rt_sim_stats s;
+        o.method = GEN_RT_METHOD_DOPRI5; o.project = 1; o.rtol = GEN_RT_C(1e-10);
+        o.atol = GEN_RT_C(1e-12); o.h_init = 0; o.h_min = 0; o.h_max = 0;
+        o.max_steps = 100000L; o.proj_tol = 0; o.proj_max_iter = 10;
+        s.n_accepted = 0; s.n_rejected = 0; s.n_rhs = 0; s.n_out = 0; s.t_last = 0;
+        s.h_next = 0; s.x_last = last;
+        x[0] = 1; x[1] = 0;
+        n = W(GEN_RT_MODEL_ADVANCE_WORK, DIMS_O(accel));
+        ni = W(GEN_RT_MODEL_ADVANCE_IWORK, DIMS_O(accel));
+        guard(n, ni);
+        st = gen_rt_model_advance(&m, 0, 3, r, p, &o, work, iwork, &s, x);
+        CHECK_INT(st, GEN_RT_OK);
+        guards_intact(n, ni);
+        CHECK_NEAR(x[0], cos(3 * w), TOL(1e-8, 1e-3));
+        CHECK_NEAR(x[1], -w * sin(3 * w), TOL(1e-8, 1e-3));
+        CHECK(s.n_rhs >= 6 * s.n_accepted);
+        CHECK_NEAR(s.t_last, 3, 0);
+        CHECK_NEAR(last[0], x[0], 0);
+        /* backwards time is a bad argument */
+        CHECK_INT(gen_rt_model_advance(&m, 3, 2, r, p, &o, work, iwork, &s, x), GEN_RT_ERR_BAD_ARG);
+        o.method = 7;
+        CHECK_INT(gen_rt_model_advance(&m, 0, 1, r, p, &o, work, iwork, &s, x), GEN_RT_ERR_BAD_ARG);
+    }
+
+    /* linearization: [[0, 1], [-k/m, 0]], B = [0, 1/m] */
+    x[0] = GEN_RT_C(0.3); x[1] = GEN_RT_C(-0.2);
+    n = W(GEN_RT_MODEL_LINEARIZE_WORK, DIMS_O(accel));
+    ni = W(GEN_RT_MODEL_LINEARIZE_IWORK, DIMS_O(accel));
+    guard(n, ni);
+    st = gen_rt_model_linearize(&m, x, r, p, 0, work, iwork, Al, Bl);
+    CHECK_INT(st, GEN_RT_OK);
+    guards_intact(n, ni);
+    CHECK_NEAR(Al[2], -PK / PM, TOL(1e-13, 1e-5));
+    CHECK_NEAR(Bl[1], 1 / PM, TOL(1e-13, 1e-5));
+
+    /* what the model does not have */
+    CHECK_INT(gen_rt_model_eval_energy(&m, x, x + 1, p, 0, E), GEN_RT_ERR_BAD_ARG);
+    CHECK_NEAR(E[0], 0, 0);
+    CHECK_INT(gen_rt_model_eval_constraints(&m, x, p, 0, E), GEN_RT_OK);
+    CHECK_INT(gen_rt_model_project(&m, 0, p, 0, 0, work, x), GEN_RT_OK);
+    /* a zero mass: singular, whichever solver */
+    {
+        const gen_rt_real p0[2] = {0, PK};
+        gen_rt_real dx[2];
+        st = gen_rt_model_eval_rhs(&m, 0, x, r, p0, work, iwork, dx, NULL);
+        CHECK_INT(st, GEN_RT_ERR_SINGULAR);
+    }
+}
+
+int main(void)
+{
+    pendulum_tests(GEN_RT_ACCEL_KKT);
+    pendulum_tests(GEN_RT_ACCEL_PARTITIONED);
+    oscillator_tests(GEN_RT_ACCEL_LDLT);
+    oscillator_tests(GEN_RT_ACCEL_LU);
+    CHECK_INT(gen_rt_simulate_rows(0, 1, GEN_RT_C(0.1)), 11);
+    CHECK_INT(gen_rt_simulate_rows(0, 1, GEN_RT_C(0.3)), 5);
+    CHECK_INT(gen_rt_simulate_rows(0, 1, 0), GEN_RT_ERR_BAD_ARG);
+    TEST_END();
+}

@@ -1,0 +1,106 @@
+"""Golden files of the generated sources: the seed Kane pendulum
+(examples/seed_pendulum.py kane_model()) rendered for the C backend (double)
+and for the Eigen backend, every generated file compared character for
+character with tests/golden/sources/c/<file> and tests/golden/sources/eigen/<file>.
+Nothing is compiled.
+
+A failure means the generated code changed. If the change is intended,
+regenerate the golden files and review them with `git diff tests/golden/sources`:
+
+    EOMGEN_UPDATE_GOLDEN=1 python -m pytest tests/test_golden_sources.py
+
+With EOMGEN_UPDATE_GOLDEN=1 the test rewrites the folder of each backend
+(files no longer generated are removed) instead of comparing, passes, and
+says so in a warning.
+"""
+import difflib
+import os
+import warnings
+from pathlib import Path
+
+import pytest
+
+import gen.ir
+import gen.render
+
+GOLDEN = Path(__file__).resolve().parent / "golden" / "sources"
+UPDATE = os.environ.get("EOMGEN_UPDATE_GOLDEN", "") not in ("", "0")
+MAX_DIFF_LINES = 60
+HOW_TO_UPDATE = ("if the change is intended: EOMGEN_UPDATE_GOLDEN=1 python -m pytest "
+                 "tests/test_golden_sources.py, then review git diff tests/golden/sources")
+
+
+# the runtime's files are copied into the project verbatim (csrc/ has its own
+# tests): the golden files are what the templates produce
+RUNTIME_COPIES = {Path(f).name for f in (gen.render.RUNTIME_SOURCES + gen.render.RUNTIME_HEADERS
+                                         + gen.render.EIGEN_RUNTIME_HEADERS)}
+
+
+def render(model, backend, real="double"):
+    """{file name: text} of the files the templates render for a model (the
+    cffi declarations and module source included)."""
+    out = gen.render.render(gen.ir.plan(model), real=real, backend=backend)
+    files = {k: v for k, v in out.files.items() if k not in RUNTIME_COPIES}
+    files["cffi/cdef.h"] = out.cdef
+    files["cffi/module.c"] = out.module_source
+    return files
+
+
+def _read(folder):
+    return {p.relative_to(folder).as_posix(): p.read_text(encoding="utf-8")
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _update(folder, files):
+    folder.mkdir(parents=True, exist_ok=True)
+    for name in _read(folder):
+        if name not in files:
+            (folder / name).unlink()
+    for name, text in files.items():
+        path = folder / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(path, "w", encoding="utf-8", newline="\n") as fh:
+            fh.write(text)
+
+
+def _diff(name, golden, now):
+    lines = list(difflib.unified_diff(golden.splitlines(keepends=True),
+                                      now.splitlines(keepends=True),
+                                      fromfile=f"golden/{name}", tofile=f"generated/{name}"))
+    more = len(lines) - MAX_DIFF_LINES
+    text = "".join(line if line.endswith("\n") else line + "\n"
+                   for line in lines[:MAX_DIFF_LINES])
+    if more > 0:
+        text += f"... ({more} more diff lines)\n"
+    return text
+
+
+@pytest.mark.parametrize("backend", ["c", "eigen"])
+def test_generated_sources_match_golden(kane_model, backend):
+    files = render(kane_model, backend)
+    folder = GOLDEN / backend
+    if UPDATE:
+        _update(folder, files)
+        msg = f"EOMGEN_UPDATE_GOLDEN: rewrote {len(files)} golden files in {folder}"
+        print(msg)
+        warnings.warn(msg)
+        return
+    assert folder.is_dir(), f"no golden files in {folder}; {HOW_TO_UPDATE}"
+    golden = _read(folder)
+    missing = sorted(set(golden) - set(files))
+    extra = sorted(set(files) - set(golden))
+    changed = [n for n in sorted(set(golden) & set(files)) if golden[n] != files[n]]
+    if not (missing or extra or changed):
+        return
+    report = [f"generated sources of the seed Kane pendulum ({backend} backend) differ "
+              f"from {folder}:"]
+    if missing:
+        report.append(f"  no longer generated: {', '.join(missing)}")
+    if extra:
+        report.append(f"  new files: {', '.join(extra)}")
+    if changed:
+        report.append(f"  changed: {', '.join(changed)}")
+        report.append(f"first difference ({changed[0]}):")
+        report.append(_diff(changed[0], golden[changed[0]], files[changed[0]]))
+    report.append(HOW_TO_UPDATE)
+    pytest.fail("\n".join(report), pytrace=False)
