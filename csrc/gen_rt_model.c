@@ -159,6 +159,25 @@ int gen_rt_model_eval_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_rea
 /* Constraint manifold: projection and consistent states              */
 /* ------------------------------------------------------------------ */
 
+/* f_c and its Jacobian at q; NONFINITE_MODEL when they are not finite */
+static int constraint_jacobian_at(const gen_rt_model *m, const gen_rt_real *q,
+                                  const gen_rt_real *p, gen_rt_real t, gen_rt_real *fc,
+                                  gen_rt_real *Jc)
+{
+    m->constraint_jacobian(q, p, t, fc, Jc);
+    return (finite_n(m->mc, fc) && finite_n(m->mc * m->nq, Jc)) ? GEN_RT_OK
+                                                                : GEN_RT_ERR_NONFINITE_MODEL;
+}
+
+/* A and b of the velocity constraints at q, checked the same way */
+static int velocity_matrix_at(const gen_rt_model *m, const gen_rt_real *q, const gen_rt_real *p,
+                              gen_rt_real t, gen_rt_real *A, gen_rt_real *b)
+{
+    m->velocity_constraint_matrix(q, p, t, A, b);
+    return (finite_n(m->mv * m->nu, A) && finite_n(m->mv, b)) ? GEN_RT_OK
+                                                             : GEN_RT_ERR_NONFINITE_MODEL;
+}
+
 int gen_rt_model_project(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *p,
                          gen_rt_real tol, int max_iter, gen_rt_real *work, gen_rt_real *x)
 {
@@ -174,8 +193,7 @@ int gen_rt_model_project(const gen_rt_model *m, gen_rt_real t, const gen_rt_real
         if (!(tol > 0)) tol = 16 * GEN_RT_EPS;
         for (it = 0; it < max_iter; ++it) {
             gen_rt_real dmax = 0;
-            m->constraint_jacobian(xc, p, t, fc, Jc);
-            if (!finite_n(mc, fc) || !finite_n(mc * nq, Jc)) return GEN_RT_ERR_NONFINITE_MODEL;
+            if ((st = constraint_jacobian_at(m, xc, p, t, fc, Jc))) return st;
             copy_n(nq, xc, q0);
             st = gen_rt_min_norm_correct(mc, nq, Jc, fc, w, xc);
             if (st) return st;
@@ -190,8 +208,7 @@ int gen_rt_model_project(const gen_rt_model *m, gen_rt_real t, const gen_rt_real
         if (!converged) return GEN_RT_ERR_NO_CONVERGENCE;
     }
     if (mv) {
-        m->velocity_constraint_matrix(xc, p, t, A, b);
-        if (!finite_n(mv * nu, A) || !finite_n(mv, b)) return GEN_RT_ERR_NONFINITE_MODEL;
+        if ((st = velocity_matrix_at(m, xc, p, t, A, b))) return st;
         for (i = 0; i < mv; ++i) {
             gen_rt_real s = b[i];
             for (j = 0; j < nu; ++j) s += A[i * nu + j] * xc[nq + j];
@@ -221,8 +238,7 @@ int gen_rt_model_consistent_state(const gen_rt_model *m, gen_rt_real t,
         if (!(tol > 0)) tol = 16 * GEN_RT_EPS;
         for (it = 0; it < max_iter; ++it) {
             gen_rt_real dmax = 0;
-            m->constraint_jacobian(xc, p, t, fc, Jc);
-            if (!finite_n(mc, fc) || !finite_n(mc * nq, Jc)) return GEN_RT_ERR_NONFINITE_MODEL;
+            if ((st = constraint_jacobian_at(m, xc, p, t, fc, Jc))) return st;
             for (i = 0; i < mc; ++i)
                 for (j = 0; j < mc; ++j) Jd[i * mc + j] = Jc[i * nq + m->q_dep[j]];
             st = gen_rt_lu_factor(mc, Jd, piv, gen_rt_max_abs(mc * nq, Jc));
@@ -240,8 +256,7 @@ int gen_rt_model_consistent_state(const gen_rt_model *m, gen_rt_real t,
         if (!converged) return GEN_RT_ERR_NO_CONVERGENCE;
     }
     if (mv) {
-        m->velocity_constraint_matrix(xc, p, t, A, b);
-        if (!finite_n(mv * nu, A) || !finite_n(mv, b)) return GEN_RT_ERR_NONFINITE_MODEL;
+        if ((st = velocity_matrix_at(m, xc, p, t, A, b))) return st;
         for (i = 0; i < mv; ++i) {
             gen_rt_real s = -b[i];
             for (j = 0; j < nu - mv; ++j)
