@@ -35,7 +35,7 @@ typedef double gen_rt_real;
 #define GEN_RT_STATUS_ENUM_(name, value, text) GEN_RT_##name = (value),
 enum gen_rt_status { GEN_RT_STATUS_TABLE(GEN_RT_STATUS_ENUM_) GEN_RT_STATUS_END_ = 1 };
 #undef GEN_RT_STATUS_ENUM_
-#define GEN_RT_STATUS_MIN (-9)
+#define GEN_RT_STATUS_MIN (-10)
 
 /* A human-readable message for a status code (static storage, never NULL). */
 const char *gen_rt_status_message(int status);

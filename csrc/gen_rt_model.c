@@ -43,20 +43,26 @@ int gen_rt_model_eval_forcing(const gen_rt_model *m, const gen_rt_real *q,
     return finite_n(m->nu, f) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
 }
 
+/* q' from the kinematic equations' outputs: explicit, qd holds q' (checked);
+ * implicit, Kqd q' = qd is solved in place (Kqd overwritten). Any failure
+ * is the kinematics' own status. */
+static int solve_kinematics(const gen_rt_model *m, gen_rt_real *Kqd, int *piv, gen_rt_real *qd)
+{
+    int nq = m->nq;
+    if (m->explicit_kinematics)
+        return finite_n(nq, qd) ? GEN_RT_OK : GEN_RT_ERR_SINGULAR_KINEMATICS;
+    if (!finite_n(nq * nq, Kqd) || !finite_n(nq, qd)) return GEN_RT_ERR_SINGULAR_KINEMATICS;
+    if (gen_rt_lu_factor(nq, Kqd, piv, 0) || gen_rt_lu_solve(nq, Kqd, piv, 1, qd))
+        return GEN_RT_ERR_SINGULAR_KINEMATICS;
+    return GEN_RT_OK;
+}
+
 int gen_rt_model_eval_kinematics(const gen_rt_model *m, const gen_rt_real *q,
                                  const gen_rt_real *u, const gen_rt_real *p, gen_rt_real t,
                                  gen_rt_real *work, int *iwork, gen_rt_real *qdot)
 {
-    int nq = m->nq, st;
-    if (m->explicit_kinematics) {
-        m->kinematics(q, u, p, t, NULL, qdot);
-        return finite_n(nq, qdot) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
-    }
-    m->kinematics(q, u, p, t, work, qdot);
-    if (!finite_n(nq * nq, work) || !finite_n(nq, qdot)) return GEN_RT_ERR_NONFINITE_MODEL;
-    st = gen_rt_lu_factor(nq, work, iwork, 0);
-    if (st) return st;
-    return gen_rt_lu_solve(nq, work, iwork, 1, qdot);
+    m->kinematics(q, u, p, t, m->explicit_kinematics ? NULL : work, qdot);
+    return solve_kinematics(m, work, iwork, qdot);
 }
 
 int gen_rt_model_eval_constraints(const gen_rt_model *m, const gen_rt_real *q,
@@ -124,13 +130,7 @@ int gen_rt_model_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
     int *kpiv = iwork, *iw = iwork + nq;
     m->rhs_terms(q, u, r, p, t, m->explicit_kinematics ? NULL : Kqd, dxdt, M, f,
                  mv ? A : NULL, mv ? a : NULL);
-    if (m->explicit_kinematics) {
-        if (!finite_n(nq, dxdt)) return GEN_RT_ERR_NONFINITE_MODEL;
-    } else {
-        if (!finite_n(nq * nq, Kqd) || !finite_n(nq, dxdt)) return GEN_RT_ERR_NONFINITE_MODEL;
-        if ((st = gen_rt_lu_factor(nq, Kqd, kpiv, 0))) return st;
-        if ((st = gen_rt_lu_solve(nq, Kqd, kpiv, 1, dxdt))) return st;
-    }
+    if ((st = solve_kinematics(m, Kqd, kpiv, dxdt))) return st;
     if (!finite_n(nu * nu, M) || !finite_n(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
     if (mv) {
         if (!finite_n(mv * nu, A) || !finite_n(mv, a)) return GEN_RT_ERR_NONFINITE_MODEL;

@@ -23,7 +23,10 @@
     X(ERR_BAD_ARG, -7, "an argument is out of range (size, step or tolerance)")         \
     X(ERR_NONFINITE_MODEL, -8, "the model expressions evaluate to NaN or infinity at "  \
                                "this state (a singular configuration of the model)")    \
-    X(ERR_OUTPUT_FULL, -9, "the output buffer is too small")
+    X(ERR_OUTPUT_FULL, -9, "the output buffer is too small")                            \
+    X(ERR_SINGULAR_KINEMATICS, -10, "singular kinematic equations: q' cannot be solved "  \
+                                    "from Kqd(q) q' + Ku(q) u + kf = 0 at this "          \
+                                    "configuration (with Euler angles: gimbal lock)")
 
 /* the message of a code outside the table */
 #define GEN_RT_STATUS_UNKNOWN "unknown status code"

@@ -25,6 +25,7 @@ EXCEPTIONS = {
     "ERR_BAD_ARG": ValueError,
     "ERR_NONFINITE_MODEL": SingularError,
     "ERR_OUTPUT_FULL": SolverError,
+    "ERR_SINGULAR_KINEMATICS": SingularError,
 }
 _METHODS = METHODS
 

@@ -118,7 +118,7 @@ def test_lagrange_matrices_against_sympy(lagrange_sim, lagrange_reference):
             "velocity_constraints": (lagrange_sim.velocity_constraints(q, u, p),
                                      np.array(ref["fv"](*argr), float).ravel()),
             # sympy's full form solves [q', q'', lam]: compare the state part
-            # and the multipliers (same sign convention as solve_multipliers)
+            # and the multipliers (the mass_matrix_full solve's: -solve_multipliers)
             "rhs": (lagrange_sim.rhs(0.0, x, p=p), sol[:4]),
             "multipliers": (lagrange_sim.multipliers(0.0, x, p=p), sol[4:]),
         }

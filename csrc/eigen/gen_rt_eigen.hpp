@@ -393,13 +393,13 @@ struct Runtime {
         if constexpr (Model::EXPLICIT_KINEMATICS) {
             Model::kinematics(q.data(), u.data(), p.data(), t, static_cast<S *>(nullptr),
                               qdot.data());
-            return finite(qdot) ? OK : ERR_NONFINITE_MODEL;
+            return finite(qdot) ? OK : ERR_SINGULAR_KINEMATICS;
         } else {
             Mat<S, NQ, NQ> Kqd;
             Coords kr;
             Model::kinematics(q.data(), u.data(), p.data(), t, Kqd.data(), kr.data());
-            if (!finite(Kqd) || !finite(kr)) return ERR_NONFINITE_MODEL;
-            return lu_solve<S, NQ>(Kqd, S(0), kr, qdot);
+            if (!finite(Kqd) || !finite(kr)) return ERR_SINGULAR_KINEMATICS;
+            return lu_solve<S, NQ>(Kqd, S(0), kr, qdot) ? ERR_SINGULAR_KINEMATICS : OK;
         }
     }
 
@@ -485,14 +485,14 @@ struct Runtime {
         if constexpr (Model::EXPLICIT_KINEMATICS) {
             Model::rhs_terms(q, u, r.data(), p.data(), t, static_cast<S *>(nullptr), qd.data(),
                              M.data(), f.data(), A.data(), a.data());
-            if (!finite(qd)) return ERR_NONFINITE_MODEL;
+            if (!finite(qd)) return ERR_SINGULAR_KINEMATICS;
         } else {
             Mat<S, NQ, NQ> Kqd;
             Coords kr;
             Model::rhs_terms(q, u, r.data(), p.data(), t, Kqd.data(), kr.data(), M.data(),
                              f.data(), A.data(), a.data());
-            if (!finite(Kqd) || !finite(kr)) return ERR_NONFINITE_MODEL;
-            if ((st = lu_solve<S, NQ>(Kqd, S(0), kr, qd))) return st;
+            if (!finite(Kqd) || !finite(kr)) return ERR_SINGULAR_KINEMATICS;
+            if (lu_solve<S, NQ>(Kqd, S(0), kr, qd)) return ERR_SINGULAR_KINEMATICS;
         }
         if (!finite(M) || !finite(f)) return ERR_NONFINITE_MODEL;
         if constexpr (Model::ACCEL == ACCEL_SPD) {
