@@ -35,7 +35,18 @@ typedef double gen_rt_real;
 #define GEN_RT_STATUS_ENUM_(name, value, text) GEN_RT_##name = (value),
 enum gen_rt_status { GEN_RT_STATUS_TABLE(GEN_RT_STATUS_ENUM_) GEN_RT_STATUS_END_ = 1 };
 #undef GEN_RT_STATUS_ENUM_
-#define GEN_RT_STATUS_MIN (-10)
+#define GEN_RT_STATUS_MIN (-11)
+
+/* A state with an entry beyond this magnitude has diverged: a model that
+ * evaluates to NaN/inf there reports GEN_RT_ERR_DIVERGED, not a singular
+ * configuration. */
+#ifndef GEN_RT_DIVERGED_ABS
+#ifdef GEN_RT_REAL_FLOAT
+#define GEN_RT_DIVERGED_ABS GEN_RT_C(1e15)
+#else
+#define GEN_RT_DIVERGED_ABS GEN_RT_C(1e150)
+#endif
+#endif
 
 /* A human-readable message for a status code (static storage, never NULL). */
 const char *gen_rt_status_message(int status);

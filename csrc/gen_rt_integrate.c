@@ -30,7 +30,7 @@ int gen_rt_rk4_step(gen_rt_rhs_fn f, void *ctx, int nx, gen_rt_real t,
     for (i = 0; i < nx; ++i)
         y[i] = x[i] + (h / GEN_RT_C(6.0)) *
                           (k1[i] + GEN_RT_C(2.0) * (k2[i] + k3[i]) + k4[i]);
-    if (!gen_rt_all_finite(nx, y)) return GEN_RT_ERR_NONFINITE_MODEL;
+    if (!gen_rt_all_finite(nx, y)) return GEN_RT_ERR_DIVERGED; /* finite stages, overflow */
     for (i = 0; i < nx; ++i) x[i] = y[i];
     return GEN_RT_OK;
 }

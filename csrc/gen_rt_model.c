@@ -118,9 +118,26 @@ int gen_rt_model_eval_energy(const gen_rt_model *m, const gen_rt_real *q,
 /* The right-hand side                                                */
 /* ------------------------------------------------------------------ */
 
+static int rhs_(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                const gen_rt_real *r, const gen_rt_real *p, gen_rt_real *work, int *iwork,
+                gen_rt_real *dxdt, gen_rt_real *lam);
+
 int gen_rt_model_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
                      const gen_rt_real *r, const gen_rt_real *p, gen_rt_real *work,
                      int *iwork, gen_rt_real *dxdt, gen_rt_real *lam)
+{
+    int st = rhs_(m, t, x, r, p, work, iwork, dxdt, lam);
+    /* a failure at a state that has run away (beyond GEN_RT_DIVERGED_ABS, or
+     * an integrator stage that overflowed) is divergence, not a singular
+     * configuration of the model */
+    if (st && (!gen_rt_all_finite(NX_(m), x) || gen_rt_max_abs(NX_(m), x) > GEN_RT_DIVERGED_ABS))
+        return GEN_RT_ERR_DIVERGED;
+    return st;
+}
+
+static int rhs_(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                const gen_rt_real *r, const gen_rt_real *p, gen_rt_real *work, int *iwork,
+                gen_rt_real *dxdt, gen_rt_real *lam)
 {
     int nq = m->nq, nu = m->nu, mv = m->mv, st;
     const gen_rt_real *q = x, *u = x + nq;

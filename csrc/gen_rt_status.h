@@ -26,7 +26,9 @@
     X(ERR_OUTPUT_FULL, -9, "the output buffer is too small")                            \
     X(ERR_SINGULAR_KINEMATICS, -10, "singular kinematic equations: q' cannot be solved "  \
                                     "from Kqd(q) q' + Ku(q) u + kf = 0 at this "          \
-                                    "configuration (with Euler angles: gimbal lock)")
+                                    "configuration (with Euler angles: gimbal lock)")  \
+    X(ERR_DIVERGED, -11, "the state diverged: it grew beyond the range of the scalar "  \
+                         "type (overflow) during integration")
 
 /* the message of a code outside the table */
 #define GEN_RT_STATUS_UNKNOWN "unknown status code"

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from .abi import METHODS, STATUSES, status_name
-from .errors import ConvergenceError, SingularError, SolverError
+from .errors import ConvergenceError, DivergenceError, SingularError, SolverError
 
 __all__ = ["Simulator", "EXCEPTIONS"]
 
@@ -26,6 +26,7 @@ EXCEPTIONS = {
     "ERR_NONFINITE_MODEL": SingularError,
     "ERR_OUTPUT_FULL": SolverError,
     "ERR_SINGULAR_KINEMATICS": SingularError,
+    "ERR_DIVERGED": DivergenceError,
 }
 _METHODS = METHODS
 

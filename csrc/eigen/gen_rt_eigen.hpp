@@ -111,6 +111,7 @@ struct Tolerances {
     static constexpr S eps = std::numeric_limits<S>::epsilon();
     static constexpr S pivot_rtol = single ? S(1e-6) : S(1e-12);
     static constexpr S partition_cmax = single ? S(1e5) : S(1e9);
+    static constexpr S diverged_abs = single ? S(1e15) : S(1e150); // GEN_RT_DIVERGED_ABS
 };
 
 /* The outputs of Model::lin_terms (row-major blocks; those the model does
@@ -207,7 +208,7 @@ inline int rk4_step(F &&f, S t, S h, Mat<S, N, 1> &x) noexcept
     y = x + h * k3;
     if ((st = f(t + h, y, k4))) return st;
     y = x + (h / S(6)) * (k1 + S(2) * (k2 + k3) + k4);
-    if (!finite(y)) return ERR_NONFINITE_MODEL;
+    if (!finite(y)) return ERR_DIVERGED; // finite stages, overflow
     x = y;
     return OK;
 }
@@ -474,6 +475,16 @@ struct Runtime {
     /* x' and (when lam != nullptr) the multipliers; inputs already checked */
     static int rhs_unchecked(S t, const State &x, const Inputs &r, const Params &p, State &dxdt,
                              Multipliers *lam) noexcept
+    {
+        const int st = rhs_impl(t, x, r, p, dxdt, lam);
+        // a failure at a state that has run away is divergence (as gen_rt_model_rhs)
+        if (st && (!finite(x) || x.cwiseAbs().maxCoeff() > Tolerances<S>::diverged_abs))
+            return ERR_DIVERGED;
+        return st;
+    }
+
+    static int rhs_impl(S t, const State &x, const Inputs &r, const Params &p, State &dxdt,
+                        Multipliers *lam) noexcept
     {
         const S *q = x.data(), *u = x.data() + NQ;
         MassMatrix M;
