@@ -250,6 +250,13 @@ typedef struct gen_rt_model {
                       const gen_rt_real *p, gen_rt_real t, const gen_rt_lin_out *o);
     /* M x = f for GEN_RT_ACCEL_LDLT (a status; x written only on success) */
     int (*mass_solve)(const gen_rt_real *M, const gen_rt_real *f, gen_rt_real *x);
+    /* auxiliary speeds (Kane's u_auxiliary): na reaction forces solving
+     * F reactions + g = 0, F (na x na) and g (na) at q, u and the
+     * accelerations ud; na == 0 and NULL when the model has none */
+    int na;
+    void (*auxiliary)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *ud,
+                      const gen_rt_real *r, const gen_rt_real *p, gen_rt_real t,
+                      gen_rt_real *F, gen_rt_real *g);
 } gen_rt_model;
 
 /* integration methods (gen_rt_sim_options.method) */
@@ -327,6 +334,13 @@ typedef struct {
 #define GEN_RT_MODEL_LINEARIZE_IWORK(nq, nu, mc, mv, nr, ek, acc)               \
     GEN_RT_MAX_(GEN_RT_LIN_IWORK(nq, nu, mc, mv), GEN_RT_ACCEL_IWORK(nu, mv) + (nq))
 
+/* eval_auxiliary_forces takes the number of reactions na as well */
+#define GEN_RT_MODEL_AUX_WORK(nq, nu, mc, mv, nr, ek, acc, na)                  \
+    ((na) ? GEN_RT_NX_(nq, nu) + (na) * (na) + (na) +                           \
+                GEN_RT_MODEL_RHS_WORK(nq, nu, mc, mv, nr, ek, acc) : 1)
+#define GEN_RT_MODEL_AUX_IWORK(nq, nu, mc, mv, nr, ek, acc, na)                 \
+    GEN_RT_MAX_(GEN_RT_MODEL_RHS_IWORK(nq, nu, mc, mv, nr, ek, acc), (na) + 1)
+
 int gen_rt_model_eval_mass_matrix(const gen_rt_model *m, const gen_rt_real *q,
                                   const gen_rt_real *p, gen_rt_real t, gen_rt_real *M);
 int gen_rt_model_eval_forcing(const gen_rt_model *m, const gen_rt_real *q,
@@ -361,6 +375,13 @@ int gen_rt_model_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
 int gen_rt_model_eval_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
                           const gen_rt_real *r, const gen_rt_real *p, gen_rt_real *work,
                           int *iwork, gen_rt_real *dxdt, gen_rt_real *lam);
+/* the m->na reaction forces of the auxiliary speeds at (t, x): u' from the
+ * right-hand side, then F reactions = -g by pivoted LU (GEN_RT_ERR_SINGULAR
+ * when F is); nothing written (GEN_RT_OK) when the model has none */
+int gen_rt_model_eval_auxiliary_forces(const gen_rt_model *m, gen_rt_real t,
+                                       const gen_rt_real *x, const gen_rt_real *r,
+                                       const gen_rt_real *p, gen_rt_real *work, int *iwork,
+                                       gen_rt_real *F);
 /* x onto f_c = 0 (Gauss-Newton, minimum norm) and A u + b = 0; x unchanged
  * on failure; tol <= 0 and max_iter <= 0 mean 16 eps and 10 */
 int gen_rt_model_project(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *p,

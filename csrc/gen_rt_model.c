@@ -172,6 +172,27 @@ int gen_rt_model_eval_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_rea
     return GEN_RT_OK;
 }
 
+int gen_rt_model_eval_auxiliary_forces(const gen_rt_model *m, gen_rt_real t,
+                                       const gen_rt_real *x, const gen_rt_real *r,
+                                       const gen_rt_real *p, gen_rt_real *work, int *iwork,
+                                       gen_rt_real *F)
+{
+    int na = m->na, i, st;
+    gen_rt_real *dx = work, *Fm = dx + NX_(m), *g = Fm + na * na, *w = g + na;
+    if (na <= 0 || !m->auxiliary) return GEN_RT_OK;
+    /* u' of the real speeds, then the auxiliary equations at them */
+    st = gen_rt_model_rhs(m, t, x, r, p, w, iwork, dx, NULL);
+    if (st) return st;
+    m->auxiliary(x, x + m->nq, dx + m->nq, r, p, t, Fm, g);
+    if (!finite_n(na * na, Fm) || !finite_n(na, g)) return GEN_RT_ERR_NONFINITE_MODEL;
+    for (i = 0; i < na; ++i) g[i] = -g[i];
+    if ((st = gen_rt_lu_factor(na, Fm, iwork, 0))) return st;
+    if ((st = gen_rt_lu_solve(na, Fm, iwork, 1, g))) return st;
+    if (!finite_n(na, g)) return GEN_RT_ERR_NONFINITE_MODEL;
+    copy_n(na, g, F);
+    return GEN_RT_OK;
+}
+
 /* ------------------------------------------------------------------ */
 /* Constraint manifold: projection and consistent states              */
 /* ------------------------------------------------------------------ */

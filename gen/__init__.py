@@ -10,7 +10,7 @@ verified C simulators.
 from ._version import __version__
 
 from .errors import (BuildError, ConvergenceError, DivergenceError, EomgenError,  # noqa: E402
-                     ModelError, SingularError, SolverError)
+                     ModelError, SingularError, SolverError, UnusedConstantWarning)
 from .model import Model  # noqa: E402
 from .render import generate  # noqa: E402
 from .build import compile  # noqa: E402,A001
@@ -18,4 +18,4 @@ from .symbolic import linearize_symbolic  # noqa: E402
 from .verify import VerifyReport, verify  # noqa: E402
 
 __all__ = ["Model", "generate", "compile", "EomgenError", "ModelError", "BuildError",
-           "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "linearize_symbolic", "verify", "VerifyReport", "__version__"]
+           "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "linearize_symbolic", "verify", "VerifyReport", "__version__"]

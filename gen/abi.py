@@ -139,7 +139,7 @@ class Param:
     name: str
     ctype: str              # "real", "int", or a struct name
     role: str
-    size: str | None = None  # an expression in NQ, NU, NX, NR, NP, MC, MV, NS ("NU*NU")
+    size: str | None = None  # an expression in NQ, NU, NX, NR, NP, MC, MV, NS, NA ("NU*NU")
     default: str | None = None
 
 
@@ -151,6 +151,7 @@ class Function:
     ret: str = "int"        # "int" (a status), "void" or "const char *"
     work: str | None = None  # the runtime's work-size macros: GEN_RT_MODEL_<work>_WORK/_IWORK
     iwork: bool = False
+    work_args: str | None = None  # sizes the work macros take beyond the model's ("NA")
 
 
 def _params(spec):
@@ -195,6 +196,12 @@ FUNCTIONS = (
     Function("eval_rhs", _params("t:scalar, x:in:NX, r:in?:NR=r, p:in?:NP=p, dxdt:out:NX, lam:out?:MV"),
              "State derivative x' (NX) and, if lam != NULL, the multipliers (MV).",
              work="EVAL_RHS", iwork=True),
+    Function("eval_auxiliary_forces",
+             _params("t:scalar, x:in:NX, r:in?:NR=r, p:in?:NP=p, F:out:NA"),
+             "Reaction forces along the auxiliary speeds (Kane's u_auxiliary), NA: u' from the "
+             "right-hand side, then F_aux reactions = -g_aux (GEN_RT_ERR_SINGULAR when F_aux "
+             "is); NA == 0: nothing written.",
+             work="AUX", iwork=True, work_args="NA"),
     Function("project", _params("t:scalar, p:in?:NP=p, tol:value, max_iter:value::int, x:inout:NX"),
              "Project x onto f_c = 0 (Gauss-Newton, minimum norm) and the velocity constraints; "
              "x unchanged on failure.", work="PROJECT"),
@@ -280,6 +287,10 @@ class Interface:
     batch_functions: tuple = BATCH_FUNCTIONS
     structs: tuple = STRUCTS
     statuses: tuple = field(default_factory=lambda: tuple(STATUSES))
+    # reaction forces of the auxiliary speeds (NA of them): C-safe names and
+    # the user's sympy spelling
+    auxiliary_names: list = field(default_factory=list)
+    auxiliary_labels: list = field(default_factory=list)
 
     # sizes as attributes: iface.nq, iface.nx, ...
     def __getattr__(self, key):
@@ -313,6 +324,11 @@ class Interface:
         return (f"{s['NQ']}, {s['NU']}, {s['MC']}, {s['MV']}, {s['NR']}, "
                 f"{1 if self.explicit_kinematics else 0}, {accel}")
 
+    def work_args(self, fn):
+        """The arguments of fn's GEN_RT_MODEL_<work>_WORK macros."""
+        extra = [str(self.size(a)) for a in (fn.work_args or "").split(",") if a.strip()]
+        return ", ".join([self.work_dims()] + extra)
+
     def checks(self, fn):
         """The argument checks of a function in parameter order, as
         (kind, name, n): kind in default_p, default_r, in, real, out, null."""
@@ -338,7 +354,7 @@ def interface(model, real="double", accel="lu"):
     """The Interface of a canonical model (gen.Model); accel: the Plan's."""
     m = model
     sizes = {"NQ": m.nq, "NU": m.nu, "NX": m.nx, "NR": m.nr, "NP": m.np, "MC": m.mc,
-             "MV": m.mv, "NS": m.ns}
+             "MV": m.mv, "NS": m.ns, "NA": getattr(m, "na", 0)}
     return Interface(
         name=m.name, real=real, method=m.method, sizes=sizes,
         state_names=list(m.state_names), state_labels=list(m.state_labels),
@@ -349,4 +365,6 @@ def interface(model, real="double", accel="lu"):
         constants=[float(v) for v in m.p_values], has_energy=m.energy is not None,
         explicit_kinematics=m.qdot is not None,
         accel=accel, functions=FUNCTIONS, batch_functions=BATCH_FUNCTIONS, structs=STRUCTS,
-        statuses=tuple(STATUSES))
+        statuses=tuple(STATUSES),
+        auxiliary_names=list(getattr(m, "auxiliary_names", [])),
+        auxiliary_labels=list(getattr(m, "auxiliary_labels", [])))

@@ -51,6 +51,10 @@ class Simulator:
         self.nq, self.nu, self.nx = iface.nq, iface.nu, iface.nx
         self.nr, self.np, self.mc, self.mv = iface.nr, iface.np, iface.mc, iface.mv
         self.ns = iface.ns
+        # reaction forces of the auxiliary speeds (Kane's u_auxiliary)
+        self.na = iface.sizes.get("NA", 0)
+        self.auxiliary_names = list(getattr(iface, "auxiliary_names", []))
+        self.auxiliary_labels = list(getattr(iface, "auxiliary_labels", []))
         self.has_energy = iface.has_energy
         self.state_names = list(iface.state_names)
         self.input_names = list(iface.input_names)
@@ -268,6 +272,17 @@ class Simulator:
         x = self._vec(x, self.nx, "state x")
         _, lam = self._call("eval_rhs", t, x, self._inputs(r), self._params(p), t=t, state=x)
         return lam.copy()
+
+    def auxiliary_forces(self, t, x, r=None, p=None):
+        """The reaction forces along the auxiliary speeds (Kane's
+        u_auxiliary) at state x, shape (na,), in the order of
+        auxiliary_names: u' from the right-hand side, then the auxiliary
+        equations F reactions + g = 0 solved. Empty for a model without
+        auxiliary speeds."""
+        x = self._vec(x, self.nx, "state x")
+        (F,) = self._call("eval_auxiliary_forces", t, x, self._inputs(r), self._params(p),
+                          t=t, state=x)
+        return F.copy()
 
     # ---------------------------------------------------- the manifold
     def project(self, x, p=None, t=0.0, tol=0.0, max_iter=0):

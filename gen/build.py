@@ -5,12 +5,24 @@ Builds happen in a private temporary directory and are moved into the
 cache with an atomic rename, so two processes building the same model at
 once both succeed and load the same module. A failed compile raises
 BuildError with the full compiler log.
+
+The cache (cache_dir(): $EOMGEN_CACHE, else $XDG_CACHE_HOME/eomgen or
+~/.cache/eomgen) holds one folder per built module (``_eomgen_<name>_<key>``)
+and the shared runtime objects (``runtime_<key>``); everything in it can be
+deleted at any time (cache_info, clear_cache). A build's temporary directory
+is ``.<module>.<pid>.XXXX`` (with an ``owner`` file: pid and host); one left
+by a killed process (dead pid on this host, or older than STALE_SECONDS) is
+removed by the next build. A cache that cannot be written (read-only, full,
+not a directory) is one BuildError naming the folder and EOMGEN_CACHE.
 """
 from __future__ import annotations
 
+import errno
 import hashlib
 import importlib.util
 import os
+import re
+import socket
 import shutil
 import subprocess
 import sys
@@ -26,7 +38,7 @@ from .eigen import eigen_version, find_eigen
 from .ir import plan as make_plan
 from .render import EIGEN_SOURCES, RUNTIME_SOURCES, Rendered, render
 
-__all__ = ["compile", "cache_dir", "build", "load", "Built"]
+__all__ = ["compile", "cache_dir", "build", "load", "Built", "cache_info", "clear_cache"]
 
 C_FLAGS = ["-std=c99", "-O2", "-fno-strict-aliasing"]
 STRICT_FLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"]
@@ -42,6 +54,152 @@ def cache_dir() -> Path:
         return Path(env).expanduser().resolve()
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return Path(base) / "eomgen"
+
+
+# a temporary build directory whose owner cannot be checked (other host, no
+# owner file) is stale after this long; one whose process is dead at once
+STALE_SECONDS = 30 * 60
+# what eomgen puts in the cache: module folders, runtime objects, temporary dirs
+_ENTRY = re.compile(r"^(_eomgen_\w+|runtime_[0-9a-f]{16})$")
+# (older eomgen versions wrote no pid: .<module>.XXXXXXXX, stale by age)
+_TEMP = re.compile(r"^\.(_eomgen_\w+|runtime_[0-9a-f]{16})\.(?:(\d+)\.)?\w+$")
+
+
+def _cache_error(e: OSError, folder: Path, what: str):
+    """A BuildError for a cache that cannot be written, in one line."""
+    why = e.strerror or str(e)
+    if e.errno in (errno.ENOTDIR, errno.EEXIST):
+        why = "it or a part of its path is not a directory"
+    elif e.errno in (errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)):
+        why = "no space left on the device"
+    return BuildError(f"cannot {what} in the eomgen cache {folder} ({why}): set EOMGEN_CACHE to "
+                      "a writable folder (or free space there)")
+
+
+_CACHE_ERRNOS = {errno.EACCES, errno.EPERM, errno.EROFS, errno.ENOSPC, errno.ENOTDIR,
+                 getattr(errno, "EDQUOT", errno.ENOSPC)}
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:   # alive, another user's
+        return True
+    except OSError:
+        return False
+    return True
+
+
+def _temp_is_stale(path: Path, now=None) -> bool:
+    """A temporary build directory left by a dead or long-gone process."""
+    now = time.time() if now is None else now
+    m = _TEMP.match(path.name)
+    if m is None:
+        return False
+    try:
+        age = now - path.stat().st_mtime
+    except OSError:
+        return False
+    host, pid = None, (int(m.group(2)) if m.group(2) else None)
+    try:
+        fields = (path / "owner").read_text().split()
+        pid, host = int(fields[0]), fields[1]
+    except (OSError, ValueError, IndexError):
+        pass
+    if pid is not None and (host is None or host == socket.gethostname()):
+        if not _pid_alive(pid):
+            return True
+        if host is not None:
+            return age > 24 * 3600   # a reused pid does not keep it forever
+    return age > STALE_SECONDS
+
+
+def clean_stale(root=None):
+    """Remove the temporary build directories of killed builds; returns the
+    paths removed. Errors (a read-only cache) are ignored."""
+    root = Path(root) if root is not None else cache_dir()
+    removed = []
+    try:
+        items = list(root.iterdir())
+    except OSError:
+        return removed
+    now = time.time()
+    for d in items:
+        if d.name.startswith(".") and d.is_dir() and _temp_is_stale(d, now):
+            shutil.rmtree(d, ignore_errors=True)
+            if not d.exists():
+                removed.append(d)
+    return removed
+
+
+def _make_temp(root: Path, modname: str) -> Path:
+    """A private build directory in the cache, named and marked with our pid."""
+    tmp = Path(tempfile.mkdtemp(prefix=f".{modname}.{os.getpid()}.", dir=root))
+    (tmp / "owner").write_text(f"{os.getpid()} {socket.gethostname()} {time.time():.0f}\n")
+    return tmp
+
+
+def _entries(root: Path):
+    """eomgen's entries in the cache folder (module folders, runtime objects,
+    temporary build directories), nothing else."""
+    try:
+        items = sorted(root.iterdir())
+    except FileNotFoundError:
+        return []
+    return [d for d in items if _ENTRY.match(d.name) or _TEMP.match(d.name)]
+
+
+def _size(path: Path) -> int:
+    if path.is_symlink() or not path.is_dir():
+        try:
+            return path.lstat().st_size
+        except OSError:
+            return 0
+    total = 0
+    for dirpath, _dirs, fnames in os.walk(path):
+        for f in fnames:
+            try:
+                total += os.lstat(os.path.join(dirpath, f)).st_size
+            except OSError:
+                pass
+    return total
+
+
+def cache_info():
+    """{"path", "exists", "modules", "runtimes", "temporary", "entries", "bytes"}
+    of the build cache (only eomgen's entries are counted)."""
+    root = cache_dir()
+    ents = _entries(root)
+    mods = [d for d in ents if d.name.startswith("_eomgen_")]
+    rts = [d for d in ents if d.name.startswith("runtime_")]
+    tmps = [d for d in ents if d.name.startswith(".")]
+    return {"path": root, "exists": root.is_dir(), "modules": len(mods), "runtimes": len(rts),
+            "temporary": len(tmps), "entries": len(mods) + len(rts),
+            "bytes": sum(_size(d) for d in ents)}
+
+
+def clear_cache():
+    """Delete eomgen's entries from the cache (other files are left, and so
+    are the temporary directories of builds running now); returns
+    (entries removed, bytes freed). Modules already loaded keep working."""
+    root = cache_dir()
+    removed, freed = 0, 0
+    for d in _entries(root):
+        if d.name.startswith(".") and not _temp_is_stale(d):
+            continue   # a build in progress
+        size = _size(d)
+        try:
+            if d.is_dir() and not d.is_symlink():
+                shutil.rmtree(d)
+            else:
+                d.unlink()
+        except OSError as e:
+            raise _cache_error(e, root, f"delete {d.name}") from None
+        removed += 1
+        freed += size
+    return removed, freed
 
 
 def _compiler():
@@ -119,13 +277,20 @@ def build(rendered: Rendered, verbose=False, timings=None):
             timings["compile"] = 0.0
             timings["cached"] = True
         return Built(so, modname, iface)
-    root.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{modname}.", dir=root))
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        clean_stale(root)
+        tmp = _make_temp(root, modname)
+    except OSError as e:
+        raise _cache_error(e, root, "create a build directory") from None
     try:
         src = tmp / "src"
-        src.mkdir()
-        for fname, text in files.items():
-            (src / fname).write_text(text)
+        try:
+            src.mkdir()
+            for fname, text in files.items():
+                (src / fname).write_text(text)
+        except OSError as e:
+            raise _cache_error(e, root, "write the sources") from None
         import cffi
         ffi = cffi.FFI()
         try:
@@ -137,7 +302,10 @@ def build(rendered: Rendered, verbose=False, timings=None):
             # the model and the runtime as objects, compiled in parallel (the
             # runtime's objects are shared by every model with the same runtime
             # sources, scalar type and flags); cffi then compiles its wrapper
-            objects = _c_objects(name, src, tmp)
+            try:
+                objects = _c_objects(name, src, tmp)
+            except OSError as e:
+                raise _cache_error(e, root, "compile") from None
             ffi.set_source(modname, wrapper, extra_objects=[str(o) for o in objects],
                            include_dirs=[str(src)], extra_compile_args=list(C_FLAGS),
                            libraries=["m"])
@@ -150,10 +318,15 @@ def build(rendered: Rendered, verbose=False, timings=None):
                            extra_compile_args=[*CXX_FLAGS, "-isystem", str(eigen_dir)],
                            libraries=["stdc++", "m"])
         bdir = tmp / "build"
-        bdir.mkdir()
+        try:
+            bdir.mkdir()
+        except OSError as e:
+            raise _cache_error(e, root, "compile") from None
         try:
             so_path = ffi.compile(tmpdir=str(bdir), verbose=verbose)
         except Exception as e:
+            if isinstance(e, OSError) and e.errno in _CACHE_ERRNOS:
+                raise _cache_error(e, root, "compile") from None
             if backend == "c":
                 ok, log = _compile_log(src, own)
             else:
@@ -162,15 +335,18 @@ def build(rendered: Rendered, verbose=False, timings=None):
             raise BuildError(f"compiling the model '{name}' failed ({type(e).__name__}: {e})",
                              log or str(e)) from None
         dest_tmp = tmp / modname
-        dest_tmp.mkdir()
-        shutil.copy2(so_path, dest_tmp / Path(so_path).name)
-        shutil.copytree(src, dest_tmp / "src")
+        try:
+            dest_tmp.mkdir()
+            shutil.copy2(so_path, dest_tmp / Path(so_path).name)
+            shutil.copytree(src, dest_tmp / "src")
+        except OSError as e:
+            raise _cache_error(e, root, "store the module") from None
         try:
             os.rename(dest_tmp, final)
-        except OSError:
+        except OSError as e:
             # another process won the race: use its build
             if _find_module(final, modname) is None:
-                raise
+                raise _cache_error(e, root, "store the module") from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     so = _find_module(final, modname)

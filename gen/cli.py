@@ -10,7 +10,9 @@ unless ``--debug``.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib.util
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -28,6 +30,7 @@ EXAMPLES = """examples:
   eomgen verify examples/seed_pendulum.py --samples 20
   eomgen generate examples/seed_pendulum.py -o out/pend_f --real float
   eomgen report examples/seed_pendulum.py --target cortex-m4f -o footprint.txt
+  eomgen cache            (where the build cache is, its size; eomgen cache clear empties it)
 
 A model file defines model() returning a gen.Model (or name a function: FILE.py:func).
 Exit codes: 0 ok, 1 failure, 2 usage error. --debug shows Python tracebacks.
@@ -157,22 +160,80 @@ def cmd_generate(a, progress):
     return 0
 
 
+@contextlib.contextmanager
+def _folder_lock(folder: Path, progress):
+    """Hold an exclusive lock on an output folder (a file next to it: the
+    folder itself is replaced by generate) while generating and building into
+    it; a second `eomgen build` into the same folder waits. fcntl on POSIX;
+    elsewhere no lock."""
+    try:
+        import fcntl
+    except ImportError:   # not POSIX
+        yield
+        return
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    lock = folder.parent / f".{folder.name}.eomgen-lock"
+    with open(lock, "a") as fh:
+        try:
+            fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            with progress.stage(f"wait for another eomgen build of {folder}"):
+                fcntl.flock(fh.fileno(), fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh.fileno(), fcntl.LOCK_UN)
+
+
 def cmd_build(a, progress):
     from .render import generate
+    if a.stack_limit is not None and a.stack_limit < 0:
+        raise UsageError(f"--stack-limit must be a number of bytes >= 0, got {a.stack_limit}")
+    if a.stack_limit and a.backend != "c":
+        raise UsageError("--stack-limit bounds the C library's frames: it needs --backend c")
     m = load_model(a.file, progress)
-    with progress.stage("generate"):
-        generate(m, a.output, real=a.real, backend=a.backend)
-    bld = Path(a.output) / "build"
-    with progress.stage("cmake configure"):
-        r = subprocess.run(["cmake", "-S", a.output, "-B", str(bld),
-                            "-DCMAKE_BUILD_TYPE=Release"], capture_output=True, text=True)
-    if r.returncode == 0:
-        with progress.stage("cmake build"):
-            r = subprocess.run(["cmake", "--build", str(bld)], capture_output=True, text=True)
+    out = Path(a.output)
+    bld = out / "build"
+    cfg = ["cmake", "-S", str(out), "-B", str(bld), "-DCMAKE_BUILD_TYPE=Release"]
+    if a.backend == "c":
+        # always given, so that a limit from an earlier run is not kept in the cache
+        cfg.append(f"-D{m.name.upper()}_STACK_LIMIT={a.stack_limit or 0}")
+    with _folder_lock(out.resolve(), progress):
+        with progress.stage("generate"):
+            generate(m, a.output, real=a.real, backend=a.backend)
+        with progress.stage("cmake configure"):
+            r = subprocess.run(cfg, capture_output=True, text=True)
+        if r.returncode == 0:
+            with progress.stage("cmake build"):
+                r = subprocess.run(["cmake", "--build", str(bld), "--parallel",
+                                    str(os.cpu_count() or 1)], capture_output=True, text=True)
     if r.returncode != 0:
         raise EomgenError("the CMake build failed:\n" + r.stdout + r.stderr)
     exe = bld / f"{m.name}_sim"
     print(exe)
+    return 0
+
+
+def _megabytes(n):
+    return f"{n / 1e6:.1f} MB" if n >= 1e5 else f"{n / 1e3:.1f} kB"
+
+
+def cmd_cache(a, progress):
+    from .build import cache_info, clear_cache
+    if a.action == "clear":
+        info = cache_info()
+        removed, freed = clear_cache()
+        print(f"removed {removed} entries ({_megabytes(freed)}) from {info['path']}")
+        return 0
+    info = cache_info()
+    print(f"cache: {info['path']}" + ("" if info["exists"] else " (does not exist yet)"))
+    print(f"entries: {info['entries']} ({info['modules']} compiled models, "
+          f"{info['runtimes']} runtime builds"
+          + (f", {info['temporary']} builds in progress or stale" if info["temporary"] else "")
+          + ")")
+    print(f"size: {_megabytes(info['bytes'])}")
+    print("set by EOMGEN_CACHE (else $XDG_CACHE_HOME/eomgen or ~/.cache/eomgen); "
+          "safe to delete: eomgen cache clear")
     return 0
 
 
@@ -248,6 +309,9 @@ def cmd_verify(a, progress):
 def cmd_report(a, progress):
     import json
     from .footprint import format_table, report_many
+    if a.stack_limit < 0:
+        raise UsageError(f"--stack-limit must be a number of bytes >= 0 (0: no bound), "
+                         f"got {a.stack_limit}")
     m = load_model(a.file, progress)
     reals = ["float", "double"] if a.real == "both" else [a.real]
     with progress.stage("build and measure the embedded library"):
@@ -306,7 +370,7 @@ def build_parser():
                              "models.", epilog=EXAMPLES, parents=[_common(defaults=True)])
     ap.add_argument("--version", action="version", version=f"eomgen {__version__}")
     sub = ap.add_subparsers(dest="cmd", required=True, parser_class=_Parser,
-                            metavar="{generate,build,simulate,linearize,verify,report}")
+                            metavar="{generate,build,simulate,linearize,verify,report,cache}")
 
     g = _sub(sub, "generate", "write the model's C (or C++/Eigen) sources and a CMake project",
              "eomgen generate examples/seed_pendulum.py -o out/pend --real float", common)
@@ -324,6 +388,10 @@ def build_parser():
     b.add_argument("-o", "--output", required=True, help="output folder (build in OUTPUT/build)")
     b.add_argument("--backend", default="c", choices=["c", "eigen"])
     _add_real(b)
+    b.add_argument("--stack-limit", type=int, default=None, metavar="BYTES",
+                   help="fail the library build on a function frame above BYTES "
+                        "(-Wstack-usage, GCC; the embedded profile's bound, 8192 by default "
+                        "when cross-compiling); default: no bound on the host")
     b.set_defaults(fn=cmd_build)
 
     s = _sub(sub, "simulate", "simulate the compiled model; write CSV and/or a plot (states, "
@@ -376,11 +444,19 @@ def build_parser():
     _add_real(rp, default="both", both=True)
     rp.add_argument("--target", default="cortex-m4f", choices=["cortex-m4f", "host"])
     rp.add_argument("--stack-limit", type=int, default=8192, metavar="BYTES",
-                    help="-Wstack-usage bound on every function frame (default 8192)")
+                    help="-Wstack-usage bound on every function frame (default 8192; "
+                         "0: no bound)")
     rp.add_argument("--build-dir", help="keep the build here (default: a temporary directory)")
     rp.add_argument("-o", "--output", help="write the table to this file (footprint.txt)")
     rp.add_argument("--json", metavar="FILE", help="also write the reports as JSON")
     rp.set_defaults(fn=cmd_report)
+
+    ca = _sub(sub, "cache", "show where eomgen's build cache is, its entries and size; "
+              "'clear' deletes eomgen's entries from it",
+              "eomgen cache clear", common)
+    ca.add_argument("action", nargs="?", default="info", choices=["info", "clear"],
+                    help="info (default) or clear")
+    ca.set_defaults(fn=cmd_cache)
     return ap
 
 

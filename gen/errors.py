@@ -46,3 +46,14 @@ class SingularError(SolverError):
 class ConvergenceError(SolverError):
     """Newton projection / consistent-state computation did not converge,
     or the adaptive integrator could not meet its tolerance."""
+
+
+class DivergenceError(ConvergenceError):
+    """The simulated state grew beyond the range of the scalar type
+    (overflow): the model or the step is unstable, not singular."""
+
+
+class UnusedConstantWarning(UserWarning):
+    """A constant given in ``constants`` appears in no expression of the
+    model (a misspelt or stale entry); it is kept as a parameter but has no
+    effect on the results."""

@@ -4,6 +4,21 @@ outputs, and one CSE'd list of assignments each.
 Jacobians are formed by forward-mode differentiation of the CSE'd
 assignment list (an expression graph), never by expanding full symbolic
 matrices, so they stay the size of the graph as models grow.
+
+Non-smooth functions are differentiated almost everywhere (``partial``),
+never into sympy's ``DiracDelta``, ``Derivative(sign(x), x)`` or
+``re``/``im`` terms, which no printer can print:
+
+    d Abs(a)       = sign(a) da                      (0 at a = 0)
+    d sign(a)      = d Heaviside(a) = d floor(a) = d ceiling(a) = 0
+    d Max(a, b)    = a > b ? da : (a < b ? db : (da + db)/2)   (Min: a < b ? ...)
+    d Mod(a, b)    = da - floor(a/b) db
+    d Piecewise((e1, c1), ..., (en, True)) = Piecewise((de1, c1), ..., (den, True))
+
+At a kink the value is the mean of the one-sided derivatives for Abs, Min
+and Max, zero at the jumps of sign, Heaviside, floor and ceiling, and the
+derivative of the selected branch for Piecewise. Expressions without these
+functions are differentiated by sympy's ``diff``, unchanged.
 """
 from __future__ import annotations
 
@@ -12,7 +27,7 @@ from dataclasses import dataclass, field
 import sympy as sm
 
 __all__ = ["Arg", "Output", "Kernel", "Plan", "plan", "make_kernel", "differentiate_graph",
-           "build_kernels", "mass_structure"]
+           "partial", "build_kernels", "mass_structure"]
 
 
 @dataclass(frozen=True)
@@ -90,6 +105,78 @@ def make_kernel(name, args, outputs, cse=True):
     return prune(Kernel(name, list(args), outs, list(assignments)))
 
 
+_NONSMOOTH = (sm.Abs, sm.sign, sm.Heaviside, sm.floor, sm.ceiling, sm.Min, sm.Max,
+              sm.Piecewise, sm.Mod)
+_ZERO_DERIVATIVE = (sm.sign, sm.Heaviside, sm.floor, sm.ceiling)
+
+
+def partial(expr, s):
+    """d expr / d s, almost everywhere (the rules in the module docstring).
+    Subexpressions free of non-smooth functions go to sympy's diff."""
+    memo = {}
+
+    def d(e):
+        if e == s:
+            return sm.S.One
+        if e.is_Atom or not e.has(s):
+            return sm.S.Zero
+        if not e.has(*_NONSMOOTH):
+            return e.diff(s)
+        hit = memo.get(e)
+        if hit is not None:
+            return hit
+        memo[e] = out = rule(e)
+        return out
+
+    def rule(e):
+        if e.is_Add:
+            return sm.Add(*[d(a) for a in e.args])
+        if e.is_Mul:
+            terms = []
+            for i, a in enumerate(e.args):
+                da = d(a)
+                if da != 0:
+                    terms.append(sm.Mul(*(e.args[:i] + (da,) + e.args[i + 1:])))
+            return sm.Add(*terms)
+        if e.is_Pow:
+            b, x = e.args
+            db, dx = d(b), d(x)
+            out = sm.S.Zero
+            if db != 0:
+                out += x * b**(x - 1) * db
+            if dx != 0:
+                out += e * sm.log(b) * dx
+            return out
+        if isinstance(e, sm.Abs):
+            return sm.sign(e.args[0]) * d(e.args[0])
+        if isinstance(e, _ZERO_DERIVATIVE):
+            return sm.S.Zero
+        if isinstance(e, (sm.Min, sm.Max)):
+            a = e.args[0]
+            rest = e.args[1] if len(e.args) == 2 else e.func(*e.args[1:])
+            da, dr = d(a), d(rest)
+            if da == dr:
+                return da
+            first, second = (a > rest, a < rest) if isinstance(e, sm.Max) else (a < rest, a > rest)
+            return sm.Piecewise((da, first), (dr, second), ((da + dr) / 2, True))
+        if isinstance(e, sm.Piecewise):
+            return sm.Piecewise(*[(d(x), c) for x, c in e.args])
+        if isinstance(e, sm.Mod):
+            a, b = e.args
+            return d(a) - sm.floor(a / b) * d(b)
+        if isinstance(e, sm.Function):
+            # chain rule through a smooth function of non-smooth arguments
+            out = sm.S.Zero
+            for i, a in enumerate(e.args):
+                da = d(a)
+                if da != 0:
+                    out += e.fdiff(i + 1) * da
+            return out
+        return e.diff(s)
+
+    return d(expr)
+
+
 def differentiate_graph(assignments, exprs, wrt, prefix="d"):
     """Forward-mode derivatives of ``exprs`` (written over the temporaries
     of ``assignments``) with respect to the symbols ``wrt``.
@@ -112,11 +199,11 @@ def differentiate_graph(assignments, exprs, wrt, prefix="d"):
         out = {}
         for s in sorted(e.free_symbols, key=sm.default_sort_key):
             if s in widx:
-                pd = e.diff(s)
+                pd = partial(e, s)
                 j = widx[s]
                 out[j] = out.get(j, 0) + pd
             elif s in deriv and deriv[s]:
-                pd = e.diff(s)
+                pd = partial(e, s)
                 if pd == 0:
                     continue
                 for j, ds in deriv[s].items():
@@ -356,6 +443,12 @@ def build_kernels(model, mass=None):
             "velocity_constraints", [Aq, Au, Ap, At], [("fv", m.A * U + m.b)])
     if m.energy is not None:
         kernels["energy"] = make_kernel("energy", [Aq, Au, Ap, At], [("E", sm.Matrix([m.energy]))])
+    if getattr(m, "na", 0):
+        # reaction forces along the auxiliary speeds: F reactions + g = 0,
+        # g in the accelerations ud (the runtime computes them first)
+        kernels["auxiliary"] = make_kernel(
+            "auxiliary", [Aq, Au, Arg("ud", tuple(m.ud)), Ar, Ap, At],
+            [("F", m.aux_F), ("g", m.aux_g)])
 
     # linearization pieces (sympy's Linearizer f_0..f_4, f_c, f_v, f_a)
     kin_res = m.Kqd * sm.Matrix(Qd) + m.Ku * U + m.kf

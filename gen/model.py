@@ -20,9 +20,9 @@ u = [u_ind, u_dep] in the KanesMethod's order; for Lagrange models
 q is the LagrangesMethod's coordinate order and u = q'.
 
 Multiplier sign: M u' = f + A^T lam with A = d(velocity constraints)/du.
-For a LagrangesMethod this lam equals the values sympy's
-``solve_multipliers`` returns (sympy's own ``eom`` uses the opposite sign,
-sympy issue 30215).
+For a LagrangesMethod this lam equals the multiplier part of the solution of
+sympy's ``mass_matrix_full`` / ``forcing_full`` system (and of ``LM.rhs()``),
+the negative of what ``LM.solve_multipliers`` returns (sympy issue 30215).
 
 The C naming rules (validate_name, c_name, c_names) live in gen.names and
 are re-exported here.
@@ -36,6 +36,7 @@ import sympy as sm
 from sympy.physics import mechanics as me
 
 from .errors import ModelError
+from .printers import check_printable
 from .names import C_KEYWORDS, C_LIBRARY_NAMES, c_name, c_names, validate_name  # noqa: F401
 
 __all__ = ["Model", "validate_name", "c_name", "c_names"]
@@ -57,6 +58,172 @@ def _sym_name(s) -> str:
     if isinstance(s, sm.Function) or (isinstance(s, sm.Expr) and s.is_Function):
         return type(s).__name__ if not hasattr(s, "func") else str(s.func)
     return str(s)
+
+
+# ---------------------------------------------------------------- containers
+# Model.from_kanes / from_lagrange / from_system accept the formed method or
+# an object holding one: a sympy System (``eom_method``), a JointsMethod
+# (``method``) or a PyDy System (``eom_method``, ``constants``,
+# ``specifieds``). They never call ``form_eoms`` themselves: that call picks
+# the backend (Kane or Lagrange) and its options, which is the user's choice.
+
+_ACCEPTED = {
+    "kane": ("Model.from_kanes", "KanesMethod",
+             "use Model.from_lagrange or Model.from_system"),
+    "lagrange": ("Model.from_lagrange", "LagrangesMethod",
+                 "use Model.from_kanes or Model.from_system"),
+}
+
+
+def _is_pydy_system(obj):
+    try:
+        from pydy.system import System as PydySystem
+    except Exception:                          # pydy missing or broken
+        PydySystem = None
+    if PydySystem is not None and isinstance(obj, PydySystem):
+        return True
+    # duck type (a stand-in, or another pydy version): the three attributes
+    # PyDy documents, and not sympy's System (which has no specifieds)
+    return (not isinstance(obj, me.System) and hasattr(type(obj), "eom_method")
+            and hasattr(obj, "constants") and hasattr(obj, "specifieds"))
+
+
+def _unwrap(obj):
+    """(formed method or None, description of obj, container kind, what the
+    user must call to form it). kind: None (a method itself), "system",
+    "joints" or "pydy"."""
+    if isinstance(obj, (me.KanesMethod, me.LagrangesMethod)):
+        return obj, type(obj).__name__, None, None
+    if isinstance(obj, me.System):
+        m = obj.eom_method
+        kind, label, call = "system", "System", "system.form_eoms()"
+    elif isinstance(obj, me.JointsMethod):
+        m = obj.method
+        kind, label, call = "joints", "JointsMethod", "method.form_eoms()"
+    elif _is_pydy_system(obj):
+        m = obj.eom_method
+        kind, label, call = "pydy", "pydy System", "km.kanes_equations(bodies, loads)"
+    else:
+        return None, type(obj).__name__, None, None
+    if m is None:
+        return None, f"{label} without equations of motion", kind, call
+    return m, f"{label} with a {type(m).__name__}", kind, call
+
+
+def _method_of(obj, want):
+    """The formed KanesMethod (want="kane") or LagrangesMethod ("lagrange")
+    held by obj, and obj's container kind; a ModelError naming what was given
+    and what is accepted otherwise."""
+    caller, cls_name, other = _ACCEPTED[want]
+    m, desc, kind, call = _unwrap(obj)
+    accepted = (f"(accepted: a {cls_name}, or a sympy System, JointsMethod or pydy "
+                "System holding one)")
+    if m is None and kind is not None:
+        raise ModelError(
+            f"{caller} needs a {cls_name}, got {desc}: call {call} first (eomgen does not "
+            f"form the equations itself: the backend is your choice) {accepted}")
+    want_cls = me.KanesMethod if want == "kane" else me.LagrangesMethod
+    if not isinstance(m, want_cls):
+        hint = f": {other}" if isinstance(m, (me.KanesMethod, me.LagrangesMethod)) else ""
+        raise ModelError(f"{caller} needs a {cls_name}, got {desc}{hint} {accepted}")
+    return m, kind
+
+
+def _pydy_defaults(obj):
+    """(constants, inputs) of a PyDy System: its constants dict as given, and
+    its specified quantities (the keys of its specifieds, then any other
+    specified symbol it knows, by name)."""
+    constants = dict(obj.constants or {})
+    spec = obj.specifieds or {}
+    inputs = []
+    if "symbols" in spec and "values" in spec:
+        inputs = list(spec["symbols"])
+    else:
+        for k in spec:
+            inputs.extend(k if isinstance(k, tuple) else [k])
+    rest = getattr(obj, "specifieds_symbols", None) or ()
+    inputs += sorted((s for s in rest if s not in inputs), key=str)
+    return constants, inputs
+
+
+def _lagrange_partition(system, lm, partition):
+    """q_ind/q_dep/qd_ind/qd_dep for a LagrangesMethod from a sympy System:
+    the user's where given, else the System's coordinates and, for the
+    derivatives, its speeds when they are the coordinate derivatives and
+    split as the velocity constraints need (a Lagrange System built with q'
+    as the joints' speeds), else q_ind' and q_dep'."""
+    out = dict(partition)
+    t = me.dynamicsymbols._t
+    if not out.get("q_ind") and not out.get("q_dep"):
+        out["q_ind"], out["q_dep"] = list(system.q_ind), list(system.q_dep)
+    if not out.get("qd_ind") and not out.get("qd_dep"):
+        qdots = {qi.diff(t) for qi in lm.q}
+        u_ind, u_dep = list(system.u_ind), list(system.u_dep)
+        n_vc = len(lm.coneqs) if lm.coneqs is not None else 0
+        if (u_ind or u_dep) and all(s in qdots for s in u_ind + u_dep) \
+                and len(u_ind) + len(u_dep) == len(lm.q) and len(u_dep) == n_vc:
+            out["qd_ind"], out["qd_dep"] = u_ind, u_dep
+        else:
+            out["qd_ind"] = [s.diff(t) for s in (out.get("q_ind") or [])]
+            out["qd_dep"] = [s.diff(t) for s in (out.get("q_dep") or [])]
+    return out
+
+
+def _user_stacklevel():
+    """warnings.warn's stacklevel, from the function calling this, of the
+    first frame outside the gen package (the user's call)."""
+    import os
+    import sys
+    here = os.path.dirname(os.path.abspath(__file__))
+    f, level = sys._getframe(1), 1
+    while f is not None and os.path.dirname(os.path.abspath(f.f_code.co_filename)) == here:
+        f, level = f.f_back, level + 1
+    return level
+
+
+def _constant_value(c, v):
+    """The float value of constant c, or a ModelError naming c (as the user
+    spelt it) and the value: NaN, infinite, complex, symbolic or not a
+    number at all."""
+    import math
+
+    import numpy as np
+
+    shown = repr(v) if isinstance(v, (str, bytes)) else str(v)
+
+    def refuse(what):
+        raise ModelError(f"constant {c} has a value {shown} that is {what}")
+
+    finite_real = "; constants must be finite real numbers"
+    if isinstance(v, (str, bytes)):
+        refuse("not a number")
+    if isinstance(v, (complex, np.complexfloating)) or (
+            isinstance(v, np.ndarray) and v.dtype.kind == "c"):
+        refuse("complex" + finite_real)
+    if isinstance(v, sm.Basic):
+        if not isinstance(v, sm.Expr):
+            refuse("not a number")
+        free = sorted(str(s) for s in v.free_symbols)
+        if free:
+            refuse(f"a sympy expression in {', '.join(free)}, not a number; give its "
+                   "numeric value")
+        if v.has(sm.nan):
+            refuse("NaN" + finite_real)
+        if v.has(sm.zoo, sm.oo, -sm.oo):
+            refuse("infinite" + finite_real)
+        re_, im_ = sm.N(v, 20).as_real_imag()
+        if im_ != 0:
+            refuse("complex" + finite_real)
+        v = re_
+    try:
+        fv = float(v)
+    except (TypeError, ValueError):
+        refuse("not a number")
+    if math.isnan(fv):
+        refuse("NaN" + finite_real)
+    if math.isinf(fv):
+        refuse("infinite" + finite_real)
+    return fv
 
 
 @dataclass
@@ -104,6 +271,15 @@ class Model:
     state_labels: list = field(default_factory=list)
     input_labels: list = field(default_factory=list)
     constant_labels: list = field(default_factory=list)
+    # auxiliary speeds (Kane's u_auxiliary): the reaction forces along them
+    # solve aux_F reactions + aux_g = 0 (NA rows, aux_F square), with aux_F
+    # and aux_g in q, u, ud (the internal symbols of u'), r, p, t
+    aux_F: sm.Matrix | None = None
+    aux_g: sm.Matrix | None = None
+    ud: list = field(default_factory=list)
+    reaction_orig: list = field(default_factory=list)
+    auxiliary_names: list = field(default_factory=list)   # C-safe, unique
+    auxiliary_labels: list = field(default_factory=list)  # as sympy prints them
 
     # ------------------------------------------------------------------ sizes
     @property
@@ -117,6 +293,11 @@ class Model:
     @property
     def nx(self):
         return self.nq + self.nu
+
+    @property
+    def na(self):
+        """Number of auxiliary speeds (= reaction forces)."""
+        return 0 if self.aux_F is None else self.aux_F.shape[0]
 
     @property
     def nr(self):
@@ -160,6 +341,10 @@ class Model:
             parts.append(sm.srepr(mat.xreplace(sub)))
         if self.energy is not None:
             parts.append(sm.srepr(self.energy.xreplace(sub)))
+        if self.na:
+            sub.update({s: sm.Symbol(f"_ud{i}") for i, s in enumerate(self.ud)})
+            parts += [repr(self.auxiliary_names), sm.srepr(self.aux_F.xreplace(sub)),
+                      sm.srepr(self.aux_g.xreplace(sub))]
         for part in parts:
             h.update(part.encode())
             h.update(b"\0")
@@ -168,20 +353,31 @@ class Model:
     # ------------------------------------------------------------ builders
     @classmethod
     def from_kanes(cls, km, constants=None, inputs=None, name="model",
-                   energy=None):
+                   energy=None, reactions=None):
         """Build from a ``KanesMethod`` after ``kanes_equations``.
+
+        km may also be a sympy ``System`` or ``JointsMethod`` after
+        ``form_eoms()`` with the Kane backend, or a PyDy ``System`` (whose
+        ``constants`` and ``specifieds`` give constants and inputs when
+        these are None); see :meth:`from_system`.
 
         constants: {symbol: value} for every parameter; inputs: symbols or
         functions of time that are inputs r (in this order); energy: an
         optional expression of the total energy (for diagnostics).
         """
         validate_name(name)
-        if not isinstance(km, me.KanesMethod):
-            raise ModelError(f"from_kanes needs a KanesMethod, got {type(km).__name__}")
+        container = km
+        km, kind = _method_of(km, "kane")
+        if kind == "pydy":
+            pd_constants, pd_inputs = _pydy_defaults(container)
+            constants = pd_constants if constants is None else constants
+            inputs = pd_inputs if inputs is None else inputs
         if getattr(km, "_fr", None) is None:
             raise ModelError("call km.kanes_equations(bodies, loads) before Model.from_kanes")
-        if getattr(km, "_uaux", None) is not None and len(km._uaux) > 0:
-            raise ModelError("auxiliary speeds (u_auxiliary) are not supported")
+        uaux = list(km._uaux) if getattr(km, "_uaux", None) is not None else []
+        if reactions is not None and not uaux:
+            raise ModelError("reactions given but the KanesMethod has no auxiliary speeds "
+                             "(u_auxiliary)")
         t = me.dynamicsymbols._t
         q = list(km.q)
         u = list(km.u)
@@ -190,9 +386,13 @@ class Model:
         nud = len(km._udep) if km._udep is not None else 0
         qdots = [qi.diff(t) for qi in q]
 
-        Kqd = sm.Matrix(km._k_kqdot)
-        Ku = sm.Matrix(km._k_ku)
-        kf = sm.Matrix(km._f_k)
+        # the kinematic equations as the user wrote them (Kqd q' + Ku u + kf = 0),
+        # never sympy's symbolic solve for q' (explicit_kinematics=True), whose
+        # expressions can be 0/0 at regular configurations (ZYX Euler angles at
+        # hover): q' is solved numerically at run time when Kqd is not diagonal
+        Kqd = sm.Matrix(getattr(km, "_k_kqdot_implicit", km._k_kqdot))
+        Ku = sm.Matrix(getattr(km, "_k_ku_implicit", km._k_ku))
+        kf = sm.Matrix(getattr(km, "_f_k_implicit", km._f_k))
         fc = sm.Matrix(km._f_h) if km._f_h is not None and len(km._f_h) else sm.zeros(0, 1)
         if nud:
             A = sm.Matrix(km._k_nh)
@@ -215,6 +415,21 @@ class Model:
             km_free.kanes_equations(km.bodies, km.loads)
             M, f = sm.Matrix(km_free.mass_matrix), sm.Matrix(km_free.forcing)
 
+        aux = None
+        if uaux:
+            # the auxiliary speeds and their derivatives are zero in every
+            # equation of the real speeds (sympy zeroes them in its own M, f;
+            # the unconstrained M, f above are formed again, so do it here)
+            zero = _aux_zero(uaux, t)
+            M, f = M.xreplace(zero[0]).xreplace(zero[1]), f.xreplace(zero[0]).xreplace(zero[1])
+            aux = _kane_auxiliary(km, q, u, uaux, inputs, reactions, t, zero)
+            hit = sorted({_sym_name(r_) for r_ in aux[1] if M.has(r_) or f.has(r_)})
+            if hit:
+                raise ModelError(
+                    f"the reaction force(s) {', '.join(hit)} appear in the equations of motion of "
+                    "the real speeds (mass matrix or forcing): eomgen computes reactions from "
+                    "the motion, which must not depend on them (for example a friction force "
+                    "proportional to a normal force); not supported")
         qdot_map = dict(km._qdot_u_map) if km._qdot_u_map else {}
         return cls._finish(
             name=name, method="kane", t=t, q=q, u=u, qdots=qdots, udots=[ui.diff(t) for ui in u],
@@ -222,7 +437,7 @@ class Model:
             u_ind=list(range(nu - nud)), u_dep=list(range(nu - nud, nu)),
             Kqd=Kqd, Ku=Ku, kf=kf, M=M, f=f, A=A, b=b, fc=fc,
             qdot_subs=qdot_map, constants=constants, inputs=inputs, energy=energy,
-            speed_names=[_sym_name(x) for x in u])
+            speed_names=[_sym_name(x) for x in u], aux=aux)
 
     @classmethod
     def from_lagrange(cls, lm, q_ind=None, qd_ind=None, q_dep=None, qd_dep=None,
@@ -231,10 +446,24 @@ class Model:
 
         q_ind/q_dep partition the coordinates, qd_ind/qd_dep their
         derivatives, as for sympy's ``LagrangesMethod.linearize``. The state
-        is x = [q, q'] in the method's coordinate order."""
+        is x = [q, q'] in the method's coordinate order.
+
+        lm may also be a sympy ``System`` or ``JointsMethod`` after
+        ``form_eoms(LagrangesMethod)``; with a System and no partition given,
+        the System's own q_ind/q_dep (and u_ind/u_dep when they are the
+        coordinate derivatives, else q_ind'/q_dep') are used."""
         validate_name(name)
-        if not isinstance(lm, me.LagrangesMethod):
-            raise ModelError(f"from_lagrange needs a LagrangesMethod, got {type(lm).__name__}")
+        container = lm
+        lm, kind = _method_of(lm, "lagrange")
+        if kind == "system":
+            part = _lagrange_partition(container, lm, dict(
+                q_ind=q_ind, q_dep=q_dep, qd_ind=qd_ind, qd_dep=qd_dep))
+            q_ind, q_dep = part["q_ind"], part["q_dep"]
+            qd_ind, qd_dep = part["qd_ind"], part["qd_dep"]
+        elif kind == "pydy":
+            pd_constants, pd_inputs = _pydy_defaults(container)
+            constants = pd_constants if constants is None else constants
+            inputs = pd_inputs if inputs is None else inputs
         if getattr(lm, "eom", None) is None:
             raise ModelError("call lm.form_lagranges_equations() before Model.from_lagrange")
         t = me.dynamicsymbols._t
@@ -305,11 +534,58 @@ class Model:
             qdot_subs={}, constants=constants, inputs=inputs, energy=energy,
             speed_names=[_sym_name(x) + "_d" for x in q])
 
+    @classmethod
+    def from_system(cls, obj, constants=None, inputs=None, name="model", energy=None,
+                    **partition):
+        """Build from whatever holds formed equations of motion: a
+        ``KanesMethod`` or ``LagrangesMethod``, a sympy ``System`` or
+        ``JointsMethod`` after ``form_eoms()`` (either backend), or a PyDy
+        ``System``. Dispatches to :meth:`from_kanes` or :meth:`from_lagrange`
+        on the formed method.
+
+        partition: the further keywords of the builder: q_ind, q_dep, qd_ind,
+        qd_dep for Lagrange models (a sympy System's own partition is the
+        default), those of from_kanes for Kane models. For a PyDy System,
+        constants=None takes its ``constants`` dict and inputs=None its
+        specified quantities. A System whose ``form_eoms()`` was not called
+        (or whose equations were reset by a later change) is refused with a
+        ModelError saying so: eomgen never forms the equations itself."""
+        m, desc, kind, call = _unwrap(obj)
+        needs = "Model.from_system needs a KanesMethod or LagrangesMethod"
+        accepted = ("(accepted: a KanesMethod or LagrangesMethod, or a sympy System, "
+                    "JointsMethod or pydy System holding one)")
+        if m is None and kind is not None:
+            raise ModelError(f"{needs}, got {desc}: call {call} first {accepted}")
+        import inspect
+        lagrange_part = {"q_ind", "q_dep", "qd_ind", "qd_dep"}
+        if isinstance(m, me.KanesMethod):
+            builder = cls.from_kanes
+            given = sorted(set(partition) & lagrange_part)
+            if given:
+                raise ModelError(
+                    f"{', '.join(given)} given for a Kane model ({desc}): the "
+                    "partition of a KanesMethod is its own (q_ind/q_dependent, "
+                    "u_ind/u_dependent)")
+        elif isinstance(m, me.LagrangesMethod):
+            builder = cls.from_lagrange
+        else:
+            raise ModelError(f"{needs}, got {desc} {accepted}")
+        # the builder's own further keywords (partition, reactions, ...)
+        extra = [k for k in inspect.signature(builder).parameters
+                 if k not in ("km", "lm", "constants", "inputs", "name", "energy")]
+        bad = sorted(set(partition) - set(extra))
+        if bad:
+            raise ModelError(
+                f"unknown argument(s) {', '.join(bad)} for Model.from_system with {desc}: "
+                f"accepted are {', '.join(extra) or 'none'}")
+        return builder(obj, constants=constants, inputs=inputs, name=name, energy=energy,
+                       **partition)
+
     # ------------------------------------------------------------ internals
     @classmethod
     def _finish(cls, *, name, method, t, q, u, qdots, udots, q_ind, q_dep, u_ind,
                 u_dep, Kqd, Ku, kf, M, f, A, b, fc, qdot_subs, constants, inputs,
-                energy, speed_names):
+                energy, speed_names, aux=None):
         constants = dict(constants or {})
         inputs = list(inputs or [])
         nq, nu = len(q), len(u)
@@ -325,13 +601,9 @@ class Model:
                 raise ModelError(f"constant {c} must be a sympy Symbol, got {type(c).__name__}")
             if c in seen:
                 raise ModelError(f"{c} is declared both as an input and as a constant")
-        values = []
-        for c, v in constants.items():
-            try:
-                fv = float(v)
-            except (TypeError, ValueError):
-                raise ModelError(f"constant {c} has a value {v!r} that is not a number") from None
-            values.append(fv)
+        # finite real numbers only (NaN, inf, complex, symbolic: ModelError
+        # naming the constant and its value), before anything is generated
+        values = [_constant_value(c, v) for c, v in constants.items()]
         for i, s in enumerate(list(q) + list(u)):
             if s in seen or s in constants:
                 raise ModelError(f"{s} is a coordinate or speed and cannot be an input or constant")
@@ -365,6 +637,7 @@ class Model:
             if qd_subs:
                 mat = mat.xreplace(qd_subs) if mat.shape[0] * mat.shape[1] else mat
             out = mat.xreplace(sub) if mat.shape[0] * mat.shape[1] else mat
+            check_printable(out, what, {v: k for k, v in sub.items()}, T)
             _check_expressions(out, what, set(Q) | set(U) | set(R) | set(P) | {T})
             return out
 
@@ -377,6 +650,47 @@ class Model:
         E_ = None
         if energy is not None:
             E_ = conv(sm.Matrix([energy]), "energy")[0]
+        # auxiliary equations F reactions + g = 0: u' becomes the symbols UD
+        UD, aux_F_, aux_g_, reactions = [], None, None, []
+        if aux is not None:
+            UD = [sm.Dummy(f"ud{i}") for i in range(nu)]
+            usub = dict(zip(udots, UD))
+            back = {v: k for k, v in sub.items()}
+            back.update({v: k for k, v in usub.items()})
+            allowed = set(Q) | set(U) | set(UD) | set(R) | set(P) | {T}
+
+            def conv_aux(mat, what):
+                mat = sm.Matrix(mat)
+                if qd_subs:
+                    mat = mat.xreplace(qd_subs)
+                mat = mat.xreplace(usub).xreplace(sub)     # u' before u
+                check_printable(mat, what, back, T)
+                _check_expressions(mat, what, allowed)
+                return mat
+
+            aux_F_ = conv_aux(aux[0], "auxiliary equations (reaction coefficients)")
+            aux_g_ = conv_aux(aux[2], "auxiliary equations")
+            reactions = list(aux[1])
+
+        # ---- constants that no expression uses: a warning naming them ----
+        used = set()
+        for mat in (Kqd_, Ku_, kf_, M_, f_, A_, b_, fc_) + (
+                (aux_F_, aux_g_) if aux_F_ is not None else ()):
+            for e in mat:
+                used |= e.free_symbols
+        if E_ is not None:
+            used |= E_.free_symbols
+        unused = [str(c) for c, d in zip(constants, P) if d not in used]
+        if unused:
+            import warnings
+
+            from .errors import UnusedConstantWarning
+            warnings.warn(UnusedConstantWarning(
+                f"model '{name}': constant{'s' if len(unused) > 1 else ''} "
+                f"{', '.join(unused)} appear{'' if len(unused) > 1 else 's'} in no "
+                "expression of the model (mass matrix, forcing, kinematic equations, "
+                "constraints, energy); kept as parameter(s) without effect"),
+                stacklevel=_user_stacklevel())
 
         # ---- structure checks -------------------------------------------
         if M_.shape != (nu, nu):
@@ -421,7 +735,8 @@ class Model:
         state_labels = [_sym_name(s) for s in q] + list(speed_names)
         input_labels = [_sym_name(s) for s in inputs]
         constant_labels = [str(s) for s in constants]
-        all_labels = state_labels + input_labels + constant_labels
+        aux_labels = [_sym_name(s) for s in reactions]
+        all_labels = state_labels + input_labels + constant_labels + aux_labels
         dup = sorted({n_ for n_ in all_labels if all_labels.count(n_) > 1})
         if dup:
             raise ModelError(f"names used twice among states, inputs and constants: {dup}; "
@@ -431,7 +746,8 @@ class Model:
         safe = c_names(all_labels)
         ns_, nr_ = len(state_labels), len(input_labels)
         state_names, input_names = safe[:ns_], safe[ns_:ns_ + nr_]
-        constant_names = safe[ns_ + nr_:]
+        constant_names = safe[ns_ + nr_:len(safe) - len(aux_labels)]
+        aux_names = safe[len(safe) - len(aux_labels):]
 
         model = cls(
             name=name, method=method, q_orig=list(q), u_orig=list(u), r_orig=inputs,
@@ -440,9 +756,45 @@ class Model:
             Kqd=Kqd_, Ku=Ku_, kf=kf_, M=M_, f=f_, A=A_, b=b_, a=a_, fc=fc_, qdot=qdot,
             energy=E_, state_names=state_names, input_names=input_names,
             constant_names=constant_names, state_labels=state_labels,
-            input_labels=input_labels, constant_labels=constant_labels)
+            input_labels=input_labels, constant_labels=constant_labels,
+            aux_F=aux_F_, aux_g=aux_g_, ud=UD, reaction_orig=reactions,
+            auxiliary_names=aux_names, auxiliary_labels=aux_labels)
         model._check_partition()
         return model
+
+    def _check_constraints_kept_by_kinematics(self, rng):
+        """With fewer velocity constraints than configuration constraints
+        (a unit quaternion whose norm's derivative is one of the kinematic
+        equations), the time derivative of f_c must vanish by the kinematic
+        equations alone: d f_c/dt = Jc q'(q, u) + df_c/dt = 0 at any q and u.
+        Checked numerically at random points; the run time keeps f_c = 0 by
+        projection, and the linearization is on [q_ind, u_ind]."""
+        import numpy as np
+        U = sm.Matrix(self.u)
+        Jc = self.fc.jacobian(self.q)
+        ft = self.fc.diff(self.t)
+        worst, scale = 0.0, 1.0
+        for _attempt in range(4):
+            vals = {s: rng.uniform(0.3, 1.7) for s in self.q + self.u + self.p + self.r + [self.t]}
+            try:
+                K = np.array(self.Kqd.xreplace(vals).evalf().tolist(), dtype=float)
+                rhs = -np.array((self.Ku * U + self.kf).xreplace(vals).evalf().tolist(),
+                                dtype=float).ravel()
+                qd = np.linalg.solve(K, rhs)
+                J = np.array(Jc.xreplace(vals).evalf().tolist(), dtype=float)
+                d = J @ qd + np.array(ft.xreplace(vals).evalf().tolist(), dtype=float).ravel()
+            except (TypeError, ValueError, np.linalg.LinAlgError):
+                continue
+            worst = max(worst, float(np.max(np.abs(d))))
+            scale = max(scale, float(np.max(np.abs(J))) * float(np.max(np.abs(qd))))
+        if not worst <= 1e-9 * scale:
+            raise ModelError(
+                f"{self.mc} configuration constraints but only {self.mv} velocity constraints, "
+                "and the time derivative of the configuration constraints does not follow from "
+                "the kinematic equations (|d f_c/dt| = "
+                f"{worst:.3g} at a sample point): give each configuration constraint its time "
+                "derivative among the velocity constraints (with a dependent speed), or among "
+                "the kinematic equations")
 
     def _check_partition(self):
         """The dependent coordinates/speeds must be determined by the
@@ -454,9 +806,7 @@ class Model:
         if self.mv != len(self.u_dep):
             raise ModelError(f"{self.mv} velocity constraints but {len(self.u_dep)} dependent speeds")
         if self.mv < self.mc:
-            raise ModelError(
-                f"{self.mc} configuration constraints but only {self.mv} velocity constraints: "
-                "every configuration constraint needs its time derivative among the velocity constraints")
+            self._check_constraints_kept_by_kinematics(rng)
         syms = self.q + self.p + [self.t]
         checks = []
         if self.mc:
@@ -488,10 +838,57 @@ class Model:
                     "choose another partition")
 
 
-_PRINTABLE_FUNCS = (sm.sin, sm.cos, sm.tan, sm.asin, sm.acos, sm.atan, sm.atan2, sm.sinh,
-                    sm.cosh, sm.tanh, sm.asinh, sm.acosh, sm.atanh, sm.exp, sm.log,
-                    sm.Abs, sm.sign, sm.floor, sm.ceiling, sm.Min, sm.Max, sm.erf,
-                    sm.gamma, sm.loggamma, sm.Piecewise, sm.Heaviside)
+def _aux_zero(uaux, t):
+    """({uaux': 0}, {uaux: 0}): replace the derivatives first."""
+    return ({s.diff(t): 0 for s in uaux}, {s: 0 for s in uaux})
+
+
+def _kane_auxiliary(km, q, u, uaux, inputs, reactions, t, zero):
+    """(F, reactions, g) with km.auxiliary_eqs = F reactions + g (in the
+    user's functions of time; u' appear in g). The reactions are the
+    user's (reactions=[...]) or the functions of time in the auxiliary
+    equations that are neither coordinates, speeds, their derivatives nor
+    declared inputs, ordered by name."""
+    eqs = sm.Matrix(km.auxiliary_eqs).xreplace(zero[0]).xreplace(zero[1])
+    na = len(uaux)
+    if eqs.shape[0] != na:
+        raise ModelError(f"the KanesMethod has {len(uaux)} auxiliary speeds but "
+                         f"{eqs.shape[0]} auxiliary equations")
+    known = set(q) | set(u) | set(uaux) | set(inputs or [])
+    if reactions is None:
+        found = set()
+        for e in eqs:
+            for fn in e.atoms(sm.core.function.AppliedUndef):
+                if fn.args == (t,) and fn not in known:
+                    found.add(fn)
+        reactions = sorted(found, key=sm.default_sort_key)
+        where = "found in the auxiliary equations"
+    else:
+        reactions = list(reactions)
+        where = "given in reactions=[...]"
+        bad = [r_ for r_ in reactions if r_ in known
+               or not (isinstance(r_, sm.Symbol)
+                       or (isinstance(r_, sm.core.function.AppliedUndef) and r_.args == (t,)))]
+        if bad or len(set(reactions)) != len(reactions):
+            raise ModelError(
+                f"reactions must be distinct symbols or functions of time that are not "
+                f"coordinates, speeds or inputs; got {[_sym_name(r_) for r_ in reactions]}")
+    names = [_sym_name(r_) for r_ in reactions]
+    if len(reactions) != na:
+        raise ModelError(
+            f"{na} auxiliary speed(s) {[_sym_name(s) for s in uaux]} but {len(reactions)} "
+            f"reaction force(s) {where}: {names}; apply one unknown force (a "
+            "dynamicsymbol) along each auxiliary direction, declare other functions of "
+            "time in inputs=[...], or name the reactions with reactions=[...]")
+    F = eqs.jacobian(reactions)
+    nonlin = sorted({_sym_name(r_) for r_ in reactions for e in F if e.has(r_)}
+                    | {_sym_name(r_) for r_ in reactions for e in eqs
+                       if e.has(sm.Derivative(r_, t))})
+    if nonlin:
+        raise ModelError(f"the auxiliary equations are not linear in the reaction force(s) "
+                         f"{', '.join(nonlin)}")
+    g = eqs.xreplace({r_: 0 for r_ in reactions})
+    return F, reactions, g
 
 
 def _check_expressions(mat, what, allowed):
@@ -519,7 +916,5 @@ def _check_expressions(mat, what, allowed):
                     f"the {what} contain {fn.func}(t), a function of time that is not a "
                     "coordinate, "
                     "speed or declared input: list it in inputs=[...]")
-            if not isinstance(fn, _PRINTABLE_FUNCS):
-                raise ModelError(
-                    f"the {what} contain the function {type(fn).__name__} ({fn}), "
-                    "which the C printer cannot print")
+            # printability (in the user's spelling) is checked before this by
+            # gen.printers.check_printable, which knows every function it prints

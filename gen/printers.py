@@ -1,19 +1,50 @@
-"""C99 printer for kernel bodies.
+"""C99 and C++ printers for kernel bodies, and the check that a model's
+expressions can be printed at all.
 
 Every model symbol is printed as an array element (``q[0]``) or a
 temporary, never under its sympy name (../shared/NOTES-sympy.md 5), so
 hostile names cannot reach the C code. ``strict=True``: an expression the
 printer cannot print is an error, never a comment that compiles.
+
+Non-smooth functions print exactly, with sympy's values everywhere
+(double / float / C++ over the template ``Scalar``):
+
+    Abs(x)          fabs(x)  fabsf(x)  std::fabs(x)
+    sign(x)         ((x) > 0 ? 1.0 : ((x) < 0 ? -1.0 : 0.0))     sign(0) = 0
+    Heaviside(x)    ((x) > 0 ? 1.0 : ((x) < 0 ? 0.0 : H0))       H0 = 1/2 unless given
+    floor, ceiling  floor/floorf/std::floor, ceil/ceilf/std::ceil
+    Min, Max        fmin/fminf/std::fmin, fmax/fmaxf/std::fmax (nested when n > 2)
+    Mod(a, b)       ((a) - (b)*floor((a)/(b)))                    sympy's sign convention
+    Piecewise       ((c1) ? (e1) : ((c2) ? (e2) : (e3)))          needs a (e, True) default
+    relations       (a > b), (a == b), ...; And/Or/Not as &&, ||, !
+
+(no ``copysign``: it would give sign(0) = +-1). The linearization
+differentiates them almost everywhere (``gen.ir.partial``): d|x| = sign(x),
+d sign = d Heaviside = d floor = d ceiling = 0, d Min/Max = the active
+argument's derivative, d Piecewise = the Piecewise of the branch
+derivatives. At a kink the linearization returns the mean of the two
+one-sided derivatives for Abs, Min and Max (d|x|/dx = sign(0) = 0 at
+x = 0: what a symmetric central difference gives), 0 for sign, Heaviside,
+floor and ceiling at their jumps (the derivative away from the jump; the
+Dirac part is dropped), and for Piecewise the derivative of the branch
+whose condition holds at the point (the branch that gives the value).
+
+:func:`unprintable` finds what the generator cannot print or
+differentiate; :func:`check_printable` turns it into a ``ModelError``
+naming the user's expression, when the model is created.
 """
 from __future__ import annotations
 
 import sympy as sm
 from sympy.codegen.ast import float32, float64, real
+from sympy.core.function import AppliedUndef
+from sympy.logic.boolalg import BooleanAtom
 from sympy.printing.c import C99CodePrinter
 
 from .errors import ModelError
 
-__all__ = ["ModelCPrinter", "ModelCxxPrinter", "print_kernel_body"]
+__all__ = ["ModelCPrinter", "ModelCxxPrinter", "print_kernel_body", "unprintable",
+           "check_printable"]
 
 
 class ModelCPrinter(C99CodePrinter):
@@ -81,7 +112,48 @@ class ModelCPrinter(C99CodePrinter):
 
     def _print_Heaviside(self, expr):
         a = self._print(expr.args[0])
-        return f"(({a}) > 0 ? {self._lit('1.0')} : (({a}) < 0 ? {self._lit('0.0')} : {self._lit('0.5')}))"
+        h0 = expr.args[1] if len(expr.args) > 1 else sm.S.Half
+        if h0.is_Number:
+            h = self._lit(repr(float(h0)))
+        else:
+            h = f"({self._print(h0)})"
+        return f"(({a}) > 0 ? {self._lit('1.0')} : (({a}) < 0 ? {self._lit('0.0')} : {h}))"
+
+    def _print_Mod(self, expr):
+        # sympy's Mod takes the sign of the divisor (fmod: of the dividend)
+        a, b = (self._print(x) for x in expr.args)
+        return f"(({a}) - ({b})*{self._ns}floor{self._suffix()}(({a})/({b})))"
+
+    def _print_Piecewise(self, expr):
+        if expr.args[-1].cond != sm.true:
+            raise ModelError(f"internal: Piecewise without a default (expr, True) branch: {expr}")
+        # conditions print parenthesized (relations, &&, ||, !) or as 1/0;
+        # integer branches as real literals, so both arms have the real type
+        def arm(e):
+            return self._lit(f"{int(e)}.0") if e.is_Integer else self._print(e)
+        out = f"({arm(expr.args[-1].expr)})"
+        for e, c in reversed(expr.args[:-1]):
+            out = f"({self._print(c)} ? ({arm(e)}) : {out})"
+        return out
+
+    def _print_Relational(self, expr):
+        lhs, rhs = self._print(expr.lhs), self._print(expr.rhs)
+        return f"({lhs} {expr.rel_op} {rhs})"
+
+    def _print_And(self, expr):
+        return "(" + " && ".join(self._print(a) for a in expr.args) + ")"
+
+    def _print_Or(self, expr):
+        return "(" + " || ".join(self._print(a) for a in expr.args) + ")"
+
+    def _print_Not(self, expr):
+        return f"(!{self._print(expr.args[0])})"
+
+    def _print_BooleanTrue(self, expr):
+        return "1"
+
+    def _print_BooleanFalse(self, expr):
+        return "0"
 
 
 def print_kernel_body(kernel, printer, indent="    "):
@@ -130,3 +202,147 @@ class ModelCxxPrinter(ModelCPrinter):
 
     def _print_NaN(self, expr):
         return f"std::numeric_limits<{self.real_type}>::quiet_NaN()"
+
+
+# ------------------------------------------------------------------ check
+# nodes printed by the printers' own structure (operators, ternaries)
+_STRUCTURAL = (sm.Add, sm.Mul, sm.Pow, sm.Piecewise, sm.core.relational.Relational,
+               sm.And, sm.Or, sm.Not, BooleanAtom, sm.Symbol, sm.NumberSymbol)
+_node_cache = {}
+
+
+def _printers():
+    return (ModelCPrinter, {"real_type": "double"}), (ModelCPrinter, {"real_type": "float"}), \
+        (ModelCxxPrinter, {})
+
+
+def _prints(expr, syms):
+    """Whether all three printers print expr (over the symbols syms)."""
+    smap = {x: f"a[{i}]" for i, x in enumerate(syms)}
+    for cls, kw in _printers():
+        try:
+            cls(smap, **kw).doprint(expr)
+        except Exception:       # noqa: BLE001 - any failure means: cannot print
+            return False
+    return True
+
+
+def _function_problem(e):
+    """Why the function node e cannot be printed or differentiated for the
+    linearization, or None. Checked once per function and number of
+    arguments, on fresh symbols (then shown with e's arguments)."""
+    key = (e.func, len(e.args))
+    if key not in _node_cache:
+        _node_cache[key] = _shell_problem(e.func, len(e.args))
+    hit = _node_cache[key]
+    if hit is None:
+        return None
+    kind, detail, syms = hit
+    if kind == "cannot differentiate":
+        detail = detail.xreplace(dict(zip(syms, e.args)))
+    return kind, detail
+
+
+def _shell_problem(func, nargs):
+    from .ir import partial
+    name = getattr(func, "__name__", str(func))
+    syms = [sm.Dummy(f"a{i}") for i in range(nargs)]
+    try:
+        shell = func(*syms)
+    except Exception:           # noqa: BLE001
+        shell = None
+    if shell is None or not _prints(shell, syms):
+        return ("cannot print", f"{name} is not a function the generator can write in C99 "
+                "or C++ (see the README, Non-smooth models, for the supported ones)", syms)
+    for x in syms:
+        try:
+            dx = partial(shell, x)
+        except Exception:       # noqa: BLE001
+            dx = sm.Derivative(shell, x)
+        if dx.has(sm.Derivative, sm.Subs) or not _prints(dx, syms):
+            return ("cannot differentiate", dx, syms)
+    return None
+
+
+def _node_problem(e):
+    """(kind, detail) when the node e itself (its arguments assumed fine)
+    cannot be printed, else None."""
+    if isinstance(e, sm.Derivative):
+        return ("derivative", None)
+    if isinstance(e, AppliedUndef):
+        return ("undefined", None)
+    if e.is_Number:
+        if e in (sm.nan, sm.zoo) or e.is_extended_real is False:
+            return ("cannot print", f"{e} is not a real number")
+        return None
+    if e is sm.I or (e.is_Atom and e.is_real is False):
+        return ("cannot print", f"{e} is not a real number")
+    if isinstance(e, sm.Piecewise):
+        if e.args[-1].cond != sm.true:
+            return ("cannot print", "a Piecewise needs a default branch (expr, True), "
+                    "used where no condition holds")
+        return None
+    if isinstance(e, _STRUCTURAL) or isinstance(e, sm.core.containers.Tuple) or e.is_Atom \
+            or type(e).__name__ == "ExprCondPair":
+        return None
+    return _function_problem(e)
+
+
+def unprintable(expr):
+    """The innermost subexpression of expr that the generator cannot print
+    in C99 (double and float) and C++, or whose derivative (by the rules of
+    ``gen.ir.partial``, for the linearization) it cannot print; None when
+    everything prints. Undefined functions (``friction(v)``, ``F(t)``) and
+    leftover ``Derivative`` terms count as unprintable."""
+    return _first_problem(expr)[0]
+
+
+def _first_problem(expr, seen=None):
+    """(node, (kind, detail)) of the first problem in a post-order walk
+    (each distinct subexpression once), or (None, None)."""
+    seen = set() if seen is None else seen
+    stack = [(sm.sympify(expr), False)]
+    while stack:
+        e, done = stack.pop()
+        if done:
+            p = _node_problem(e)
+            if p is not None:
+                return e, p
+            continue
+        if e in seen:
+            continue
+        seen.add(e)
+        stack.append((e, True))
+        if not isinstance(e, (sm.Derivative, AppliedUndef)):
+            stack.extend((a, False) for a in reversed(e.args))
+    return None, None
+
+
+def check_printable(exprs, what, names, time=None):
+    """Raise ModelError when an expression of ``exprs`` holds something the
+    generator cannot print (``unprintable``), naming it in the user's
+    symbols: ``names`` maps the model's internal symbols to the user's.
+    Undefined functions of ``time`` alone and leftover derivatives are left
+    to the caller (they are undeclared inputs, with their own message)."""
+    seen = set()            # subexpressions shared between entries are checked once
+    for expr in exprs:
+        node, problem = _first_problem(expr, seen)
+        if node is None:
+            continue
+        kind, detail = problem
+        shown = node.xreplace(names)
+        if kind == "derivative":
+            continue
+        if kind == "undefined":
+            if time is not None and all(a == time for a in node.args):
+                continue
+            raise ModelError(
+                f"the {what} contain {shown}, a call of the undefined function {node.func}, "
+                "which the generator cannot print: write it out with the functions it prints "
+                "(sign, Abs, Heaviside, Min, Max, Piecewise, exp, tanh, ...)")
+        if kind == "cannot differentiate":
+            raise ModelError(
+                f"the {what} contain {shown}, which the generator cannot differentiate for "
+                f"the linearization: its derivative {detail.xreplace(names)} cannot be printed")
+        raise ModelError(f"the {what} contain {shown}, which the generator cannot print: "
+                         f"{detail}")

@@ -91,6 +91,7 @@ _KERNEL_DOCS = {
     "velocity_constraint_matrix": "A(q), b(q, t)",
     "velocity_constraints": "A(q) u + b",
     "energy": "total energy",
+    "auxiliary": "F and g of the auxiliary equations F reactions + g = 0",
     "lin_terms": "Jacobian blocks of the linearization",
 }
 

@@ -87,7 +87,29 @@ def _reference(model):
         ref["a"] = lam(m.a)
     if m.energy is not None:
         ref["E"] = lam(sm.Matrix([m.energy]))
+    if getattr(m, "na", 0):
+        # auxiliary equations F reactions + g = 0, over the arguments and u'
+        ref["auxF"] = sm.lambdify(args + list(m.ud), m.aux_F, modules="numpy")
+        ref["auxg"] = sm.lambdify(args + list(m.ud), m.aux_g, modules="numpy")
     return ref
+
+
+def _with_real_symbols(model):
+    """The model over internal symbols assumed real, for the symbolic
+    linearization: sympy then differentiates Abs to sign and sign, Heaviside
+    to DiracDelta (0 away from the kink), not to re/im or unevaluated
+    Derivative terms that cannot be evaluated at a point."""
+    import dataclasses
+    m = model
+    old = list(m.q) + list(m.u) + list(m.r) + list(m.p) + [m.t]
+    rep = {s: sm.Dummy(s.name, real=True) for s in old}
+    kw = {"q": [rep[s] for s in m.q], "u": [rep[s] for s in m.u], "r": [rep[s] for s in m.r],
+          "p": [rep[s] for s in m.p], "t": rep[m.t]}
+    for f in dataclasses.fields(m):
+        v = getattr(m, f.name)
+        if f.name not in kw and isinstance(v, (sm.MatrixBase, sm.Expr)):
+            kw[f.name] = v.xreplace(rep)
+    return dataclasses.replace(m, **kw)
 
 
 def _call(fn, x, r, p, t):
@@ -132,6 +154,7 @@ def verify(model, samples=20, backend="c", real="double", sources=None, seed=0, 
     m = model
     rng = np.random.default_rng(seed)
     ref = _reference(m)
+    m_real = _with_real_symbols(m)
     p = np.array(m.p_values, dtype=float)
     errs = {}
     points = {}
@@ -187,9 +210,15 @@ def verify(model, samples=20, backend="c", real="double", sources=None, seed=0, 
             note("eval_rhs", _rel(sim.rhs(t, x, r), xd_ref))
             if m.mv:
                 note("eval_rhs (multipliers)", _rel(sim.multipliers(t, x, r), lam_ref))
+            if getattr(m, "na", 0):
+                ud = xd_ref[m.nq:]
+                Fa = np.array(ref["auxF"](*x, *r, *p, t, *ud), dtype=float)
+                ga = np.array(ref["auxg"](*x, *r, *p, t, *ud), dtype=float).ravel()
+                note("eval_auxiliary_forces", _rel(sim.auxiliary_forces(t, x, r),
+                                                   np.linalg.solve(Fa, -ga)))
             if k < linearize_samples:
                 op = dict(zip(m.state_names, x))
-                A_s, B_s = linearize_symbolic(m, op, r_op=dict(zip(m.input_names, r)),
+                A_s, B_s = linearize_symbolic(m_real, op, r_op=dict(zip(m.input_names, r)),
                                               constants="values", t=t, simplify=False)
                 A_c, B_c = sim.linearize(x, r, t=t)
                 e = _rel(A_c, np.array(A_s.evalf(), dtype=float))

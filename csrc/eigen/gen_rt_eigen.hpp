@@ -36,6 +36,10 @@
  *     template <class S> static void lin_terms(const S *q, const S *u, const S *qd,
  *         const S *ud, const S *lam, const S *r, const S *p, S t, const LinOut<S> &o);
  *         // writes the Jacobian blocks the model has; the others are 0 x n
+ *     // optional (auxiliary speeds, Kane's u_auxiliary): NA > 0 reaction forces
+ *     static constexpr int NA;
+ *     template <class S> static void auxiliary(const S *q, const S *u, const S *ud,
+ *         const S *r, const S *p, S t, S *F, S *g);  // F reactions + g = 0, F NA x NA
  *   };
  *
  * The integration options and statistics are the generated header's structs
@@ -119,6 +123,16 @@ struct Tolerances {
 template <typename S>
 struct LinOut {
     S *Kqd, *Ku, *M, *A, *Kq, *Rq, *Ru, *Rr, *Sq, *Su, *Vq, *Jc;
+};
+
+/* Model::NA, or 0 when the traits type has no auxiliary speeds. */
+template <class M, class = void>
+struct AuxiliaryCount {
+    static constexpr int value = 0;
+};
+template <class M>
+struct AuxiliaryCount<M, std::void_t<decltype(M::NA)>> {
+    static constexpr int value = M::NA;
 };
 
 // ------------------------------------------------------------------ helpers
@@ -668,6 +682,35 @@ struct Runtime {
     {
         if (!finite(t) || !finite(x) || !finite(r) || !finite(p)) return ERR_NONFINITE_INPUT;
         return rhs_unchecked(t, x, r, p, dxdt, lam);
+    }
+
+    /* The NA reaction forces of the auxiliary speeds (gen_rt_model_eval_auxiliary_forces):
+     * u' from the right-hand side, then F reactions = -g (partial-pivot LU); OK and
+     * nothing written when the model has none. */
+    static constexpr int NA = AuxiliaryCount<Model>::value;
+    using AuxiliaryForces = Mat<S, NA, 1>;
+    static int eval_auxiliary_forces(S t, const State &x, const Inputs &r, const Params &p,
+                                     AuxiliaryForces &F) noexcept
+    {
+        if (!finite(t) || !finite(x) || !finite(r) || !finite(p)) return ERR_NONFINITE_INPUT;
+        if constexpr (NA > 0) {
+            State dx;
+            const int st = rhs_unchecked(t, x, r, p, dx, nullptr);
+            if (st) return st;
+            Mat<S, NA, NA> Fr; // row-major, as the kernel writes it
+            AuxiliaryForces g, sol;
+            Model::auxiliary(x.data(), x.data() + NQ, dx.data() + NQ, r.data(), p.data(), t,
+                             Fr.data(), g.data());
+            if (!finite(Fr) || !finite(g)) return ERR_NONFINITE_MODEL;
+            const Eigen::Matrix<S, NA, NA> Fm = Fr;
+            const AuxiliaryForces rhs = -g;
+            if (lu_solve<S, NA>(Fm, S(0), rhs, sol)) return ERR_SINGULAR;
+            if (!finite(sol)) return ERR_NONFINITE_MODEL;
+            F = sol;
+        } else {
+            (void)F;
+        }
+        return OK;
     }
 
     // ------------------------------------------------- constraint manifold

@@ -130,6 +130,7 @@ static gen_rt_model pend_model(int accel)
     m.rhs_terms = p_rhs_terms; m.constraints = p_constraints; m.constraint_jacobian = p_jac;
     m.velocity_constraints = p_vc; m.velocity_constraint_matrix = p_vcm;
     m.energy = p_energy; m.lin_terms = p_lin; m.mass_solve = NULL;
+    m.na = 0; m.auxiliary = NULL;
     return m;
 }
 
@@ -181,6 +182,23 @@ static int o_solve(const gen_rt_real *M, const gen_rt_real *f, gen_rt_real *x)
     return GEN_RT_OK;
 }
 
+/* two made-up reactions R of the oscillator: F R + g = 0 with g = [m x'', x]
+ * and the constant F = [[2, 1], [1, 3]] (the singular [[1, 2], [2, 4]] when
+ * x > 100) */
+static void o_aux(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *ud,
+                  const gen_rt_real *r, const gen_rt_real *p, gen_rt_real t, gen_rt_real *F,
+                  gen_rt_real *g)
+{
+    (void)u; (void)r; (void)t;
+    if (q[0] > 100) {
+        F[0] = 1; F[1] = 2; F[2] = 2; F[3] = 4;
+    } else {
+        F[0] = 2; F[1] = 1; F[2] = 1; F[3] = 3;
+    }
+    g[0] = p[0] * ud[0];
+    g[1] = q[0];
+}
+
 static const int o_ind[1] = {0}, o_none[1] = {0};
 
 static gen_rt_model osc_model(int accel)
@@ -194,6 +212,7 @@ static gen_rt_model osc_model(int accel)
     m.velocity_constraints = NULL; m.velocity_constraint_matrix = NULL;
     m.energy = NULL; m.lin_terms = o_lin;
     m.mass_solve = accel == GEN_RT_ACCEL_LDLT ? o_solve : NULL;
+    m.na = 0; m.auxiliary = NULL;
     return m;
 }
 
@@ -410,8 +429,43 @@ static void oscillator_tests(int accel)
     }
 }
 
+/* gen_rt_model_eval_auxiliary_forces: u' from the right-hand side, then
+ * F R = -g; closed form R = -F^-1 g with F^-1 = [[3, -1], [-1, 2]] / 5 */
+static void auxiliary_tests(int accel)
+{
+    gen_rt_model m = osc_model(accel);
+    const gen_rt_real p[2] = {PM, PK}, r[1] = {GEN_RT_C(0.7)};
+    const double xq = 0.3, g0 = -PK * xq + 0.7, g1 = xq;
+    gen_rt_real x[2], R[2];
+    int st, n, ni;
+    x[0] = (gen_rt_real)xq; x[1] = GEN_RT_C(-0.2);
+    /* a model without auxiliary speeds: OK, nothing written */
+    R[0] = 7; R[1] = 7;
+    st = gen_rt_model_eval_auxiliary_forces(&m, 0, x, r, p, work, iwork, R);
+    CHECK_INT(st, GEN_RT_OK);
+    CHECK(R[0] == 7 && R[1] == 7);
+    CHECK_INT(W(GEN_RT_MODEL_AUX_WORK, DIMS_O(accel), 0), 1);
+    m.na = 2; m.auxiliary = o_aux;
+    n = W(GEN_RT_MODEL_AUX_WORK, DIMS_O(accel), 2);
+    ni = W(GEN_RT_MODEL_AUX_IWORK, DIMS_O(accel), 2);
+    guard(n, ni);
+    st = gen_rt_model_eval_auxiliary_forces(&m, 0, x, r, p, work, iwork, R);
+    CHECK_INT(st, GEN_RT_OK);
+    guards_intact(n, ni);
+    CHECK_NEAR(R[0], -(3 * g0 - g1) / 5, TOL(1e-14, 1e-6));
+    CHECK_NEAR(R[1], -(-g0 + 2 * g1) / 5, TOL(1e-14, 1e-6));
+    /* singular F */
+    x[0] = 200;
+    R[0] = 7;
+    st = gen_rt_model_eval_auxiliary_forces(&m, 0, x, r, p, work, iwork, R);
+    CHECK_INT(st, GEN_RT_ERR_SINGULAR);
+    CHECK(R[0] == 7);
+}
+
 int main(void)
 {
+    auxiliary_tests(GEN_RT_ACCEL_LDLT);
+    auxiliary_tests(GEN_RT_ACCEL_LU);
     pendulum_tests(GEN_RT_ACCEL_KKT);
     pendulum_tests(GEN_RT_ACCEL_PARTITIONED);
     oscillator_tests(GEN_RT_ACCEL_LDLT);

@@ -32,6 +32,7 @@ typedef P(real) real;
 #define MV PU(MV)
 #define NS PU(NS)
 #define ROWS 4
+#define STATUS_MIN PU(STATUS_MIN)
 
 static void fail(const char *what, const char *why, int st)
 {
@@ -49,7 +50,7 @@ static int finite_all(const real *v, int n)
 
 static int check(const char *what, int st, const real *out, int n)
 {
-    if (st != 0 && !(st <= -1 && st >= -9)) fail(what, "unknown status", st);
+    if (st != 0 && !(st <= -1 && st >= STATUS_MIN)) fail(what, "unknown status", st);
     if (st == 0 && out && n > 0 && !finite_all(out, n)) fail(what, "status 0 with a non-finite output", st);
     return st;
 }
@@ -106,7 +107,7 @@ static void exercise(const real *x, const real *r, const real *p, real t, real h
     o.max_steps = 20;
     o.method = (h < 0) ? PU(METHOD_DOPRI5) : PU(METHOD_RK4);
     rows = P(simulate_rows)(t, t + 2 * fabs(h), fabs(h));
-    if (rows < -9) fail("simulate_rows", "unknown status", rows);
+    if (rows < STATUS_MIN) fail("simulate_rows", "unknown status", rows);
     if (rows > 0 && rows <= ROWS) {
         memset(&s, 0, sizeof s);
         st = P(simulate)(x, t, t + 2 * fabs(h), fabs(h), r, p, &o, ROWS, tout, xout, lout, &s);

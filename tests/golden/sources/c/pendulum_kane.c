@@ -54,18 +54,22 @@ static void pendulum_kane_k_forcing(const pendulum_kane_real *q, const pendulum_
 }
 
 /* q' (or Kqd and its right-hand side) (0 temporaries) */
-static void pendulum_kane_k_kinematics(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_qdot)
+static void pendulum_kane_k_kinematics(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_kr)
 {
     (void)q;
     (void)u;
     (void)p;
     (void)t;
-    out_qdot[0] = u[0];
-    out_qdot[1] = u[1];
+    out_Kqd[0] = 0;
+    out_Kqd[1] = 1;
+    out_Kqd[2] = 1;
+    out_Kqd[3] = 0;
+    out_kr[0] = u[1];
+    out_kr[1] = u[0];
 }
 
 /* everything the right-hand side needs (13 temporaries) */
-static void pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_qdot, pendulum_kane_real *out_M, pendulum_kane_real *out_f, pendulum_kane_real *out_A, pendulum_kane_real *out_a)
+static void pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_kr, pendulum_kane_real *out_M, pendulum_kane_real *out_f, pendulum_kane_real *out_A, pendulum_kane_real *out_a)
 {
     (void)q;
     (void)u;
@@ -85,8 +89,12 @@ static void pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulu
     const double w10 = (q[1]*q[1]*q[1]);
     const double w11 = -w2/w10 + (1.0/(q[1]));
     const double w12 = w7*w9;
-    out_qdot[0] = u[0];
-    out_qdot[1] = u[1];
+    out_Kqd[0] = 0;
+    out_Kqd[1] = 1;
+    out_Kqd[2] = 1;
+    out_Kqd[3] = 0;
+    out_kr[0] = u[1];
+    out_kr[1] = u[0];
     out_M[0] = p[1];
     out_M[1] = 0;
     out_M[2] = 0;
@@ -247,14 +255,14 @@ static void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulu
     const double d15 = -lam[0]*d11;
     const double d16 = -lam[0]*d12;
     const double d29 = u[0]*(u[0]*w3*w4 - v27) + u[1]*d22*(-2*w12 + w15*w16) + ud[0]*d11 + ud[1]*d12 + d0*(-u[0]*v26 - 2*u[1]*w16) - d18*v25 + d20*v14 + d23*v17 + d25*v19 + d6*v20 + d8*v15 + v23*v3 + v23*v4 + v28*w12*w14*w15;
-    out_Kqd[0] = 1;
-    out_Kqd[1] = 0;
-    out_Kqd[2] = 0;
-    out_Kqd[3] = 1;
-    out_Ku[0] = -1;
-    out_Ku[1] = 0;
-    out_Ku[2] = 0;
-    out_Ku[3] = -1;
+    out_Kqd[0] = 0;
+    out_Kqd[1] = 1;
+    out_Kqd[2] = 1;
+    out_Kqd[3] = 0;
+    out_Ku[0] = 0;
+    out_Ku[1] = -1;
+    out_Ku[2] = -1;
+    out_Ku[3] = 0;
     out_M[0] = p[1];
     out_M[1] = 0;
     out_M[2] = 0;
@@ -290,15 +298,13 @@ static void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulu
 static void pendulum_kane_kinematics(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t,
                          pendulum_kane_real *Kqd, pendulum_kane_real *qd)
 {
-    (void)Kqd;
-    pendulum_kane_k_kinematics(q, u, p, t, qd);
+    pendulum_kane_k_kinematics(q, u, p, t, Kqd, qd);
 }
 
 static void pendulum_kane_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p,
                         pendulum_kane_real t, pendulum_kane_real *Kqd, pendulum_kane_real *qd, pendulum_kane_real *M, pendulum_kane_real *f, pendulum_kane_real *A, pendulum_kane_real *a)
 {
-    (void)Kqd;
-    pendulum_kane_k_rhs_terms(q, u, r, p, t, qd, M, f, A, a);
+    pendulum_kane_k_rhs_terms(q, u, r, p, t, Kqd, qd, M, f, A, a);
 }
 
 static void pendulum_kane_lin_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *ud,
@@ -310,14 +316,15 @@ static void pendulum_kane_lin_terms(const pendulum_kane_real *q, const pendulum_
 
 static const gen_rt_model pendulum_kane_model = {
     2, 2, 0, 3, 1, 1,
-    1, GEN_RT_ACCEL_PARTITIONED,
+    0, GEN_RT_ACCEL_PARTITIONED,
     pendulum_kane_q_ind, pendulum_kane_q_dep, pendulum_kane_u_ind, pendulum_kane_u_dep,
     pendulum_kane_k_mass_matrix, pendulum_kane_k_forcing, pendulum_kane_kinematics, pendulum_kane_rhs_terms,
     pendulum_kane_k_constraints, pendulum_kane_k_constraint_jacobian,
     pendulum_kane_k_velocity_constraints, pendulum_kane_k_velocity_constraint_matrix,
     pendulum_kane_k_energy,
     pendulum_kane_lin_terms,
-    NULL
+    NULL,
+    0, NULL
 };
 
 /* ------------------------------------------------------------------ */
@@ -372,8 +379,8 @@ int pendulum_kane_eval_forcing(const pendulum_kane_real *q, const pendulum_kane_
 
 int pendulum_kane_eval_kinematics(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *qdot)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_KIN_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_KIN_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_KIN_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_KIN_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_IN(q, 2);
     PENDULUM_KANE_CHECK_IN(u, 2);
     if (!p) p = pendulum_kane_p_default;
@@ -395,7 +402,7 @@ int pendulum_kane_eval_constraints(const pendulum_kane_real *q, const pendulum_k
 
 int pendulum_kane_eval_constraint_jacobian(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *Jc)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_JAC_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_JAC_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_IN(q, 2);
     if (!p) p = pendulum_kane_p_default;
     PENDULUM_KANE_CHECK_IN(p, 3);
@@ -439,8 +446,8 @@ int pendulum_kane_eval_energy(const pendulum_kane_real *q, const pendulum_kane_r
 
 int pendulum_kane_eval_rhs(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *dxdt, pendulum_kane_real *lam)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_EVAL_RHS_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_EVAL_RHS_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_EVAL_RHS_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_EVAL_RHS_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_IN(x, 4);
     if (!r) r = pendulum_kane_r_zero;
@@ -451,9 +458,22 @@ int pendulum_kane_eval_rhs(pendulum_kane_real t, const pendulum_kane_real *x, co
     return gen_rt_model_eval_rhs(&pendulum_kane_model, t, x, r, p, work, iwork, dxdt, lam);
 }
 
+int pendulum_kane_eval_auxiliary_forces(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *F)
+{
+    pendulum_kane_real work[GEN_RT_MODEL_AUX_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED, 0)];
+    int iwork[GEN_RT_MODEL_AUX_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED, 0)];
+    PENDULUM_KANE_CHECK_REAL(t);
+    PENDULUM_KANE_CHECK_IN(x, 4);
+    if (!r) r = pendulum_kane_r_zero;
+    PENDULUM_KANE_CHECK_IN(r, 0);
+    if (!p) p = pendulum_kane_p_default;
+    PENDULUM_KANE_CHECK_IN(p, 3);
+    return gen_rt_model_eval_auxiliary_forces(&pendulum_kane_model, t, x, r, p, work, iwork, F);
+}
+
 int pendulum_kane_project(pendulum_kane_real t, const pendulum_kane_real *p, pendulum_kane_real tol, int max_iter, pendulum_kane_real *x)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_PROJECT_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_PROJECT_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_REAL(t);
     if (!p) p = pendulum_kane_p_default;
     PENDULUM_KANE_CHECK_IN(p, 3);
@@ -463,8 +483,8 @@ int pendulum_kane_project(pendulum_kane_real t, const pendulum_kane_real *p, pen
 
 int pendulum_kane_consistent_state(pendulum_kane_real t, const pendulum_kane_real *p, pendulum_kane_real tol, int max_iter, pendulum_kane_real *x)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_CONSISTENT_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_CONSISTENT_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_CONSISTENT_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_CONSISTENT_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_REAL(t);
     if (!p) p = pendulum_kane_p_default;
     PENDULUM_KANE_CHECK_IN(p, 3);
@@ -489,8 +509,8 @@ void pendulum_kane_sim_options_default(pendulum_kane_sim_options *opts)
 
 int pendulum_kane_step_rk4(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, int project, pendulum_kane_real *x)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_STEP_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_STEP_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_STEP_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_STEP_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_REAL(h);
     if (!r) r = pendulum_kane_r_zero;
@@ -503,8 +523,8 @@ int pendulum_kane_step_rk4(pendulum_kane_real t, pendulum_kane_real h, const pen
 
 int pendulum_kane_advance(pendulum_kane_real t0, pendulum_kane_real t1, const pendulum_kane_real *r, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, pendulum_kane_sim_stats *stats, pendulum_kane_real *x)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_ADVANCE_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_ADVANCE_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_ADVANCE_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_ADVANCE_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     gen_rt_sim_options opts_rt;
     gen_rt_sim_stats stats_rt;
     pendulum_kane_sim_options opts_default;
@@ -553,8 +573,8 @@ int pendulum_kane_simulate_rows(pendulum_kane_real t0, pendulum_kane_real t_end,
 
 int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_real *r, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_sim_stats *stats)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_SIMULATE_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_SIMULATE_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_SIMULATE_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_SIMULATE_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     gen_rt_sim_options opts_rt;
     gen_rt_sim_stats stats_rt;
     pendulum_kane_sim_options opts_default;
@@ -598,8 +618,8 @@ int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, 
 
 int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_LINEARIZE_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_LINEARIZE_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_LINEARIZE_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_LINEARIZE_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_IN(x_op, 4);
     if (!r_op) r_op = pendulum_kane_r_zero;
     PENDULUM_KANE_CHECK_IN(r_op, 0);

@@ -23,6 +23,7 @@ typedef double pendulum_kane_real;
 #define PENDULUM_KANE_MC 1     /* configuration constraints f_c(q) = 0 */
 #define PENDULUM_KANE_MV 1     /* velocity constraints A(q) u + b = 0 (= multipliers) */
 #define PENDULUM_KANE_NS 2     /* independent state [q_ind, u_ind] (linearization) */
+#define PENDULUM_KANE_NA 0     /* auxiliary speeds = reaction forces (eval_auxiliary_forces) */
 #define PENDULUM_KANE_HAS_ENERGY 1
 
 /* Status codes: 0 ok, negative on failure (the runtime's codes) */
@@ -36,6 +37,9 @@ typedef double pendulum_kane_real;
 #define PENDULUM_KANE_ERR_BAD_ARG (-7) /* an argument is out of range (size, step or tolerance) */
 #define PENDULUM_KANE_ERR_NONFINITE_MODEL (-8) /* the model expressions evaluate to NaN or infinity at this state (a singular configuration of the model) */
 #define PENDULUM_KANE_ERR_OUTPUT_FULL (-9) /* the output buffer is too small */
+#define PENDULUM_KANE_ERR_SINGULAR_KINEMATICS (-10) /* singular kinematic equations: q' cannot be solved from Kqd(q) q' + Ku(q) u + kf = 0 at this configuration (with Euler angles: gimbal lock) */
+#define PENDULUM_KANE_ERR_DIVERGED (-11) /* the state diverged: it grew beyond the range of the scalar type (overflow) during integration */
+#define PENDULUM_KANE_STATUS_MIN (-11) /* the most negative code */
 
 /* Integration methods for pendulum_kane_sim_options.method */
 #define PENDULUM_KANE_METHOD_RK4 0
@@ -120,6 +124,9 @@ int pendulum_kane_eval_energy(const pendulum_kane_real *q, const pendulum_kane_r
 
 /* State derivative x' (NX) and, if lam != NULL, the multipliers (MV). */
 int pendulum_kane_eval_rhs(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *dxdt, pendulum_kane_real *lam);
+
+/* Reaction forces along the auxiliary speeds (Kane's u_auxiliary), NA: u' from the right-hand side, then F_aux reactions = -g_aux (GEN_RT_ERR_SINGULAR when F_aux is); NA == 0: nothing written. */
+int pendulum_kane_eval_auxiliary_forces(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *F);
 
 /* Project x onto f_c = 0 (Gauss-Newton, minimum norm) and the velocity constraints; x unchanged on failure. */
 int pendulum_kane_project(pendulum_kane_real t, const pendulum_kane_real *p, pendulum_kane_real tol, int max_iter, pendulum_kane_real *x);

@@ -245,6 +245,22 @@ int pendulum_kane_eval_rhs(pendulum_kane_real t, const pendulum_kane_real *x, co
     return PENDULUM_KANE_OK;
 }
 
+int pendulum_kane_eval_auxiliary_forces(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *F)
+{
+    PENDULUM_KANE_CHECK_REAL(t);
+    PENDULUM_KANE_CHECK_IN(x, 4);
+    if (!r) r = r_zero;
+    PENDULUM_KANE_CHECK_IN(r, 0);
+    if (!p) p = mdl::p_default<S>;
+    PENDULUM_KANE_CHECK_IN(p, 3);
+    (void)t;
+    (void)x;
+    (void)r;
+    (void)p;
+    (void)F;
+    return PENDULUM_KANE_OK;
+}
+
 int pendulum_kane_project(pendulum_kane_real t, const pendulum_kane_real *p, pendulum_kane_real tol, int max_iter, pendulum_kane_real *x)
 {
     PENDULUM_KANE_CHECK_REAL(t);

@@ -60,6 +60,7 @@ inline constexpr int NP = 3;   // constants p
 inline constexpr int MC = 1;   // configuration constraints f_c(q) = 0
 inline constexpr int MV = 1;   // velocity constraints A(q) u + b = 0 (= multipliers)
 inline constexpr int NS = 2;   // independent state [q_ind, u_ind] (linearization)
+inline constexpr int NA = 0;   // auxiliary speeds = reaction forces (eval_auxiliary_forces)
 inline constexpr int NQI = NQ - MC; // independent coordinates
 inline constexpr int NUI = NU - MV; // independent speeds
 inline constexpr bool HAS_ENERGY = true;
@@ -90,6 +91,7 @@ template <typename S> using ConstraintJacobian = Mat<S, MC, NQ>;
 template <typename S> using VelocityMatrix = Mat<S, MV, NU>;
 template <typename S> using StateMatrix = Mat<S, NS, NS>;
 template <typename S> using InputMatrix = Mat<S, NS, NR>;
+template <typename S> using AuxiliaryForces = Mat<S, NA, 1>;
 
 // Coordinate partition (indices into q and u)
 inline constexpr int q_ind[1] = { 0 };
@@ -173,19 +175,23 @@ inline void k_forcing(const Scalar *q, const Scalar *u, const Scalar *r, const S
 
 /* q' (or Kqd and its right-hand side) (0 temporaries) */
 template <typename Scalar>
-inline void k_kinematics(const Scalar *q, const Scalar *u, const Scalar *p, Scalar t, Scalar *out_qdot) noexcept
+inline void k_kinematics(const Scalar *q, const Scalar *u, const Scalar *p, Scalar t, Scalar *out_Kqd, Scalar *out_kr) noexcept
 {
     (void)q;
     (void)u;
     (void)p;
     (void)t;
-    out_qdot[0] = u[0];
-    out_qdot[1] = u[1];
+    out_Kqd[0] = 0;
+    out_Kqd[1] = 1;
+    out_Kqd[2] = 1;
+    out_Kqd[3] = 0;
+    out_kr[0] = u[1];
+    out_kr[1] = u[0];
 }
 
 /* everything the right-hand side needs (13 temporaries) */
 template <typename Scalar>
-inline void k_rhs_terms(const Scalar *q, const Scalar *u, const Scalar *r, const Scalar *p, Scalar t, Scalar *out_qdot, Scalar *out_M, Scalar *out_f, Scalar *out_A, Scalar *out_a) noexcept
+inline void k_rhs_terms(const Scalar *q, const Scalar *u, const Scalar *r, const Scalar *p, Scalar t, Scalar *out_Kqd, Scalar *out_kr, Scalar *out_M, Scalar *out_f, Scalar *out_A, Scalar *out_a) noexcept
 {
     (void)q;
     (void)u;
@@ -205,8 +211,12 @@ inline void k_rhs_terms(const Scalar *q, const Scalar *u, const Scalar *r, const
     const Scalar w10 = (q[1]*q[1]*q[1]);
     const Scalar w11 = -w2/w10 + (Scalar(1.0)/(q[1]));
     const Scalar w12 = w7*w9;
-    out_qdot[0] = u[0];
-    out_qdot[1] = u[1];
+    out_Kqd[0] = 0;
+    out_Kqd[1] = 1;
+    out_Kqd[2] = 1;
+    out_Kqd[3] = 0;
+    out_kr[0] = u[1];
+    out_kr[1] = u[0];
     out_M[0] = p[1];
     out_M[1] = 0;
     out_M[2] = 0;
@@ -373,14 +383,14 @@ inline void k_lin_terms(const Scalar *q, const Scalar *u, const Scalar *qd, cons
     const Scalar d15 = -lam[0]*d11;
     const Scalar d16 = -lam[0]*d12;
     const Scalar d29 = u[0]*(u[0]*w3*w4 - v27) + u[1]*d22*(-2*w12 + w15*w16) + ud[0]*d11 + ud[1]*d12 + d0*(-u[0]*v26 - 2*u[1]*w16) - d18*v25 + d20*v14 + d23*v17 + d25*v19 + d6*v20 + d8*v15 + v23*v3 + v23*v4 + v28*w12*w14*w15;
-    out_Kqd[0] = 1;
-    out_Kqd[1] = 0;
-    out_Kqd[2] = 0;
-    out_Kqd[3] = 1;
-    out_Ku[0] = -1;
-    out_Ku[1] = 0;
-    out_Ku[2] = 0;
-    out_Ku[3] = -1;
+    out_Kqd[0] = 0;
+    out_Kqd[1] = 1;
+    out_Kqd[2] = 1;
+    out_Kqd[3] = 0;
+    out_Ku[0] = 0;
+    out_Ku[1] = -1;
+    out_Ku[2] = -1;
+    out_Ku[3] = 0;
     out_M[0] = p[1];
     out_M[1] = 0;
     out_M[2] = 0;
@@ -414,9 +424,9 @@ inline void k_lin_terms(const Scalar *q, const Scalar *u, const Scalar *qd, cons
 struct Model {
     static constexpr int NQ = pendulum_kane::NQ, NU = pendulum_kane::NU, NX = pendulum_kane::NX, NR = pendulum_kane::NR,
                          NP = pendulum_kane::NP, MC = pendulum_kane::MC, MV = pendulum_kane::MV, NS = pendulum_kane::NS,
-                         NQI = pendulum_kane::NQI, NUI = pendulum_kane::NUI;
+                         NQI = pendulum_kane::NQI, NUI = pendulum_kane::NUI, NA = pendulum_kane::NA;
     static constexpr bool HAS_ENERGY = pendulum_kane::HAS_ENERGY;
-    static constexpr bool EXPLICIT_KINEMATICS = true;
+    static constexpr bool EXPLICIT_KINEMATICS = false;
     static constexpr gen_rt::Accel ACCEL = gen_rt::ACCEL_PARTITIONED;
     static constexpr const auto &q_ind = pendulum_kane::q_ind;
     static constexpr const auto &q_dep = pendulum_kane::q_dep;
@@ -436,15 +446,13 @@ struct Model {
     template <class S>
     static void kinematics(const S *q, const S *u, const S *p, S t, S *Kqd, S *qd) noexcept
     {
-        (void)Kqd;
-        k_kinematics<S>(q, u, p, t, qd);
+        k_kinematics<S>(q, u, p, t, Kqd, qd);
     }
     template <class S>
     static void rhs_terms(const S *q, const S *u, const S *r, const S *p, S t, S *Kqd, S *qd,
                           S *M, S *f, S *A, S *a) noexcept
     {
-        (void)Kqd;
-        k_rhs_terms<S>(q, u, r, p, t, qd, M, f, A, a);
+        k_rhs_terms<S>(q, u, r, p, t, Kqd, qd, M, f, A, a);
     }
     template <class S>
     static void constraints(const S *q, const S *p, S t, S *fc) noexcept
@@ -548,6 +556,16 @@ inline int eval_energy(const Coords<S> &q, const Speeds<S> &u, const Params<S> &
                        S &E) noexcept
 {
     return detail::RT<S>::eval_energy(q, u, p, t, E);
+}
+
+/* Reaction forces along the auxiliary speeds (Kane's u_auxiliary), NA:
+ * u' from the right-hand side, then F reactions = -g (ERR_SINGULAR when F
+ * is); NA == 0: OK, nothing written. */
+template <typename S>
+inline int eval_auxiliary_forces(S t, const State<S> &x, const Inputs<S> &r, const Params<S> &p,
+                                 AuxiliaryForces<S> &F) noexcept
+{
+    return detail::RT<S>::eval_auxiliary_forces(t, x, r, p, F);
 }
 
 /* State derivative x' (and the multipliers lam in the first overload). */

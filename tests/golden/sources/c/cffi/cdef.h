@@ -30,6 +30,7 @@ int pendulum_kane_eval_velocity_constraints(const pendulum_kane_real *q, const p
 int pendulum_kane_eval_velocity_constraint_matrix(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *b);
 int pendulum_kane_eval_energy(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *E);
 int pendulum_kane_eval_rhs(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *dxdt, pendulum_kane_real *lam);
+int pendulum_kane_eval_auxiliary_forces(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *F);
 int pendulum_kane_project(pendulum_kane_real t, const pendulum_kane_real *p, pendulum_kane_real tol, int max_iter, pendulum_kane_real *x);
 int pendulum_kane_consistent_state(pendulum_kane_real t, const pendulum_kane_real *p, pendulum_kane_real tol, int max_iter, pendulum_kane_real *x);
 void pendulum_kane_sim_options_default(pendulum_kane_sim_options *opts);

@@ -1,0 +1,367 @@
+"""Issue 14: auxiliary speeds (KanesMethod u_auxiliary) and the reaction
+forces along them: Model.from_kanes finds the unknown forces, the generated
+code solves the auxiliary equations F reactions + g = 0 at u' from the
+right-hand side, sim.auxiliary_forces returns them.
+
+References: sympy's own auxiliary_eqs (lambdified; u' from numpy.linalg.solve
+of mass_matrix_full / forcing_full; the reactions by a linear solve), and the
+pin force of a simple pendulum computed by hand."""
+import numpy as np
+import pytest
+import sympy as sm
+from sympy.physics import mechanics as me
+
+import gen
+from gen.errors import ModelError
+from helpers import rel_err
+
+t = me.dynamicsymbols._t
+
+
+# ------------------------------------------------------------------ models
+def rolling_disc(normal=True):
+    """sympy's test_aux (test_kane.py): a disc rolling on the ground, the
+    contact point's velocity along L.x and Y.z x L.x as auxiliary speeds
+    u4, u5 carrying the contact forces f1, f2; with normal=True a third
+    auxiliary speed u6 along Y.z (up) carries the normal force f3."""
+    q1, q2, q3, u1, u2, u3 = me.dynamicsymbols('q1 q2 q3 u1 u2 u3')
+    u4, u5, u6, f1, f2, f3 = me.dynamicsymbols('u4 u5 u6 f1 f2 f3')
+    r, m, g = sm.symbols('r m g')
+    N = me.ReferenceFrame('N')
+    Y = N.orientnew('Y', 'Axis', [q1, N.z])
+    L = Y.orientnew('L', 'Axis', [q2, Y.x])
+    R = L.orientnew('R', 'Axis', [q3, L.y])
+    w_R_N_qd = R.ang_vel_in(N)
+    R.set_ang_vel(N, u1 * L.x + u2 * L.y + u3 * L.z)
+    C = me.Point('C')
+    vel = u4 * L.x + u5 * (Y.z ^ L.x)
+    force = f1 * L.x + f2 * (Y.z ^ L.x)
+    uaux = [u4, u5]
+    if normal:
+        vel, force, uaux = vel + u6 * Y.z, force + f3 * Y.z, uaux + [u6]
+    C.set_vel(N, vel)
+    Dmc = C.locatenew('Dmc', r * L.z)
+    Dmc.v2pt_theory(C, N, R)
+    Dmc.a2pt_theory(C, N, R)
+    inertia = me.inertia(L, m / 4 * r**2, m / 2 * r**2, m / 4 * r**2)
+    kd = [me.dot(R.ang_vel_in(N) - w_R_N_qd, uv) for uv in L]
+    loads = [(Dmc, - m * g * Y.z), (C, force)]
+    body = me.RigidBody('BodyD', Dmc, R, m, (inertia, Dmc))
+    km = me.KanesMethod(N, q_ind=[q1, q2, q3], u_ind=[u1, u2, u3], kd_eqs=kd,
+                        u_auxiliary=uaux)
+    km.kanes_equations([body], loads)
+    reactions = [f1, f2, f3] if normal else [f1, f2]
+    return km, {r: 0.35, m: 2.5, g: 9.81}, reactions
+
+
+def box_on_ground(friction=True):
+    """sympy's test_box_on_ground (test_system_class.py): a particle sliding
+    on the ground, the vertical speed ua auxiliary, the normal force N along
+    it; F is an input. With friction the forcing holds -mu N."""
+    g, m, mu = sm.symbols('g m mu')
+    q, u, ua = me.dynamicsymbols('q u ua')
+    Nf, F = me.dynamicsymbols('N F', positive=True)
+    P = me.Particle("P", mass=m)
+    system = me.System()
+    system.add_bodies(P)
+    P.masscenter.set_pos(system.fixed_point, q * system.x)
+    P.masscenter.set_vel(system.frame, u * system.x + ua * system.y)
+    system.q_ind, system.u_ind, system.u_aux = [q], [u], [ua]
+    system.kdes = [q.diff(t) - u]
+    system.apply_uniform_gravity(-g * system.y)
+    if friction:
+        system.add_loads(me.Force(P, Nf * system.y), me.Force(P, F * system.x - mu * Nf * system.x))
+        consts = {g: 9.81, m: 1.7, mu: 0.3}
+    else:
+        system.add_loads(me.Force(P, Nf * system.y), me.Force(P, F * system.x))
+        consts = {g: 9.81, m: 1.7}
+    system.validate_system()
+    system.form_eoms()
+    return system, consts, F, Nf
+
+
+def pin_pendulum():
+    """A simple pendulum (angle theta from the downward vertical N.x, rod
+    length L, bob mass m) whose pivot O moves with two auxiliary speeds
+    along the rod (A.x, from the pivot to the bob) and across it (A.y),
+    carrying the pin force R1 A.x + R2 A.y on the pendulum. By hand:
+    R1 = -m (g cos(theta) + L theta'^2) (the pin pulls the bob towards the
+    pivot) and R2 = 0 (the bob swings freely)."""
+    th, w, ua1, ua2, R1, R2 = me.dynamicsymbols('theta omega ua1 ua2 R1 R2')
+    m, g, L = sm.symbols('m g L')
+    N = me.ReferenceFrame('N')
+    A = N.orientnew('A', 'Axis', [th, N.z])
+    A.set_ang_vel(N, w * N.z)
+    O = me.Point('O')
+    O.set_vel(N, ua1 * A.x + ua2 * A.y)
+    P = O.locatenew('P', L * A.x)
+    P.v2pt_theory(O, N, A)
+    bob = me.Particle('bob', P, m)
+    km = me.KanesMethod(N, q_ind=[th], u_ind=[w], kd_eqs=[th.diff(t) - w],
+                        u_auxiliary=[ua1, ua2])
+    km.kanes_equations([bob], [(P, m * g * N.x), (O, R1 * A.x + R2 * A.y)])
+    return km, {m: 1.3, g: 9.81, L: 0.8}, (R1, R2)
+
+
+# --------------------------------------------------------------- reference
+def sympy_reactions(km, consts, reactions, X, inputs=(), r_vals=None):
+    """Reactions from sympy's auxiliary_eqs at the states X (rows [q, u]):
+    u' from mass_matrix_full / forcing_full, then the auxiliary equations
+    (linear in the reactions: F from unit reactions) solved."""
+    q, u = list(km.q), list(km.u)
+    ud = [s.diff(t) for s in u]
+    uaux = list(km._uaux)
+    zero = {s.diff(t): 0 for s in uaux}
+    zero.update({s: 0 for s in uaux})
+    aux = km.auxiliary_eqs.xreplace(zero).xreplace(consts)
+    Mf = sm.lambdify(q + u + list(inputs), km.mass_matrix_full.xreplace(consts))
+    ff = sm.lambdify(q + u + list(inputs), km.forcing_full.xreplace(consts))
+    fa = sm.lambdify(q + u + ud + list(inputs) + list(reactions), aux)
+    r_vals = list(r_vals if r_vals is not None else [])
+    out = []
+    for x in X:
+        xd = np.linalg.solve(np.array(Mf(*x, *r_vals), dtype=float),
+                             np.array(ff(*x, *r_vals), dtype=float).ravel())
+        a = xd[len(q):]
+        na = len(reactions)
+        g0 = np.array(fa(*x, *a, *r_vals, *np.zeros(na)), dtype=float).ravel()
+        F = np.column_stack([np.array(fa(*x, *a, *r_vals, *np.eye(na)[j]), dtype=float).ravel()
+                             - g0 for j in range(na)])
+        out.append(np.linalg.solve(F, -g0))
+    return np.array(out)
+
+
+def random_states(n, nx, seed):
+    return np.random.default_rng(seed).uniform(-1.5, 1.5, (n, nx))
+
+
+# ------------------------------------------------------------------- tests
+@pytest.mark.parametrize("normal", [False, True])
+def test_rolling_disc_matches_sympy_auxiliary_eqs(normal):
+    km, consts, reactions = rolling_disc(normal)
+    model = gen.Model.from_kanes(km, constants=consts, name="disc_aux")
+    assert model.na == len(reactions)
+    assert model.auxiliary_labels == [str(f.func) for f in reactions]
+    sim = gen.compile(model)
+    assert sim.na == len(reactions)
+    assert sim.auxiliary_names == sim.auxiliary_labels == [str(f.func) for f in reactions]
+    X = random_states(20, sim.nx, 14)
+    ref = sympy_reactions(km, consts, reactions, X)
+    got = np.array([sim.auxiliary_forces(0.0, x) for x in X])
+    assert got.shape == (20, len(reactions))
+    err = max(rel_err(g_, r_) for g_, r_ in zip(got, ref))
+    assert err < 1e-12, err
+    # the motion of the real speeds is the one without auxiliary speeds
+    assert rel_err(sim.rhs(0.0, X[0]), np.linalg.solve(
+        np.array(sm.lambdify(list(km.q) + list(km.u), km.mass_matrix_full.xreplace(consts))(*X[0]),
+                 dtype=float),
+        np.array(sm.lambdify(list(km.q) + list(km.u), km.forcing_full.xreplace(consts))(*X[0]),
+                 dtype=float).ravel())) < 1e-12
+
+
+def test_rolling_disc_normal_force_at_rest_is_the_weight():
+    km, consts, _ = rolling_disc(normal=True)
+    sim = gen.compile(gen.Model.from_kanes(km, constants=consts, name="disc_aux"))
+    # upright (q2 = 0), at rest: no tangential force, the normal force is m g
+    f = sim.auxiliary_forces(0.0, np.zeros(6))
+    assert abs(f[0]) < 1e-14 and abs(f[1]) < 1e-14
+    assert abs(f[2] - 2.5 * 9.81) < 1e-12 * 2.5 * 9.81
+
+
+def test_pendulum_pin_force_by_hand():
+    km, consts, (R1, R2) = pin_pendulum()
+    m, g, L = (consts[s] for s in sorted(consts, key=lambda s: "mgL".index(str(s))))
+    model = gen.Model.from_kanes(km, constants=consts, name="pin")
+    assert model.na == 2 and model.auxiliary_labels == ["R1", "R2"]
+    sim = gen.compile(model)
+    X = random_states(50, 2, 7) * np.array([2.0, 3.0])
+    got = np.array([sim.auxiliary_forces(0.0, x) for x in X])
+    th, w = X[:, 0], X[:, 1]
+    radial = -m * (g * np.cos(th) + L * w**2)
+    assert rel_err(got[:, 0], radial) < 1e-12
+    assert np.max(np.abs(got[:, 1])) < 1e-12 * np.max(np.abs(radial))
+    # against sympy's own auxiliary equations as well
+    assert rel_err(got, sympy_reactions(km, consts, (R1, R2), X)) < 1e-12
+
+
+def test_reactions_argument_names_and_orders_them():
+    km, consts, (R1, R2) = pin_pendulum()
+    sim = gen.compile(gen.Model.from_kanes(km, constants=consts, name="pin",
+                                           reactions=[R2, R1]))
+    assert sim.auxiliary_names == ["R2", "R1"]
+    x = np.array([0.4, -1.1])
+    m, g, L = 1.3, 9.81, 0.8
+    f = sim.auxiliary_forces(0.0, x)
+    assert abs(f[1] + m * (g * np.cos(0.4) + L * 1.1**2)) < 1e-12 * 20
+
+
+def test_box_on_ground_without_friction():
+    system, consts, F, Nf = box_on_ground(friction=False)
+    model = gen.Model.from_kanes(system, constants=consts, inputs=[F], name="box")
+    assert model.na == 1 and model.auxiliary_labels == ["N"]
+    sim = gen.compile(model)
+    X = random_states(10, 2, 3)
+    for x in X:
+        for r in (None, [2.5]):
+            np.testing.assert_allclose(sim.auxiliary_forces(0.0, x, r=r), [1.7 * 9.81],
+                                       rtol=1e-14)
+    km = system.eom_method
+    ref = sympy_reactions(km, consts, [Nf], X, inputs=[F], r_vals=[2.5])
+    got = np.array([sim.auxiliary_forces(0.0, x, r=[2.5]) for x in X])
+    assert rel_err(got, ref) < 1e-12
+
+
+def test_box_on_ground_with_friction_is_refused_naming_the_reaction():
+    # sympy's own model: the friction -mu N makes the motion depend on the
+    # reaction, which eomgen does not solve for
+    system, consts, F, _ = box_on_ground(friction=True)
+    with pytest.raises(ModelError, match=r"reaction force\(s\) N appear in the equations of "
+                                         r"motion"):
+        gen.Model.from_kanes(system, constants=consts, inputs=[F], name="box")
+
+
+def test_errors_name_the_symbols():
+    km, consts, (R1, R2) = pin_pendulum()
+    with pytest.raises(ModelError, match=r"2 auxiliary speed\(s\).*1 reaction.*\['R1'\]"):
+        gen.Model.from_kanes(km, constants=consts, reactions=[R1])
+    # an undeclared input in the auxiliary equations looks like another reaction
+    th, w, ua, R, Fx = me.dynamicsymbols('theta omega ua R Fx')
+    N = me.ReferenceFrame('N')
+    P = me.Point('P')
+    P.set_vel(N, w * N.x + ua * N.y)
+    km1 = me.KanesMethod(N, q_ind=[th], u_ind=[w], kd_eqs=[th.diff(t) - w], u_auxiliary=[ua])
+    km1.kanes_equations([me.Particle('p', P, 1)], [(P, (R + Fx) * N.y)])
+    with pytest.raises(ModelError, match=r"1 auxiliary speed\(s\).*2 reaction.*\['Fx', 'R'\]"):
+        gen.Model.from_kanes(km1, name="box")
+    sim = gen.compile(gen.Model.from_kanes(km1, inputs=[Fx], name="box"))
+    assert sim.auxiliary_names == ["R"]
+    assert abs(sim.auxiliary_forces(0.0, [0.0, 1.0], r=[0.75])[0] + 0.75) < 1e-15
+    # not linear in the reactions
+    th, w, ua, R = me.dynamicsymbols('theta omega ua R')
+    N = me.ReferenceFrame('N')
+    P = me.Point('P')
+    P.set_vel(N, w * N.x + ua * N.y)
+    km2 = me.KanesMethod(N, q_ind=[th], u_ind=[w], kd_eqs=[th.diff(t) - w], u_auxiliary=[ua])
+    km2.kanes_equations([me.Particle('p', P, 1)], [(P, R**2 * N.y)])
+    with pytest.raises(ModelError, match="not linear in the reaction force.*R"):
+        gen.Model.from_kanes(km2)
+
+
+def test_model_without_auxiliary_speeds(kane_sim):
+    assert kane_sim.na == 0
+    assert kane_sim.auxiliary_names == [] and kane_sim.auxiliary_labels == []
+    out = kane_sim.auxiliary_forces(0.0, np.zeros(kane_sim.nx))
+    assert out.shape == (0,)
+
+
+def test_singular_reaction_matrix_is_reported():
+    # two auxiliary speeds along the same direction: F is singular
+    th, w, ua1, ua2, R1, R2 = me.dynamicsymbols('theta omega ua1 ua2 R1 R2')
+    N = me.ReferenceFrame('N')
+    P = me.Point('P')
+    P.set_vel(N, w * N.x + ua1 * N.y + ua2 * N.y)
+    km = me.KanesMethod(N, q_ind=[th], u_ind=[w], kd_eqs=[th.diff(t) - w],
+                        u_auxiliary=[ua1, ua2])
+    km.kanes_equations([me.Particle('p', P, 1)], [(P, R1 * N.y + R2 * N.y)])
+    sim = gen.compile(gen.Model.from_kanes(km, name="sing"))
+    with pytest.raises(gen.SingularError if hasattr(gen, "SingularError") else Exception,
+                       match="ERR_SINGULAR"):
+        sim.auxiliary_forces(0.0, [0.1, 0.2])
+
+
+@pytest.mark.eigen
+def test_eigen_backend_matches_c():
+    from conftest import require_eigen
+    require_eigen()
+    km, consts, reactions = rolling_disc(normal=True)
+    model = gen.Model.from_kanes(km, constants=consts, name="disc_aux")
+    c, e = gen.compile(model), gen.compile(model, backend="eigen")
+    X = random_states(10, 6, 5)
+    ref = sympy_reactions(km, consts, reactions, X)
+    got = np.array([e.auxiliary_forces(0.0, x) for x in X])
+    assert rel_err(got, ref) < 1e-12
+    assert rel_err(got, [c.auxiliary_forces(0.0, x) for x in X]) < 1e-13
+
+
+def constrained_rolling_disc():
+    """examples/rolling_disc.py (two nonholonomic constraints: dependent
+    speeds u4, u5, a drive torque T as input) with an auxiliary vertical
+    speed ua of the disc (centre and contact point) carrying the normal
+    force fN at the contact point: the path
+    through the unconstrained equations and the runtime's elimination of
+    the dependent speeds."""
+    q1, q2, q3, x, y = me.dynamicsymbols("q1 q2 q3 x y")
+    u1, u2, u3, u4, u5 = me.dynamicsymbols("u1:6")
+    ua, fN, T = me.dynamicsymbols("ua fN T")
+    m, r, g = sm.symbols("m r g")
+    N = me.ReferenceFrame("N")
+    Y = N.orientnew("Y", "Axis", [q1, N.z])
+    L = Y.orientnew("L", "Axis", [q2, Y.x])
+    R = L.orientnew("R", "Axis", [q3, L.y])
+    qd = {q1.diff(): u1, q2.diff(): u2, q3.diff(): u3, x.diff(): u4, y.diff(): u5}
+    R.set_ang_vel(N, R.ang_vel_in(N).subs(qd))
+    L.set_ang_vel(N, L.ang_vel_in(N).subs(qd))
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    C = O.locatenew("C", x * N.x + y * N.y)
+    Dmc = C.locatenew("Dmc", r * L.z)
+    Dmc.set_vel(N, Dmc.pos_from(O).dt(N).subs(qd) + ua * N.z)
+    v_contact = Dmc.vel(N) + R.ang_vel_in(N).cross(C.pos_from(Dmc))
+    f_v = sm.Matrix([v_contact.dot(Y.x), v_contact.dot(Y.y)]).applyfunc(sm.expand)
+    I_disc = me.inertia(L, m * r**2 / 4, m * r**2 / 2, m * r**2 / 4)
+    disc = me.RigidBody("disc", Dmc, R, m, (I_disc, Dmc))
+    kde = [q1.diff() - u1, q2.diff() - u2, q3.diff() - u3, x.diff() - u4, y.diff() - u5]
+    km = me.KanesMethod(N, q_ind=[q1, q2, q3, x, y], u_ind=[u1, u2, u3],
+                        u_dependent=[u4, u5], kd_eqs=kde, velocity_constraints=f_v,
+                        u_auxiliary=[ua])
+    # the normal force acts at the disc's material point at the contact
+    # (no vertical velocity from the real speeds, ua from the auxiliary one)
+    Cm = me.Point("Cm")
+    Cm.set_vel(N, v_contact)
+    km.kanes_equations([disc], [(Dmc, -m * g * N.z), (Cm, fN * N.z), (R, T * L.y),
+                                (L, -T * L.y)])
+    return km, {m: 1.2, r: 0.3, g: 9.81}, [fN], T
+
+
+def test_constrained_model_matches_sympy_auxiliary_eqs():
+    km, consts, reactions, T = constrained_rolling_disc()
+    model = gen.Model.from_kanes(km, constants=consts, inputs=[T], name="cdisc")
+    assert model.mv == 2 and model.na == 1
+    sim = gen.compile(model)
+    X = np.array([sim.consistent_state(x) for x in random_states(10, sim.nx, 21)])
+    ref = sympy_reactions(km, consts, reactions, X, inputs=[T], r_vals=[0.4])
+    got = np.array([sim.auxiliary_forces(0.0, x, r=[0.4]) for x in X])
+    assert rel_err(got, ref) < 1e-12, rel_err(got, ref)
+
+
+def test_standalone_csv_has_one_column_per_reaction(tmp_path):
+    import shutil
+    import subprocess
+    from gen.render import generate
+    cc = shutil.which("cc") or shutil.which("gcc")
+    if cc is None:
+        pytest.skip("no C compiler")
+    km, consts, _ = pin_pendulum()
+    model = gen.Model.from_kanes(km, constants=consts, name="pin")
+    generate(model, tmp_path / "src")
+    src = sorted(str(p) for p in (tmp_path / "src").glob("*.c"))
+    exe = tmp_path / "pin_sim"
+    subprocess.run([cc, "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O1",
+                    "-I", str(tmp_path / "src"), *src, "-lm", "-o", str(exe)], check=True)
+    out = subprocess.run([str(exe), "--t-end", "0.05", "--dt", "0.01", "--x0", "theta=0.5",
+                          "--x0", "omega=1.5"], capture_output=True, text=True, check=True).stdout
+    lines = out.splitlines()
+    assert lines[0].split(",") == ["t", "theta", "omega", "R1", "R2"]
+    data = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+    m, g, L = 1.3, 9.81, 0.8
+    radial = -m * (g * np.cos(data[:, 1]) + L * data[:, 2]**2)
+    assert rel_err(data[:, 3], radial) < 1e-12
+    assert np.max(np.abs(data[:, 4])) < 1e-12 * np.max(np.abs(radial))
+
+
+def test_verify_checks_the_auxiliary_forces():
+    km, consts, _ = rolling_disc(normal=True)
+    report = gen.verify(gen.Model.from_kanes(km, constants=consts, name="disc_aux"), samples=5,
+                        linearize_samples=1)
+    assert report.ok, report.table()
+    assert "eval_auxiliary_forces" in report.table()
