@@ -422,6 +422,10 @@ class Model:
             # the unconstrained M, f above are formed again, so do it here)
             zero = _aux_zero(uaux, t)
             M, f = M.xreplace(zero[0]).xreplace(zero[1]), f.xreplace(zero[0]).xreplace(zero[1])
+            # velocity constraints written with the auxiliary speeds (a contact
+            # point's velocity, sympy's test_aux_dep): sympy keeps them in
+            # _k_nh/_f_nh; they are zero in the real motion too
+            A, b = A.xreplace(zero[0]).xreplace(zero[1]), b.xreplace(zero[0]).xreplace(zero[1])
             aux = _kane_auxiliary(km, q, u, uaux, inputs, reactions, t, zero)
             hit = sorted({_sym_name(r_) for r_ in aux[1] if M.has(r_) or f.has(r_)})
             if hit:
