@@ -269,6 +269,7 @@ def test_singular_reaction_matrix_is_reported():
         sim.auxiliary_forces(0.0, [0.1, 0.2])
 
 
+@pytest.mark.slow
 @pytest.mark.eigen
 def test_eigen_backend_matches_c():
     from conftest import require_eigen
