@@ -13,7 +13,12 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "examples"))
 sys.path.insert(0, str(ROOT / "tests"))
 if "EOMGEN_CACHE" not in os.environ:
-    os.environ["EOMGEN_CACHE"] = tempfile.mkdtemp(prefix="eomgen-test-cache-")
+    if os.environ.get("CI") == "true":
+        os.environ["EOMGEN_CACHE"] = tempfile.mkdtemp(prefix="eomgen-test-cache-")
+    else:
+        # the cache is keyed by content, so a rerun reuses what did not change:
+        # the fast tier's second run skips most compiles (CI starts empty)
+        os.environ["EOMGEN_CACHE"] = str(ROOT / ".eomgen-test-cache")
 
 import gen  # noqa: E402
 import seed_pendulum  # noqa: E402

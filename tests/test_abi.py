@@ -50,6 +50,7 @@ def test_c_runtime_messages_are_the_table(kane_sim):
     assert got[-1000] == abi.STATUS_UNKNOWN
 
 
+@pytest.mark.slow
 @pytest.mark.eigen
 def test_eigen_messages_equal_c(kane_model, kane_sim):
     require_eigen()

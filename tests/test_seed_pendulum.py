@@ -259,6 +259,7 @@ def test_generation_is_reproducible(tmp_path, kane_model):
 
 
 # ------------------------------------------------------- Eigen backend
+@pytest.mark.slow
 @pytest.mark.eigen
 def test_eigen_backend_agrees_with_c(kane_model, kane_sim):
     """The fast tier's compile of the C++/Eigen backend (tests/test_eigen.py,
