@@ -319,10 +319,13 @@ class Interface:
     def work_dims(self):
         """The arguments of the runtime's GEN_RT_MODEL_*_WORK macros."""
         s = self.sizes
-        accel = {"partitioned": "GEN_RT_ACCEL_PARTITIONED", "kkt": "GEN_RT_ACCEL_KKT",
-                 "ldlt": "GEN_RT_ACCEL_LDLT", "lu": "GEN_RT_ACCEL_LU"}[self.accel]
         return (f"{s['NQ']}, {s['NU']}, {s['MC']}, {s['MV']}, {s['NR']}, "
-                f"{1 if self.explicit_kinematics else 0}, {accel}")
+                f"{1 if self.explicit_kinematics else 0}, {self.accel_macro}")
+
+    @property
+    def accel_macro(self):
+        """The runtime's constant for the solver: GEN_RT_ACCEL_PARTITIONED, ..."""
+        return "GEN_RT_ACCEL_" + self.accel.upper()
 
     def work_args(self, fn):
         """The arguments of fn's GEN_RT_MODEL_<work>_WORK macros."""

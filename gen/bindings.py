@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .abi import METHODS, STATUSES, status_name
+from .abi import METHODS, status_name
 from .errors import ConvergenceError, DivergenceError, SingularError, SolverError
 
 __all__ = ["Simulator", "EXCEPTIONS"]
@@ -28,7 +28,6 @@ EXCEPTIONS = {
     "ERR_SINGULAR_KINEMATICS": SingularError,
     "ERR_DIVERGED": DivergenceError,
 }
-_METHODS = METHODS
 
 
 class Simulator:
@@ -309,8 +308,8 @@ class Simulator:
         """Simulate from x0 to t_end. dt is the RK4 step, or the output
         interval of the adaptive DOPRI5. Returns (t, X) with one row per
         output time (plus the multipliers and/or stats when asked)."""
-        if method not in _METHODS:
-            raise ValueError(f"method must be one of {sorted(_METHODS)}, got {method!r}")
+        if method not in METHODS:
+            raise ValueError(f"method must be one of {sorted(METHODS)}, got {method!r}")
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a positive number, got {dt!r}")
         if not (np.isfinite(t_end) and t_end >= t0):
@@ -322,7 +321,7 @@ class Simulator:
             self._check(rows, "simulate_rows")
         opts = self._ffi.new(f"{self._p}_sim_options *")
         self._fn("sim_options_default")(opts)
-        opts.method = _METHODS[method]
+        opts.method = METHODS[method]
         opts.project = 1 if project else 0
         opts.rtol = rtol
         opts.atol = atol

@@ -236,8 +236,7 @@ def build_context(plan, iface, timings=None, backend="c"):
         "defaults": {f.name: _field_default(f, real) for f in opts.fields},
         # the solver choice (made by the plan) as the runtime's constant, and
         # the arguments of the runtime's work-size macros
-        "accel_c": "GEN_RT_ACCEL_" + plan.accel.upper(),
-        "dims": iface.work_dims(),
+        "accel_c": iface.accel_macro,
         "mass_solve": (ldlt_program(m.nu, plan.mass_nonzero) if plan.accel == "ldlt" else None),
         # array sizes (C99 and C++ have no zero-length arrays)
         "sz": {"nqi": mx(nq - mc), "nui": mx(nu - mv), "mc": mx(mc), "mv": mx(mv),
@@ -249,11 +248,8 @@ def build_context(plan, iface, timings=None, backend="c"):
         "state_names": m.state_names,
         "input_names": m.input_names,
         "constant_names": m.constant_names,
-        "lam_names": [f"lam{i}" for i in range(mv)],
-        "fc_names": [f"fc{i}" for i in range(mc)],
         "ind_names": m.independent_state_names,
         "runtime_sources": RUNTIME_SOURCES,
-        "p_values_c": [_fmt_real(v, real) for v in m.p_values],
     }
     if backend == "eigen":
         ctx.update(_eigen_context(m, kernels))

@@ -14,12 +14,11 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import sympy as sm
 
-from .errors import EomgenError, ModelError
+from .errors import EomgenError
 
 __all__ = ["verify", "VerifyReport"]
 
