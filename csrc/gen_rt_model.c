@@ -158,7 +158,12 @@ static int rhs_(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
         /* Lagrange: accelerations and multipliers from the KKT system */
         return gen_rt_accel_kkt(nu, mv, M, f, A, a, w, iw, dxdt + nq, lam);
     }
-    if (m->accel == GEN_RT_ACCEL_LDLT) return m->mass_solve(M, f, dxdt + nq);
+    if (m->accel == GEN_RT_ACCEL_LDLT) {
+        /* the unrolled LDL^T checks its pivots; an overflowing solution
+         * (a tiny mass under a large force) is singular too, as with LU */
+        if ((st = m->mass_solve(M, f, dxdt + nq))) return st;
+        return finite_n(nu, dxdt + nq) ? GEN_RT_OK : GEN_RT_ERR_SINGULAR;
+    }
     return gen_rt_accel_kkt(nu, 0, M, f, NULL, NULL, w, iw, dxdt + nq, NULL);
 }
 
@@ -504,6 +509,7 @@ int gen_rt_model_linearize(const gen_rt_model *m, const gen_rt_real *x_op,
         if (st) return st;
     } else if (m->accel == GEN_RT_ACCEL_LDLT) {
         if ((st = m->mass_solve(M, f, ud))) return st;
+        if (!finite_n(nu, ud)) return GEN_RT_ERR_SINGULAR;
         lam[0] = 0;
     } else {
         st = gen_rt_accel_kkt(nu, 0, M, f, NULL, NULL, scratch, iwork, ud, NULL);

@@ -273,12 +273,15 @@ def cmd_simulate(a, progress):
     E = None
     if m.energy is not None:
         E = np.array([sim.energy(xi, p=p) for xi in X])
+    aux = None
+    if sim.na:
+        aux = np.array([sim.auxiliary_forces(ti, xi, r=r, p=p) for ti, xi in zip(t, X)])
     for out in (a.csv, a.plot):
         if out:
             Path(out).resolve().parent.mkdir(parents=True, exist_ok=True)
     if a.csv:
         with progress.stage(f"write {a.csv}"):
-            write_csv(a.csv, sim, cols, data, lam, res_names, res, E)
+            write_csv(a.csv, sim, cols, data, lam, res_names, res, E, aux)
         print(f"wrote {len(t)} rows to {a.csv}")
     if a.plot:
         with progress.stage(f"plot {a.plot}"):
@@ -288,7 +291,8 @@ def cmd_simulate(a, progress):
                 raise UsageError(str(e)) from None
         print(f"wrote {a.plot}")
     if not a.csv and not a.plot:
-        print_csv(cols, np.hstack(data))
+        print_csv(cols + (list(sim.auxiliary_names) if aux is not None else []),
+                  np.hstack(data + ([aux] if aux is not None else [])))
     return 0
 
 
@@ -410,7 +414,8 @@ def build_parser():
     s.add_argument("--param", action="append", metavar="NAME=VALUE", help="constant value")
     s.add_argument("--input", action="append", metavar="NAME=VALUE",
                    help="constant input value")
-    s.add_argument("--csv", help="write the trajectory (t, states, lam, residuals, energy)")
+    s.add_argument("--csv", help="write the trajectory (t, states, lam, residuals, energy, "
+                        "reaction forces)")
     s.add_argument("--plot", help="write a PNG plot")
     _add_real(s)
     s.set_defaults(fn=cmd_simulate, backend="c")

@@ -94,15 +94,18 @@ def print_linearization(sim, x, r, A, B):
     print("eigenvalues of A:", "  ".join(f"{e.real + 0.0:.9g}{e.imag + 0.0:+.9g}j" for e in ev))
 
 
-def write_csv(path, sim, cols, data, lam, res_names, res, E):
+def write_csv(path, sim, cols, data, lam, res_names, res, E, aux=None):
     """The trajectory as CSV: the columns cols of data, then the multipliers
-    (when the model has velocity constraints), the constraint residuals and
-    the energy when present."""
+    (when the model has velocity constraints), the constraint residuals, the
+    energy when present and the reaction forces of the auxiliary speeds
+    (aux: rows of sim.auxiliary_names, as the standalone binary writes)."""
     import numpy as np
     extra = [lam] if sim.mv else []
-    table = np.hstack(data + extra + res + ([E[:, None]] if E is not None else []))
+    has_aux = aux is not None and sim.na
+    table = np.hstack(data + extra + res + ([E[:, None]] if E is not None else [])
+                      + ([aux] if has_aux else []))
     header = cols + [f"lam{i}" for i in range(sim.mv)] + res_names + \
-        (["energy"] if E is not None else [])
+        (["energy"] if E is not None else []) + (list(sim.auxiliary_names) if has_aux else [])
     with open(path, "w") as fh:
         fh.write(",".join(header) + "\n")
         for row in table:

@@ -427,13 +427,8 @@ class Model:
             # _k_nh/_f_nh; they are zero in the real motion too
             A, b = A.xreplace(zero[0]).xreplace(zero[1]), b.xreplace(zero[0]).xreplace(zero[1])
             aux = _kane_auxiliary(km, q, u, uaux, inputs, reactions, t, zero)
-            hit = sorted({_sym_name(r_) for r_ in aux[1] if M.has(r_) or f.has(r_)})
-            if hit:
-                raise ModelError(
-                    f"the reaction force(s) {', '.join(hit)} appear in the equations of motion of "
-                    "the real speeds (mass matrix or forcing): eomgen computes reactions from "
-                    "the motion, which must not depend on them (for example a friction force "
-                    "proportional to a normal force); not supported")
+            if any(M.has(r_) or f.has(r_) for r_ in aux[1]):
+                M, f = _eliminate_reactions(M, f, aux, [ui.diff(t) for ui in u], q)
         qdot_map = dict(km._qdot_u_map) if km._qdot_u_map else {}
         return cls._finish(
             name=name, method="kane", t=t, q=q, u=u, qdots=qdots, udots=[ui.diff(t) for ui in u],
@@ -893,6 +888,65 @@ def _kane_auxiliary(km, q, u, uaux, inputs, reactions, t, zero):
                          f"{', '.join(nonlin)}")
     g = eqs.xreplace({r_: 0 for r_ in reactions})
     return F, reactions, g
+
+
+
+def _eliminate_reactions(M, f, aux, udots, coords):
+    """Reactions in the real speeds' equations (friction -mu*N on the normal
+    reaction N of an auxiliary speed): M u' = f(N) and the auxiliary
+    equations aux_F N + aux_g(u') = 0 form one linear system in (u', N).
+    N = -aux_F^-1 aux_g(u') is put into f, and its u' terms move into M
+    (which may then be unsymmetric; the runtime solves it by LU).
+
+    aux_F must be free of the state, inputs and time (a reaction applied
+    along its auxiliary direction, the usual case), so that its inverse
+    cannot divide by zero at some configuration; it is refused otherwise."""
+    F, reactions, g = aux
+    names = [_sym_name(r_) for r_ in reactions]
+    inM = [n for r_, n in zip(reactions, names) if M.has(r_)]
+    if inM:
+        raise ModelError(f"the reaction force(s) {', '.join(inM)} appear in the mass matrix of "
+                         "the real speeds; not supported")
+    G = f.jacobian(reactions)
+    nonlin = [n for r_, n in zip(reactions, names) if any(e.has(r_) for e in G)]
+    if nonlin:
+        raise ModelError(f"the forcing is not linear in the reaction force(s) "
+                         f"{', '.join(nonlin)} (for example Abs(N) or a product of "
+                         "reactions): eomgen solves the motion and the reactions together "
+                         "and needs them to enter linearly")
+    varying = sorted({_sym_name(fn) for e in F
+                      for fn in e.atoms(sm.core.function.AppliedUndef)}
+                     | ({"t"} if any(e.has(me.dynamicsymbols._t) for e in F) else set()))
+    if varying:
+        raise ModelError(
+            f"the reaction force(s) {', '.join(names)} appear in the equations of motion "
+            "(for example a friction force proportional to a normal force), and their "
+            f"coefficients in the auxiliary equations depend on {', '.join(varying)}: "
+            "eomgen solves for such reactions only when each is applied along a fixed "
+            "combination of its auxiliary directions (the coefficients are constants)")
+    det = sm.simplify(F.det())
+    if det == 0:
+        raise ModelError(f"the auxiliary equations do not determine the reaction force(s) "
+                         f"{', '.join(names)} (their coefficient matrix is singular)")
+    sol = -F.LUsolve(g)
+    f_sub = f.xreplace(dict(zip(reactions, sol)))
+    J = f_sub.jacobian(udots)
+    if any(e.has(ud) for e in J for ud in udots):
+        raise ModelError("the reaction forces make the equations of motion nonlinear in "
+                         "the accelerations; not supported")
+    speeds = sorted({_sym_name(fn) for e in J for fn in e.atoms(sm.core.function.AppliedUndef)
+                     if fn not in coords})
+    if speeds:
+        raise ModelError(
+            f"the reaction force(s) {', '.join(names)} enter the equations of motion with "
+            f"coefficients that depend on {', '.join(speeds)} (for example "
+            "Coulomb friction -mu*N*sign(v)) while the reactions depend on the "
+            "accelerations: solved together, the matrix multiplying u' would depend on them, "
+            "and eomgen's mass matrix is a function of the configuration only; not "
+            "supported (a reaction that does not depend on the accelerations, such as the "
+            "normal force of a block on flat ground, is)")
+    zero = {ud: 0 for ud in udots}
+    return M - J, f_sub.xreplace(zero)
 
 
 def _check_expressions(mat, what, allowed):

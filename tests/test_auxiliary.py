@@ -211,13 +211,131 @@ def test_box_on_ground_without_friction():
     assert rel_err(got, ref) < 1e-12
 
 
-def test_box_on_ground_with_friction_is_refused_naming_the_reaction():
-    # sympy's own model: the friction -mu N makes the motion depend on the
-    # reaction, which eomgen does not solve for
-    system, consts, F, _ = box_on_ground(friction=True)
-    with pytest.raises(ModelError, match=r"reaction force\(s\) N appear in the equations of "
-                                         r"motion"):
-        gen.Model.from_kanes(system, constants=consts, inputs=[F], name="box")
+def sympy_residuals(system, consts, F, Nf, x, r, xdot, n_val):
+    """sympy's own equations at a state with eomgen's u' and reaction put
+    in: the dynamic equations (mass_matrix u' - forcing) and the auxiliary
+    equations, both zero when eomgen solved them together."""
+    km = system.eom_method
+    q, u, ua = km.q[0], km.u[0], km._uaux[0]
+    sub = {u.diff(t): xdot[1], ua.diff(t): 0}
+    sub2 = {q: x[0], u: x[1], ua: 0, F: r[0], Nf: n_val}
+    dyn = (km.mass_matrix * sm.Matrix([u.diff(t)]) - km.forcing)
+    vals = [float(e.xreplace(sub).xreplace(sub2).xreplace(consts))
+            for e in list(dyn) + list(km.auxiliary_eqs)]
+    return np.array(vals)
+
+
+def test_box_on_ground_with_friction_solves_motion_and_reaction_together():
+    # sympy's own model: the friction -mu N puts the normal reaction into the
+    # motion; eomgen solves u' and N together
+    system, consts, F, Nf = box_on_ground(friction=True)
+    model = gen.Model.from_kanes(system, constants=consts, inputs=[F], name="box")
+    sim = gen.compile(model)
+    m, g, mu = 1.7, 9.81, 0.3
+    for x in random_states(10, 2, 5):
+        r = [np.random.default_rng(int(1e3 * abs(x[0]))).uniform(0, 20)]
+        xd = sim.rhs(0.0, x, r=r)
+        n_val = sim.auxiliary_forces(0.0, x, r=r)[0]
+        assert abs(xd[1] - (r[0] - mu * m * g) / m) < 1e-14 * 20
+        assert abs(n_val - m * g) < 1e-14 * 20
+        res = sympy_residuals(system, consts, F, Nf, x, r, xd, n_val)
+        assert np.max(np.abs(res)) < 1e-12 * m * g, res
+    # the linearization carries the friction: d u'/d F = 1/m, the rest zero
+    A, B = sim.linearize([0.0, 0.5], [3.0])
+    np.testing.assert_allclose(B, [[0.0], [1 / m]], atol=1e-15)
+    np.testing.assert_allclose(A, [[0.0, 1.0], [0.0, 0.0]], atol=1e-15)
+
+
+def cart_pendulum_with_friction(signed=False):
+    """A cart (mass mc, position x, speed v) sliding forward on the ground
+    with friction -mu N on the normal force N (-mu N sign(v) with
+    signed=True), which the swinging bob
+    (mass mp, rod l, angle theta from the downward vertical) changes: the
+    vertical speed ua of the cart is auxiliary and carries N (the problem of
+    Florian, 'Correct equations for the dynamics of the cart-pole system',
+    2007, with a point mass)."""
+    x, th, v, w, ua, Nf, F = me.dynamicsymbols('x theta v omega ua N F')
+    mc, mp, l, g, mu = sm.symbols('m_c m_p l g mu')
+    N = me.ReferenceFrame('N')
+    A = N.orientnew('A', 'Axis', [th, N.z])
+    A.set_ang_vel(N, w * N.z)
+    O = me.Point('O')
+    C = O.locatenew('C', x * N.x)
+    C.set_vel(N, v * N.x + ua * N.y)
+    P = C.locatenew('P', -l * A.y)
+    P.v2pt_theory(C, N, A)
+    bodies = [me.Particle('cart', C, mc), me.Particle('bob', P, mp)]
+    fric = mu * Nf * (sm.sign(v) if signed else 1)
+    loads = [(C, -mc * g * N.y + Nf * N.y + (F - fric) * N.x),
+             (P, -mp * g * N.y)]
+    km = me.KanesMethod(N, q_ind=[x, th], u_ind=[v, w],
+                        kd_eqs=[x.diff(t) - v, th.diff(t) - w], u_auxiliary=[ua])
+    km.kanes_equations(bodies, loads)
+    consts = {mc: 1.4, mp: 0.6, l: 0.7, g: 9.81, mu: 0.25}
+    return km, consts, F, Nf
+
+
+def newton_euler(x_state, F, mc=1.4, mp=0.6, l=0.7, g=9.81, mu=0.25):
+    """By hand: the bob at (x + l sin th, -l cos th) with rod tension T, the
+    cart with N and friction mu N against +x; four linear equations in
+    x'', th'', T, N."""
+    _, th, v, w = x_state
+    s, c, sg = np.sin(th), np.cos(th), 1.0
+    # unknowns [x'', th'', T, N]
+    K = np.array([
+        [mp, mp * l * c, s, 0.0],            # bob x: mp ax = -T sin th
+        [0.0, mp * l * s, -c, 0.0],          # bob y: mp ay = T cos th - mp g
+        [mc, 0.0, -s, mu * sg],              # cart x: mc x'' = F - mu N sgn + T sin th
+        [0.0, 0.0, c, -1.0]])                # cart y: 0 = N - mc g - T cos th
+    rhs = np.array([mp * l * w**2 * s, -mp * l * w**2 * c - mp * g, F, -mc * g])
+    return np.linalg.solve(K, rhs)
+
+
+def test_cart_pendulum_friction_on_varying_normal_force_by_hand():
+    km, consts, F, Nf = cart_pendulum_with_friction()
+    model = gen.Model.from_kanes(km, constants=consts, inputs=[F], name="cartfric")
+    assert model.auxiliary_labels == ["N"]
+    sim = gen.compile(model)
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        x = rng.uniform(-2, 2, 4)
+        x[2] = abs(x[2])                    # sliding forward
+        r = rng.uniform(-5, 5, 1)
+        xdd, thdd, _, n_val = newton_euler(x, r[0])
+        got = sim.rhs(0.0, x, r=r)
+        np.testing.assert_allclose(got, [x[2], x[3], xdd, thdd], rtol=1e-12, atol=1e-12)
+        assert abs(sim.auxiliary_forces(0.0, x, r=r)[0] - n_val) < 1e-12 * abs(n_val)
+    # the linearization is the derivative of that rhs (central differences)
+    x0, r0 = np.array([0.1, 0.8, 0.4, -0.3]), np.array([1.5])
+    A, B = sim.linearize(x0, r0)
+    h = 1e-6
+    An = np.column_stack([(sim.rhs(0.0, x0 + h * e, r=r0) - sim.rhs(0.0, x0 - h * e, r=r0)) / (2 * h)
+                          for e in np.eye(4)])
+    assert rel_err(A, An) < 1e-8
+
+
+def test_reaction_with_speed_dependent_coefficient_is_refused():
+    # Coulomb friction -mu N sign(v) on a normal force that depends on the
+    # accelerations: u'-coefficients would depend on v
+    km, consts, F, _ = cart_pendulum_with_friction(signed=True)
+    with pytest.raises(ModelError, match=r"reaction force\(s\) N enter the equations of motion "
+                                         r"with coefficients that depend on v"):
+        gen.Model.from_kanes(km, constants=consts, inputs=[F], name="cartfric")
+
+
+def test_reaction_along_a_turning_direction_in_the_motion_is_refused():
+    # the reaction acts along a direction that turns with q: solving for it
+    # would divide by cos(q), which can vanish
+    q, u, ua, R = me.dynamicsymbols('q u ua R')
+    N = me.ReferenceFrame('N')
+    B = N.orientnew('B', 'Axis', [q, N.z])
+    P = me.Point('P')
+    P.set_vel(N, u * N.x + ua * N.y)
+    km = me.KanesMethod(N, q_ind=[q], u_ind=[u], kd_eqs=[q.diff(t) - u], u_auxiliary=[ua])
+    km.kanes_equations([me.Particle('p', P, 1)], [(P, R * B.y - sm.Rational(1, 3) * R * N.x)])
+    with pytest.raises(ModelError, match=r"reaction force\(s\) R appear in the equations of "
+                                         r"motion .* depend on q"):
+        gen.Model.from_kanes(km, name="turning")
 
 
 def test_errors_name_the_symbols():

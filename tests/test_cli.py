@@ -188,3 +188,46 @@ def test_readme_tour_runs_as_written(tmp_path):
     assert pngs, "the tour writes a plot"
     committed = ROOT / "docs" / pngs[0].name
     assert committed.is_file(), f"the README's plot {committed} is committed"
+
+
+PIN_MODEL = '''
+import sympy as sm
+from sympy.physics import mechanics as me
+import gen
+
+
+def model():
+    t = me.dynamicsymbols._t
+    th, w, ua1, ua2, R1, R2 = me.dynamicsymbols('theta omega ua1 ua2 R1 R2')
+    m, g, L = sm.symbols('m g L')
+    N = me.ReferenceFrame('N')
+    A = N.orientnew('A', 'Axis', [th, N.z])
+    A.set_ang_vel(N, w * N.z)
+    O = me.Point('O')
+    O.set_vel(N, ua1 * A.x + ua2 * A.y)
+    P = O.locatenew('P', L * A.x)
+    P.v2pt_theory(O, N, A)
+    km = me.KanesMethod(N, q_ind=[th], u_ind=[w], kd_eqs=[th.diff(t) - w],
+                        u_auxiliary=[ua1, ua2])
+    km.kanes_equations([me.Particle('bob', P, m)], [(P, m * g * N.x), (O, R1 * A.x + R2 * A.y)])
+    return gen.Model.from_kanes(km, constants={m: 1.3, g: 9.81, L: 0.8}, name="pin")
+'''
+
+
+def test_simulate_csv_has_the_reaction_forces(tmp_path):
+    # the pin force of a pendulum, by hand: R1 = -m (g cos(theta) + L theta'^2), R2 = 0
+    f = tmp_path / "pin_model.py"
+    f.write_text(PIN_MODEL)
+    out = tmp_path / "run.csv"
+    eomgen("simulate", str(f), "--t-end", "0.5", "--dt", "0.01", "--x0", "theta=0.5",
+           "--x0", "omega=1.5", "--csv", str(out), check_rc=0)
+    lines = out.read_text().splitlines()
+    assert lines[0].split(",") == ["t", "theta", "omega", "R1", "R2"]
+    data = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+    radial = -1.3 * (9.81 * np.cos(data[:, 1]) + 0.8 * data[:, 2] ** 2)
+    assert np.max(np.abs(data[:, 3] - radial)) < 1e-12 * np.max(np.abs(radial))
+    assert np.max(np.abs(data[:, 4])) < 1e-12 * np.max(np.abs(radial))
+    # on stdout too
+    p = eomgen("simulate", str(f), "--t-end", "0.02", "--dt", "0.01", "--x0", "theta=0.5",
+               check_rc=0)
+    assert p.stdout.splitlines()[0] == "t,theta,omega,R1,R2"

@@ -567,17 +567,7 @@ def test_model_matches_sympy(key):
     expect_unused = d.get("unused", [])
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        try:
-            model = _build(d, ("from_system", key))
-        except gen.ModelError as e:
-            uaux = getattr(d["method"], "_uaux", None)
-            if uaux is not None and len(uaux):
-                # sympy's box on ground: its friction -mu*N puts the normal
-                # reaction N into the equations of motion, which auxiliary
-                # speeds cannot give (tests/test_auxiliary.py covers the rest)
-                assert "N" in str(e) and "reaction" in str(e), str(e)
-                return
-            raise
+        model = _build(d, ("from_system", key))
     unused = [w for w in caught if issubclass(w.category, UnusedConstantWarning)]
     assert len(unused) == (1 if expect_unused else 0), [str(w.message) for w in unused]
     for name in expect_unused:

@@ -21,8 +21,19 @@ from conftest import require_eigen, require_tool
 pytestmark = pytest.mark.fuzz
 
 HARNESS = Path(__file__).resolve().parent / "fuzz" / "harness.c"
+
+
+def _box_friction():
+    """sympy's box on the ground with friction -mu N: an auxiliary speed
+    whose reaction is in the motion (eval_auxiliary_forces, NA = 1)."""
+    from test_auxiliary import box_on_ground
+    system, consts, F, _ = box_on_ground(friction=True)
+    return gen.Model.from_kanes(system, constants=consts, inputs=[F], name="box_fric")
+
+
 MODELS = {"kane": sp.kane_model, "lagrange": sp.lagrange_model,
-          "rolling_disc": rolling_disc.model, "four_bar": four_bar.model}
+          "rolling_disc": rolling_disc.model, "four_bar": four_bar.model,
+          "box_friction": _box_friction}
 
 
 def _build(model, out, cc, flags, extra=()):
@@ -54,7 +65,7 @@ def test_hostile_inputs_under_sanitizers(tmp_path, key):
 
 @pytest.mark.slow
 @pytest.mark.eigen
-@pytest.mark.parametrize("key", ["rolling_disc"])
+@pytest.mark.parametrize("key", ["rolling_disc", "box_friction"])
 def test_eigen_backend_under_sanitizers(tmp_path, key):
     """The C++/Eigen backend's extern "C" layer obeys the same rules."""
     inc = require_eigen()

@@ -49,11 +49,7 @@ SLOW_SOURCES = {
     "test_kane3.py::test_bicycle": "Whipple bicycle: sympy's own test takes minutes",
 }
 # models whose refusal by the generator is correct by design: {id: reason}
-REFUSAL_OK = {
-    "test_system_class.py::TestSystemExamples::test_box_on_ground#1":
-        "friction -mu*N(t) on the reaction N of the auxiliary speed: the motion depends on "
-        "the reaction, which eomgen computes from the motion (README, Auxiliary speeds)",
-}
+REFUSAL_OK = {}
 
 T = me.dynamicsymbols._t
 
@@ -384,10 +380,8 @@ def reference(method, d, cvals):
 
     Mf = conv(method.mass_matrix_full)
     Ff = conv(method.forcing_full)
-    fM = sm.lambdify((ts, xs, rs), Mf, "numpy")
-    fF = sm.lambdify((ts, xs, rs), Ff, "numpy")
     nx = len(xs)
-    faux = None
+    faux = coupled = None
     if d["kind"] == "kane" and d["uaux"] and d["reactions"]:
         # sympy's auxiliary equations F w + g(q, u, u') = 0, solved for the reactions w
         u = d["states"][n:]
@@ -397,6 +391,18 @@ def reference(method, d, cvals):
         eqs = conv(eqs.xreplace(dict(zip(d["reactions"], ws))))
         Fa, ga = eqs.jacobian(ws), eqs.xreplace({w: 0 for w in ws})
         faux = sm.lambdify((ts, xs, rs, uds), (Fa, ga), "numpy")
+        Ff = Ff.xreplace({w_: w for w_, w in zip(d["reactions"], ws)}
+                         ).xreplace({sm.sympify(w_).xreplace({T: ts}): w
+                                     for w_, w in zip(d["reactions"], ws)})
+        if Ff.has(*ws):
+            # the reactions are in sympy's forcing (friction -mu*N): sympy's full
+            # form and its auxiliary equations solved together for (x', w)
+            Gf = Ff.jacobian(ws)
+            Ff = Ff.xreplace({w: 0 for w in ws})
+            ga0 = ga.xreplace({v: 0 for v in uds})
+            coupled = sm.lambdify((ts, xs, rs), (Gf, ga.jacobian(uds), Fa, ga0), "numpy")
+    fM = sm.lambdify((ts, xs, rs), Mf, "numpy")
+    fF = sm.lambdify((ts, xs, rs), Ff, "numpy")
 
     def ref(t, x, r):
         with np.errstate(all="ignore"):
@@ -404,6 +410,14 @@ def reference(method, d, cvals):
             F = np.array(fF(t, x, r), dtype=float).reshape(-1)
         if not (np.all(np.isfinite(M)) and np.all(np.isfinite(F))):
             return None
+        if coupled is not None:
+            Gf, Ha, Fa, ga0 = (np.array(a, dtype=float) for a in coupled(t, x, r))
+            na = Fa.shape[0]
+            K = np.zeros((nx + na, nx + na))
+            K[:nx, :nx], K[:nx, nx:] = M, -Gf
+            K[nx:, n:nx], K[nx:, nx:] = Ha, Fa
+            sol = np.linalg.solve(K, np.concatenate([F, -ga0.reshape(-1)]))
+            return sol[:nx], None, sol[nx:]
         if np.linalg.cond(M) > 1e12:
             return "singular"
         sol = np.linalg.solve(M, F)

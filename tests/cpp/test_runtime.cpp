@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 
 #include "gen_rt_eigen.hpp"
 
@@ -109,6 +110,56 @@ struct Oscillator {
         o.Rr[0] = S(-1);
     }
 };
+
+// The oscillator with two auxiliary speeds: F R + g(q, u') = 0 with the
+// constant F = [[2, 1], [1, 3]] (the singular [[1, 2], [2, 4]] when q > 100)
+// and g = [m u', q]; closed form R = -F^-1 g, F^-1 = [[3, -1], [-1, 2]] / 5
+struct AuxOscillator : Oscillator<false> {
+    static constexpr int NA = 2;
+    template <class S>
+    static void auxiliary(const S *q, const S *, const S *ud, const S *, const S *p, S, S *F,
+                          S *g) noexcept
+    {
+        const bool sing = q[0] > 100;
+        F[0] = sing ? S(1) : S(2);
+        F[1] = sing ? S(2) : S(1);
+        F[2] = sing ? S(2) : S(1);
+        F[3] = sing ? S(4) : S(3);
+        g[0] = p[0] * ud[0];
+        g[1] = q[0];
+    }
+};
+
+void test_auxiliary()
+{
+    using RT = gen_rt::Runtime<AuxOscillator, double>;
+    using RT0 = gen_rt::Runtime<Oscillator<false>, double>;
+    static_assert(RT::NA == 2 && RT0::NA == 0, "NA from the traits type");
+    typename RT::Params p;
+    p << 1.5, 4, 0.4;
+    typename RT::Inputs r;
+    r << 0.7;
+    typename RT::State x(0.3, -0.2);
+    typename RT::AuxiliaryForces R;
+    expect(RT::eval_auxiliary_forces(0.0, x, r, p, R) == gen_rt::OK, "auxiliary forces: OK");
+    const double ud = (-4 * 0.3 - 0.4 * -0.2 + 0.7) / 1.5, g0 = 1.5 * ud, g1 = 0.3;
+    expect(std::fabs(R[0] + (3 * g0 - g1) / 5) < 1e-14 &&
+               std::fabs(R[1] + (-g0 + 2 * g1) / 5) < 1e-14,
+           "auxiliary forces: -F^-1 g at u' from the right-hand side", R[0]);
+    // a model without auxiliary speeds: OK, nothing written
+    typename RT0::AuxiliaryForces none;
+    expect(RT0::eval_auxiliary_forces(0.0, x, r, p, none) == gen_rt::OK,
+           "auxiliary forces: NA = 0 is OK");
+    // singular F, and a non-finite input, leave R as it was
+    const typename RT::AuxiliaryForces before = R;
+    x[0] = 200;
+    expect(RT::eval_auxiliary_forces(0.0, x, r, p, R) == gen_rt::ERR_SINGULAR && R == before,
+           "auxiliary forces: singular F reported, R unchanged");
+    x[0] = std::numeric_limits<double>::quiet_NaN();
+    expect(RT::eval_auxiliary_forces(0.0, x, r, p, R) == gen_rt::ERR_NONFINITE_INPUT &&
+               R == before,
+           "auxiliary forces: NaN state refused, R unchanged");
+}
 
 // p = [L, m, g]; q = [x, y], u = [vx, vy]
 struct Pendulum {
@@ -513,6 +564,7 @@ int main()
     test_oscillator<Oscillator<true>>("oscillator, implicit kinematics");
     test_float();
     test_pendulum();
+    test_auxiliary();
     if (failures) {
         std::printf("%d failures\n", failures);
         return 1;

@@ -31,6 +31,7 @@ typedef P(real) real;
 #define MC PU(MC)
 #define MV PU(MV)
 #define NS PU(NS)
+#define NA PU(NA)
 #define ROWS 4
 #define STATUS_MIN PU(STATUS_MIN)
 
@@ -66,6 +67,7 @@ static void exercise(const real *x, const real *r, const real *p, real t, real h
     real dx[NX], lam[MV + 1], M[NU * NU], f[NU], qd[NQ], xc[NX], E[1];
     real A[NS * NS + 1], B[NS * NR + 1];
     real fc[MC + 1], Jc[MC * NQ + 1], fv[MV + 1], Av[MV * NU + 1], bv[MV + 1];
+    real Fa[NA + 1];
     real tout[ROWS], xout[ROWS * NX], lout[ROWS * (MV + 1)];
     P(sim_options) o;
     P(sim_stats) s;
@@ -86,6 +88,7 @@ static void exercise(const real *x, const real *r, const real *p, real t, real h
     check("eval_velocity_constraint_matrix", st, Av, MV * NU);
     check("eval_velocity_constraint_matrix (b)", st, bv, MV);
 #endif
+    check("eval_auxiliary_forces", P(eval_auxiliary_forces)(t, x, r, p, Fa), Fa, NA);
 #if PU(HAS_ENERGY)
     check("eval_energy", P(eval_energy)(x, x + NQ, p, t, E), E, 1);
 #endif
@@ -134,6 +137,10 @@ static void null_checks(void)
     if (P(step_rk4)(0, (real)0.01, r, NULL, 1, NULL) != -1) fail("step_rk4", "NULL x accepted", 0);
     if (P(simulate)(x, 0, 1, (real)0.1, r, NULL, NULL, 4, NULL, NULL, NULL, NULL) != -1)
         fail("simulate", "NULL outputs accepted", 0);
+    if (P(eval_auxiliary_forces)(0, NULL, r, NULL, dx) != -1)
+        fail("eval_auxiliary_forces", "NULL x accepted", 0);
+    if (NA > 0 && P(eval_auxiliary_forces)(0, x, r, NULL, NULL) != -1)
+        fail("eval_auxiliary_forces", "NULL F accepted", 0);
     if (P(status_message)(-3) == NULL || P(status_message)(12345) == NULL)
         fail("status_message", "NULL message", 0);
 }
