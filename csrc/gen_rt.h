@@ -179,6 +179,8 @@ typedef struct {
     const gen_rt_real *Su;  /* mv x nu */
     const gen_rt_real *Vq;  /* mv x nq: d(A u + b)/dq */
     const gen_rt_real *Jc;  /* mc x nq: d f_c / dq */
+    const gen_rt_real *Sqd; /* mv x nq: dS/dq' when the acceleration-constraint term
+                             * holds q' (implicit kinematics); NULL otherwise */
 } gen_rt_lin_blocks;
 
 #define GEN_RT_LIN_WORK(nq, nu, mc, mv, nr)                                   \
@@ -214,7 +216,7 @@ int gen_rt_linearize(const gen_rt_lin_dims *d, const gen_rt_lin_blocks *b,
 /* outputs of the linearization kernel (the blocks of gen_rt_lin_blocks);
  * the kernel writes the blocks the model has */
 typedef struct {
-    gen_rt_real *Kqd, *Ku, *M, *A, *Kq, *Rq, *Ru, *Rr, *Sq, *Su, *Vq, *Jc;
+    gen_rt_real *Kqd, *Ku, *M, *A, *Kq, *Rq, *Ru, *Rr, *Sq, *Su, *Vq, *Jc, *Sqd;
 } gen_rt_lin_out;
 
 typedef struct gen_rt_model {
@@ -257,6 +259,12 @@ typedef struct gen_rt_model {
     void (*auxiliary)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *ud,
                       const gen_rt_real *r, const gen_rt_real *p, gen_rt_real t,
                       gen_rt_real *F, gen_rt_real *g);
+    /* the acceleration-constraint term a (mv) at q' (qd), for a model with
+     * velocity constraints and implicit kinematics: a = d(A u + b)/dq q' +
+     * d(A u + b)/dt holds q', which only the run time knows (rhs_terms then
+     * writes a at q' = 0 and this overwrites it); NULL otherwise */
+    void (*accel_terms)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *qd,
+                        const gen_rt_real *p, gen_rt_real t, gen_rt_real *a);
 } gen_rt_model;
 
 /* integration methods (gen_rt_sim_options.method) */
@@ -327,7 +335,7 @@ typedef struct {
 #define GEN_RT_MODEL_LINEARIZE_WORK(nq, nu, mc, mv, nr, ek, acc)                \
     ((nq) + (nu) + (mv) + 1 + (nu) * (nu) + (nu) + (mv) * (nu) + (mv) +          \
      2 * (nq) * (nq) + (nq) * (nu) + (nu) * (nq) + (nu) * (nu) + (nu) * (nr) +   \
-     2 * (mv) * (nq) + (mv) * (nu) + (mc) * (nq) +                               \
+     3 * (mv) * (nq) + (mv) * (nu) + (mc) * (nq) +                               \
      GEN_RT_MAX_(GEN_RT_MAX_(GEN_RT_ACCEL_WORK(nu, mv), GEN_RT_MODEL_KIN_WORK(nq, nu, mc, mv, nr, ek, acc)), \
                  (nq) + (nu) * (nu) + (nu) + (nq) * (nq)) +                      \
      GEN_RT_LIN_WORK(nq, nu, mc, mv, nr) + 8)

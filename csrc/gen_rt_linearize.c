@@ -134,6 +134,14 @@ int gen_rt_linearize(const gen_rt_lin_dims *d, const gen_rt_lin_blocks *b,
             for (k = 0; k < niu; ++k) G[(nu + i) * (ns + nr) + niq + k] = -T2[i * niu + k];
             for (k = 0; k < nr; ++k) G[(nu + i) * (ns + nr) + ns + k] = 0;
         }
+        /* S holds q' (implicit kinematics): its share through dq' = Dq */
+        if (b->Sqd)
+            for (i = 0; i < mv; ++i)
+                for (k = 0; k < ns; ++k) {
+                    gen_rt_real s = 0;
+                    for (j = 0; j < nq; ++j) s += b->Sqd[i * nq + j] * Dq[j * ns + k];
+                    G[(nu + i) * (ns + nr) + k] -= s;
+                }
     }
     if ((st = gen_rt_lu_factor(N, K, iwork, 0))) return st;
     if ((st = gen_rt_lu_solve(N, K, iwork, ns + nr, G))) return st;

@@ -148,6 +148,7 @@ static int rhs_(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
     m->rhs_terms(q, u, r, p, t, m->explicit_kinematics ? NULL : Kqd, dxdt, M, f,
                  mv ? A : NULL, mv ? a : NULL);
     if ((st = solve_kinematics(m, Kqd, kpiv, dxdt))) return st;
+    if (mv && m->accel_terms) m->accel_terms(q, u, dxdt, p, t, a);
     if (!finite_n(nu * nu, M) || !finite_n(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
     if (mv) {
         if (!finite_n(mv * nu, A) || !finite_n(mv, a)) return GEN_RT_ERR_NONFINITE_MODEL;
@@ -484,7 +485,7 @@ int gen_rt_model_linearize(const gen_rt_model *m, const gen_rt_real *x_op,
                 *A = f + nu, *a = A + mv * nu, *Kqd = a + mv, *Kq = Kqd + nq * nq,
                 *Ku = Kq + nq * nq, *Rq = Ku + nq * nu, *Ru = Rq + nu * nq, *Rr = Ru + nu * nu,
                 *Sq = Rr + nu * nr, *Su = Sq + mv * nq, *Vq = Su + mv * nu, *Jc = Vq + mv * nq,
-                *scratch = Jc + mc * nq;
+                *Sqd = Jc + mc * nq, *scratch = Sqd + mv * nq;
     int sw = GEN_RT_ACCEL_WORK(nu, mv);
     gen_rt_real Bdummy[1];
     gen_rt_lin_out o;
@@ -504,6 +505,7 @@ int gen_rt_model_linearize(const gen_rt_model *m, const gen_rt_real *x_op,
          * are not needed here) */
         gen_rt_real *qdt = scratch, *Mt = qdt + nq, *ft = Mt + nu * nu, *Kt = ft + nu;
         m->rhs_terms(q, u, r_op, p, t, m->explicit_kinematics ? NULL : Kt, qdt, Mt, ft, A, a);
+        if (m->accel_terms) m->accel_terms(q, u, qd, p, t, a);
         if (!finite_n(mv * nu, A) || !finite_n(mv, a)) return GEN_RT_ERR_NONFINITE_MODEL;
         st = gen_rt_accel_kkt(nu, mv, M, f, A, a, scratch, iwork, ud, lam);
         if (st) return st;
@@ -517,7 +519,7 @@ int gen_rt_model_linearize(const gen_rt_model *m, const gen_rt_real *x_op,
         lam[0] = 0;
     }
     o.Kqd = Kqd; o.Ku = Ku; o.M = M; o.A = A; o.Kq = Kq; o.Rq = Rq; o.Ru = Ru; o.Rr = Rr;
-    o.Sq = Sq; o.Su = Su; o.Vq = Vq; o.Jc = Jc;
+    o.Sq = Sq; o.Su = Su; o.Vq = Vq; o.Jc = Jc; o.Sqd = Sqd;
     m->lin_terms(q, u, qd, ud, lam, r_op, p, t, &o);
     d.nq = nq; d.nu = nu; d.mc = mc; d.mv = mv; d.nr = nr;
     d.q_ind = m->q_ind; d.q_dep = m->q_dep; d.u_ind = m->u_ind; d.u_dep = m->u_dep;
@@ -525,9 +527,11 @@ int gen_rt_model_linearize(const gen_rt_model *m, const gen_rt_real *x_op,
     b.Rr = nr ? Rr : NULL; b.A = mv ? A : NULL;
     b.Sq = mv ? Sq : NULL; b.Su = mv ? Su : NULL;
     b.Vq = mv ? Vq : NULL; b.Jc = mc ? Jc : NULL;
+    b.Sqd = (mv && m->accel_terms) ? Sqd : NULL;
     if (!finite_n(nq * nq, Kq) || !finite_n(nu * nq, Rq) || !finite_n(nu * nu, Ru) ||
         !finite_n(mv * nq, Sq) || !finite_n(mv * nu, Su) || !finite_n(mc * nq, Jc) ||
-        !finite_n(mv * nq, Vq) || !finite_n(nu * nr, Rr))
+        !finite_n(mv * nq, Vq) || !finite_n(nu * nr, Rr) ||
+        (b.Sqd && !finite_n(mv * nq, Sqd)))
         return GEN_RT_ERR_NONFINITE_MODEL;
     return gen_rt_linearize(&d, &b, scratch + sw, iwork, A_lin, nr ? B_lin : Bdummy);
 }

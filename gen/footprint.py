@@ -218,10 +218,11 @@ _RUNTIME_INDIRECT = {
     # static helpers of gen_rt_model.c, when the compiler does not inline them
     "constraint_jacobian_at": ["constraint_jacobian"],
     "velocity_matrix_at": ["velocity_constraint_matrix"],
-    "gen_rt_model_rhs": ["rhs_terms", "mass_solve"],
+    "gen_rt_model_rhs": ["rhs_terms", "accel_terms", "mass_solve"],
     "gen_rt_model_project": ["constraint_jacobian", "velocity_constraint_matrix"],
     "gen_rt_model_consistent_state": ["constraint_jacobian", "velocity_constraint_matrix"],
-    "gen_rt_model_linearize": ["mass_matrix", "forcing", "rhs_terms", "lin_terms", "mass_solve"],
+    "gen_rt_model_linearize": ["mass_matrix", "forcing", "rhs_terms", "accel_terms", "lin_terms",
+                               "mass_solve"],
 }
 _CALLBACKS = ["rhs_cb", "post_cb"]
 

@@ -429,8 +429,14 @@ def build_kernels(model, mass=None):
     kernels["kinematics"] = make_kernel("kinematics", [Aq, Au, Ap, At], kin_out)
     # everything the right-hand side needs, jointly CSE'd
     rhs_out = list(kin_out) + [("M", Msym), ("f", F)]
+    qd_model = list(getattr(m, "qd", []) or [])
     if m.mv:
-        rhs_out += [("A", m.A), ("a", m.a)]
+        # with implicit kinematics a holds q' (m.qd): rhs_terms writes it at
+        # q' = 0, and accel_terms at the q' the runtime solved for
+        rhs_out += [("A", m.A), ("a", m.a.xreplace({s: 0 for s in qd_model}))]
+        if qd_model:
+            kernels["accel_terms"] = make_kernel(
+                "accel_terms", [Aq, Au, Arg("qd", tuple(qd_model)), Ap, At], [("a", m.a)])
     kernels["rhs_terms"] = make_kernel("rhs_terms", [Aq, Au, Ar, Ap, At], rhs_out)
     if m.mc:
         kernels["constraints"] = make_kernel("constraints", [Aq, Ap, At], [("fc", m.fc)])
@@ -460,11 +466,13 @@ def build_kernels(model, mass=None):
     if m.nr:
         jacs.append(("Rr", R, m.r))
     if m.mv:
-        S = m.A * sm.Matrix(Ud) + m.a
+        S = m.A * sm.Matrix(Ud) + m.a.xreplace(dict(zip(qd_model, Qd)))
         plain.append(("A", m.A))
         jacs += [("Sq", S, m.q), ("Su", S, m.u), ("Vq", m.A * U + m.b, m.q)]
     if m.mc:
         jacs.append(("Jc", m.fc, m.q))
+    if m.mv and qd_model:
+        jacs.append(("Sqd", S, Qd))
     kernels["lin_terms"] = make_jacobian_kernel(
         "lin_terms", [Aq, Au, Aqd, Aud, Alam, Ar, Ap, At], plain, jacs)
     return kernels

@@ -280,6 +280,10 @@ class Model:
     reaction_orig: list = field(default_factory=list)
     auxiliary_names: list = field(default_factory=list)   # C-safe, unique
     auxiliary_labels: list = field(default_factory=list)  # as sympy prints them
+    # internal symbols of q' in the acceleration-constraint term a, when the
+    # kinematics are implicit (qdot is None) and there are velocity
+    # constraints; empty otherwise (a is then a function of q, u, t)
+    qd: list = field(default_factory=list)
 
     # ------------------------------------------------------------------ sizes
     @property
@@ -336,6 +340,7 @@ class Model:
         sub.update({s: sm.Symbol(f"_r{i}") for i, s in enumerate(self.r)})
         sub.update({s: sm.Symbol(f"_p{i}") for i, s in enumerate(self.p)})
         sub[self.t] = sm.Symbol("_t")
+        sub.update({s: sm.Symbol(f"_qd{i}") for i, s in enumerate(self.qd)})
         for mat in (self.Kqd, self.Ku, self.kf, self.M, self.f, self.A, self.b,
                     self.a, self.fc):
             parts.append(sm.srepr(mat.xreplace(sub)))
@@ -715,19 +720,20 @@ class Model:
             if all(d != 0 for d in diag):
                 qdot = sm.Matrix([-(Ku_[i, :].dot(sm.Matrix(U)) + kf_[i]) / diag[i]
                                   for i in range(nq)])
-        # q' as a function of (q, u) for the acceleration constraint
-        if qdot is not None:
-            qdot_expr = qdot
-        elif method == "kane" and qd_subs:
-            qdot_expr = sm.Matrix([qd_subs[qd].xreplace(sub) if qd in qd_subs else None
-                                   for qd in qdots])
-        else:
-            qdot_expr = Kqd_.LUsolve(-(Ku_ * sm.Matrix(U) + kf_))
-        # a = d/dt(A u + b) - A u'  (q' from the kinematic equations)
+        # a = d/dt(A u + b) - A u' = d(A u + b)/dq q' + d(A u + b)/dt. With
+        # explicit kinematics q' is an expression of (q, u); otherwise it
+        # stays the symbols QD, which the runtime fills with the q' it solved
+        # from Kqd q' = kr (never sympy's symbolic solve of the kinematics,
+        # 0/0 at regular configurations such as ZYX Euler angles at hover)
+        QD = []
         mv = A_.shape[0]
         if mv:
             fv = A_ * sm.Matrix(U) + b_
-            a_ = fv.jacobian(Q) * qdot_expr + fv.diff(T)
+            if qdot is not None:
+                a_ = fv.jacobian(Q) * qdot + fv.diff(T)
+            else:
+                QD = [sm.Dummy(f"qd{i}") for i in range(nq)]
+                a_ = fv.jacobian(Q) * sm.Matrix(QD) + fv.diff(T)
         else:
             a_ = sm.zeros(0, 1)
 
@@ -757,7 +763,7 @@ class Model:
             constant_names=constant_names, state_labels=state_labels,
             input_labels=input_labels, constant_labels=constant_labels,
             aux_F=aux_F_, aux_g=aux_g_, ud=UD, reaction_orig=reactions,
-            auxiliary_names=aux_names, auxiliary_labels=aux_labels)
+            auxiliary_names=aux_names, auxiliary_labels=aux_labels, qd=QD)
         model._check_partition()
         return model
 

@@ -92,6 +92,7 @@ _KERNEL_DOCS = {
     "velocity_constraints": "A(q) u + b",
     "energy": "total energy",
     "auxiliary": "F and g of the auxiliary equations F reactions + g = 0",
+    "accel_terms": "the acceleration-constraint term a at the q' solved at run time",
     "lin_terms": "Jacobian blocks of the linearization",
 }
 
@@ -230,6 +231,7 @@ def build_context(plan, iface, timings=None, backend="c"):
                        for i, (n, v) in enumerate(zip(m.constant_names, m.p_values))],
         "ind_doc": list(enumerate(m.independent_state_names)),
         "kernels": kctx,
+        "has_accel_terms": "accel_terms" in kernels,
         "lin_outputs": [o.name for o in kernels["lin_terms"].outputs],
         "p_default": [_fmt_real(v, real) for v in m.p_values],
         "p_default_double": [_fmt_real(v, "double") for v in m.p_values],

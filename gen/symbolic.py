@@ -127,7 +127,7 @@ def linearize_symbolic(model: Model, op_point=None, r_op=None, constants=None, t
     if mv:
         K[:nu, nu:] = -A0.T
         K[nu:, :nu] = A0
-        rhs[nu:, 0] = -at(m.a)
+        rhs[nu:, 0] = -at(m.a).xreplace(dict(zip(m.qd, qd0)))
     sol = _solve(K, rhs, "the constrained dynamics [M, -A^T; A, 0]")
     ud0, lam0 = sol[:nu, 0], sol[nu:, 0]
 
@@ -177,9 +177,13 @@ def linearize_symbolic(model: Model, op_point=None, r_op=None, constants=None, t
     # ---- 4. dynamics
     G = -(Rq * Qm + Ru * Uq).row_join(Ru * Uu).row_join(Rr)
     if mv:
-        S = m.A * Ud + m.a
+        # a may hold q' (m.qd, implicit kinematics): its share through q'(q, u)
+        S = m.A * Ud + m.a.xreplace(dict(zip(m.qd, Qd)))
         Sq, Su = jac(S, Q), jac(S, U)
-        G = G.col_join((-(Sq * Qm + Su * Uq)).row_join(-Su * Uu).row_join(sm.zeros(mv, nr)))
+        GS = (-(Sq * Qm + Su * Uq)).row_join(-Su * Uu)
+        if m.qd:
+            GS = GS - jac(S, Qd) * Dq
+        G = G.col_join(GS.row_join(sm.zeros(mv, nr)))
     Z = _solve(K, G, "the constrained dynamics [M, -A^T; A, 0]")
     # ---- 5. independent rows
     A_lin = sm.zeros(ns, ns)

@@ -83,7 +83,8 @@ def _reference(model):
     if m.mv:
         ref["A"] = lam(m.A)
         ref["b"] = lam(m.b)
-        ref["a"] = lam(m.a)
+        # a holds q' as symbols (m.qd) when the kinematics are implicit
+        ref["a"] = sm.lambdify(args + list(m.qd), m.a, modules="numpy")
     if m.energy is not None:
         ref["E"] = lam(sm.Matrix([m.energy]))
     if getattr(m, "na", 0):
@@ -129,7 +130,8 @@ def _rhs_reference(model, ref, x, r, p, t):
         A = _call(ref["A"], x, r, p, t)
         K[:nu, nu:] = -A.T
         K[nu:, :nu] = A
-        z[nu:] = -_call(ref["a"], x, r, p, t).ravel()
+        z[nu:] = -np.array(ref["a"](*x, *r, *p, t, *(qd if m.qd else [])),
+                            dtype=float).ravel()
     sol = np.linalg.solve(K, z)
     return np.concatenate([qd, sol[:nu]]), sol[nu:]
 

@@ -36,6 +36,12 @@
  *     template <class S> static void lin_terms(const S *q, const S *u, const S *qd,
  *         const S *ud, const S *lam, const S *r, const S *p, S t, const LinOut<S> &o);
  *         // writes the Jacobian blocks the model has; the others are 0 x n
+ *     // optional (velocity constraints with implicit kinematics): the term a of
+ *     // the acceleration constraint at the solved q' (rhs_terms writes a at q' = 0),
+ *     // and lin_terms writes o.Sqd = dS/dq'
+ *     static constexpr bool HAS_ACCEL_TERMS = true;
+ *     template <class S> static void accel_terms(const S *q, const S *u, const S *qd,
+ *                                                const S *p, S t, S *a);
  *     // optional (auxiliary speeds, Kane's u_auxiliary): NA > 0 reaction forces
  *     static constexpr int NA;
  *     template <class S> static void auxiliary(const S *q, const S *u, const S *ud,
@@ -123,6 +129,19 @@ struct Tolerances {
 template <typename S>
 struct LinOut {
     S *Kqd, *Ku, *M, *A, *Kq, *Rq, *Ru, *Rr, *Sq, *Su, *Vq, *Jc;
+    S *Sqd; // MV x NQ, only with Model::HAS_ACCEL_TERMS (else null)
+};
+
+/* Model::HAS_ACCEL_TERMS, or false: the acceleration-constraint term a holds
+ * q' (velocity constraints with implicit kinematics), and
+ * Model::accel_terms(q, u, qd, p, t, a) gives it once q' is solved. */
+template <class M, class = void>
+struct AccelTerms {
+    static constexpr bool value = false;
+};
+template <class M>
+struct AccelTerms<M, std::void_t<decltype(M::HAS_ACCEL_TERMS)>> {
+    static constexpr bool value = M::HAS_ACCEL_TERMS;
 };
 
 /* Model::NA, or 0 when the traits type has no auxiliary speeds. */
@@ -519,6 +538,8 @@ struct Runtime {
             if (!finite(Kqd) || !finite(kr)) return ERR_SINGULAR_KINEMATICS;
             if (lu_solve<S, NQ>(Kqd, S(0), kr, qd)) return ERR_SINGULAR_KINEMATICS;
         }
+        if constexpr (MV > 0 && AccelTerms<Model>::value)
+            Model::accel_terms(q, u, qd.data(), p.data(), t, a.data());
         if (!finite(M) || !finite(f)) return ERR_NONFINITE_MODEL;
         if constexpr (Model::ACCEL == ACCEL_SPD) {
             (void)lam;
@@ -938,6 +959,8 @@ struct Runtime {
                 Model::rhs_terms(q.data(), u.data(), r_op.data(), p.data(), t, Kt.data(),
                                  qdt.data(), Mt.data(), ft.data(), A.data(), a.data());
             }
+            if constexpr (AccelTerms<Model>::value)
+                Model::accel_terms(q.data(), u.data(), qd.data(), p.data(), t, a.data());
             if (!finite(A) || !finite(a)) return ERR_NONFINITE_MODEL;
             if ((st = accel_kkt(M, f, A, a, ud, &lam))) return st;
         } else {
@@ -953,12 +976,14 @@ struct Runtime {
         Mat<S, MV, NQ> Sq, Vq;
         Mat<S, MV, NU> Su;
         Mat<S, MC, NQ> Jc;
+        Mat<S, MV, NQ> Sqd = Mat<S, MV, NQ>::Zero();
         const LinOut<S> out{Kqd.data(), Ku.data(), M.data(), A.data(), Kq.data(), Rq.data(),
-                            Ru.data(),  Rr.data(), Sq.data(), Su.data(), Vq.data(), Jc.data()};
+                            Ru.data(),  Rr.data(), Sq.data(), Su.data(), Vq.data(), Jc.data(),
+                            AccelTerms<Model>::value ? Sqd.data() : nullptr};
         Model::lin_terms(q.data(), u.data(), qd.data(), ud.data(), lam.data(), r_op.data(),
                          p.data(), t, out);
         if (!finite(Kq) || !finite(Rq) || !finite(Ru) || !finite(Rr) || !finite(Sq) ||
-            !finite(Su) || !finite(Vq) || !finite(Jc))
+            !finite(Su) || !finite(Vq) || !finite(Jc) || !finite(Sqd))
             return ERR_NONFINITE_MODEL;
 
         // 1. coordinates: dq = Q dq_ind
@@ -1020,6 +1045,8 @@ struct Runtime {
             G.template block<MV, NQI>(NU, 0) = -(Sq * Q + Su * Uq);
             G.template block<MV, NUI>(NU, NQI) = -(Su * Uu);
             G.template block<MV, NR>(NU, NS).setZero();
+            // S holds q' (implicit kinematics): its share through dq' = Dq
+            if constexpr (AccelTerms<Model>::value) G.template block<MV, NS>(NU, 0) -= Sqd * Dq;
             Eigen::Matrix<S, NU + MV, NU + MV> K;
             K.template topLeftCorner<NU, NU>() = M;
             K.template topRightCorner<NU, MV>() = -A.transpose();

@@ -68,7 +68,31 @@ static void pendulum_kane_k_kinematics(const pendulum_kane_real *q, const pendul
     out_kr[1] = u[0];
 }
 
-/* everything the right-hand side needs (13 temporaries) */
+/* the acceleration-constraint term a at the q' solved at run time (13 temporaries) */
+static void pendulum_kane_k_accel_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_a)
+{
+    (void)q;
+    (void)u;
+    (void)qd;
+    (void)p;
+    (void)t;
+    const double w0 = (q[1]*q[1]);
+    const double w1 = (q[0]*q[0]);
+    const double w2 = w0 + w1;
+    const double w3 = sqrt(w2/w0);
+    const double w4 = (1.0/(w2));
+    const double w5 = (1.0/(w2*w2));
+    const double w6 = u[0]*w3;
+    const double w7 = w5*w6;
+    const double w8 = q[0]*w0;
+    const double w9 = u[1]*w3;
+    const double w10 = w5*w9;
+    const double w11 = (q[1]*q[1]*q[1]);
+    const double w12 = -w2/w11 + (1.0/(q[1]));
+    out_a[0] = qd[0]*(q[1]*u[0]*w3*w4 - q[1]*w1*w7 - w10*w8) + qd[1]*(q[0]*w11*w12*w7 + q[0]*w4*w6 + (q[1]*q[1]*q[1]*q[1])*w10*w12 + 2*q[1]*w4*w9 - 2*w10*w11 - 2*w7*w8);
+}
+
+/* everything the right-hand side needs (3 temporaries) */
 static void pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_kr, pendulum_kane_real *out_M, pendulum_kane_real *out_f, pendulum_kane_real *out_A, pendulum_kane_real *out_a)
 {
     (void)q;
@@ -77,18 +101,8 @@ static void pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulu
     (void)p;
     (void)t;
     const double w0 = (q[1]*q[1]);
-    const double w1 = (q[0]*q[0]);
-    const double w2 = w0 + w1;
-    const double w3 = sqrt(w2/w0);
-    const double w4 = (1.0/(w2));
-    const double w5 = w3*w4;
-    const double w6 = q[1]*w5;
-    const double w7 = w3/(w2*w2);
-    const double w8 = u[1]*w7;
-    const double w9 = q[0]*u[0];
-    const double w10 = (q[1]*q[1]*q[1]);
-    const double w11 = -w2/w10 + (1.0/(q[1]));
-    const double w12 = w7*w9;
+    const double w1 = (q[0]*q[0]) + w0;
+    const double w2 = sqrt(w1/w0)/w1;
     out_Kqd[0] = 0;
     out_Kqd[1] = 1;
     out_Kqd[2] = 1;
@@ -101,9 +115,9 @@ static void pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulu
     out_M[3] = p[1];
     out_f[0] = 0;
     out_f[1] = p[1]*p[2];
-    out_A[0] = q[0]*w6;
-    out_A[1] = w0*w5;
-    out_a[0] = u[0]*(-q[0]*w0*w8 - q[1]*u[0]*w1*w7 + q[1]*u[0]*w3*w4) + u[1]*((q[1]*q[1]*q[1]*q[1])*w11*w8 + 2*u[1]*w6 - 2*w0*w12 + w10*w11*w12 - 2*w10*w8 + w5*w9);
+    out_A[0] = q[0]*q[1]*w2;
+    out_A[1] = w0*w2;
+    out_a[0] = 0;
 }
 
 /* f_c(q) (0 temporaries) */
@@ -167,8 +181,8 @@ static void pendulum_kane_k_energy(const pendulum_kane_real *q, const pendulum_k
     out_E[0] = -p[1]*p[2]*q[1] + (1.0/2.0)*p[1]*((u[0]*u[0]) + (u[1]*u[1]));
 }
 
-/* Jacobian blocks of the linearization (77 temporaries) */
-static void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *ud, const pendulum_kane_real *lam, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_Ku, pendulum_kane_real *out_M, pendulum_kane_real *out_A, pendulum_kane_real *out_Kq, pendulum_kane_real *out_Rq, pendulum_kane_real *out_Ru, pendulum_kane_real *out_Sq, pendulum_kane_real *out_Su, pendulum_kane_real *out_Vq, pendulum_kane_real *out_Jc)
+/* Jacobian blocks of the linearization (79 temporaries) */
+static void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *ud, const pendulum_kane_real *lam, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_Ku, pendulum_kane_real *out_M, pendulum_kane_real *out_A, pendulum_kane_real *out_Kq, pendulum_kane_real *out_Rq, pendulum_kane_real *out_Ru, pendulum_kane_real *out_Sq, pendulum_kane_real *out_Su, pendulum_kane_real *out_Vq, pendulum_kane_real *out_Jc, pendulum_kane_real *out_Sqd)
 {
     (void)q;
     (void)u;
@@ -201,22 +215,22 @@ static void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulu
     const double v10 = 2*w14;
     const double v11 = (q[1]*q[1]*q[1]*q[1]);
     const double v12 = v11*w15;
-    const double v13 = u[0]*w0;
-    const double v14 = -q[0]*v13 + u[1]*(-v10 + v12);
-    const double v15 = 2*(u[1]*u[1]);
-    const double v16 = w14*w16;
-    const double v17 = u[1]*(v11*w12 + v16);
-    const double v18 = 2*w0;
-    const double v19 = u[1]*(-v18 + w14*w15);
-    const double v20 = u[1]*w13;
-    const double v21 = u[1]*w5;
-    const double v22 = (u[0]*u[0]);
-    const double v23 = q[1]*v22;
-    const double v24 = q[1]*w11;
-    const double v25 = v23*w1;
-    const double v26 = q[0]*w12;
-    const double v27 = v9*w1;
-    const double v28 = 4*u[1];
+    const double v13 = qd[0]*w0;
+    const double v14 = -q[0]*v13 + qd[1]*(-v10 + v12);
+    const double v15 = w14*w16;
+    const double v16 = qd[1]*(v11*w12 + v15);
+    const double v17 = 2*w0;
+    const double v18 = qd[1]*(-v17 + w14*w15);
+    const double v19 = qd[1]*w13;
+    const double v20 = qd[1]*w5;
+    const double v21 = 2*qd[1];
+    const double v22 = u[1]*v21;
+    const double v23 = q[1]*qd[0];
+    const double v24 = u[0]*v23;
+    const double v25 = q[1]*w1;
+    const double v26 = qd[0]*u[0]*v25;
+    const double v27 = q[0]*w12;
+    const double v28 = v9*w1;
     const double v29 = (1.0/2.0)/sqrt(w2);
     const double d0 = 2*q[1];
     const double d1 = 2*q[0];
@@ -230,8 +244,10 @@ static void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulu
     const double d24 = -d1*v8;
     const double d26 = d19*w13 + v9;
     const double d27 = q[0]*w11;
-    const double d30 = q[0]*v21 + q[1]*u[0]*v0 - q[1]*v27 + u[0]*(q[1]*w3*w4 - v24*w1) + d27*v19 - v26*w0;
-    const double d31 = -v10*w12 + v12*w12 + v14*w11 + v16*w15 - v18*w16 + v28*w6 + w13*w5;
+    const double d30 = q[1]*u[0]*w3*w4 - q[1]*v28 - v27*w0;
+    const double d31 = 2*u[1]*w6 - v10*w12 + v12*w12 + v15*w15 - v17*w16 + w13*w5;
+    const double d32 = q[0]*v20 + qd[0]*(q[1]*w3*w4 - v25*w11) + d27*v18;
+    const double d33 = v14*w11 + v21*w6;
     const double v1 = (1.0/2.0)*d0;
     const double v4 = d4*w3;
     const double v5 = d3*w4;
@@ -246,7 +262,7 @@ static void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulu
     const double d18 = -d0*v7 + d2*v2;
     const double d20 = u[1]*d18;
     const double d25 = d18*w13;
-    const double d28 = u[0]*v21 + ud[0]*d10 + ud[1]*d13 - d1*v22*v24 - d19*v25 + d21*v14 + d24*v17 + d26*v19 + d7*v20 + d9*v15 - v13*w12 + v23*v5 + v23*v6;
+    const double d28 = u[0]*v20 + ud[0]*d10 + ud[1]*d13 - d1*v23*v9 - d19*v26 + d21*v14 + d24*v16 + d26*v18 + d7*v19 + d9*v22 - v13*w12 + v24*v5 + v24*v6;
     const double v3 = d2*w4;
     const double d6 = v3 + v4;
     const double d8 = q[1]*d6 + w5;
@@ -254,7 +270,7 @@ static void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulu
     const double d12 = d0*w5 + d6*w0;
     const double d15 = -lam[0]*d11;
     const double d16 = -lam[0]*d12;
-    const double d29 = u[0]*(u[0]*w3*w4 - v27) + u[1]*d22*(-2*w12 + w15*w16) + ud[0]*d11 + ud[1]*d12 + d0*(-u[0]*v26 - 2*u[1]*w16) - d18*v25 + d20*v14 + d23*v17 + d25*v19 + d6*v20 + d8*v15 + v23*v3 + v23*v4 + v28*w12*w14*w15;
+    const double d29 = qd[0]*(u[0]*w3*w4 - v28) + qd[1]*d22*(-2*w12 + w15*w16) + 4*qd[1]*w12*w14*w15 + ud[0]*d11 + ud[1]*d12 + d0*(-qd[0]*v27 - v21*w16) - d18*v26 + d20*v14 + d23*v16 + d25*v18 + d6*v19 + d8*v22 + v24*v3 + v24*v4;
     out_Kqd[0] = 0;
     out_Kqd[1] = 1;
     out_Kqd[2] = 1;
@@ -283,12 +299,14 @@ static void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulu
     out_Ru[3] = 0;
     out_Sq[0] = d28;
     out_Sq[1] = d29;
-    out_Su[0] = d30;
-    out_Su[1] = d31;
+    out_Su[0] = d32;
+    out_Su[1] = d33;
     out_Vq[0] = u[0]*d10 + u[1]*d13;
     out_Vq[1] = u[0]*d11 + u[1]*d12;
     out_Jc[0] = d1*v29;
     out_Jc[1] = d0*v29;
+    out_Sqd[0] = d30;
+    out_Sqd[1] = d31;
 }
 
 /* ------------------------------------------------------------------ */
@@ -311,7 +329,7 @@ static void pendulum_kane_lin_terms(const pendulum_kane_real *q, const pendulum_
                         const pendulum_kane_real *lam, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t,
                         const gen_rt_lin_out *o)
 {
-    pendulum_kane_k_lin_terms(q, u, qd, ud, lam, r, p, t, o->Kqd, o->Ku, o->M, o->A, o->Kq, o->Rq, o->Ru, o->Sq, o->Su, o->Vq, o->Jc);
+    pendulum_kane_k_lin_terms(q, u, qd, ud, lam, r, p, t, o->Kqd, o->Ku, o->M, o->A, o->Kq, o->Rq, o->Ru, o->Sq, o->Su, o->Vq, o->Jc, o->Sqd);
 }
 
 static const gen_rt_model pendulum_kane_model = {
@@ -324,7 +342,8 @@ static const gen_rt_model pendulum_kane_model = {
     pendulum_kane_k_energy,
     pendulum_kane_lin_terms,
     NULL,
-    0, NULL
+    0, NULL,
+    pendulum_kane_k_accel_terms
 };
 
 /* ------------------------------------------------------------------ */

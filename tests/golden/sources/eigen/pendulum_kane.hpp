@@ -189,7 +189,32 @@ inline void k_kinematics(const Scalar *q, const Scalar *u, const Scalar *p, Scal
     out_kr[1] = u[0];
 }
 
-/* everything the right-hand side needs (13 temporaries) */
+/* the acceleration-constraint term a at the q' solved at run time (13 temporaries) */
+template <typename Scalar>
+inline void k_accel_terms(const Scalar *q, const Scalar *u, const Scalar *qd, const Scalar *p, Scalar t, Scalar *out_a) noexcept
+{
+    (void)q;
+    (void)u;
+    (void)qd;
+    (void)p;
+    (void)t;
+    const Scalar w0 = (q[1]*q[1]);
+    const Scalar w1 = (q[0]*q[0]);
+    const Scalar w2 = w0 + w1;
+    const Scalar w3 = std::sqrt(w2/w0);
+    const Scalar w4 = (Scalar(1.0)/(w2));
+    const Scalar w5 = (Scalar(1.0)/(w2*w2));
+    const Scalar w6 = u[0]*w3;
+    const Scalar w7 = w5*w6;
+    const Scalar w8 = q[0]*w0;
+    const Scalar w9 = u[1]*w3;
+    const Scalar w10 = w5*w9;
+    const Scalar w11 = (q[1]*q[1]*q[1]);
+    const Scalar w12 = -w2/w11 + (Scalar(1.0)/(q[1]));
+    out_a[0] = qd[0]*(q[1]*u[0]*w3*w4 - q[1]*w1*w7 - w10*w8) + qd[1]*(q[0]*w11*w12*w7 + q[0]*w4*w6 + (q[1]*q[1]*q[1]*q[1])*w10*w12 + 2*q[1]*w4*w9 - 2*w10*w11 - 2*w7*w8);
+}
+
+/* everything the right-hand side needs (3 temporaries) */
 template <typename Scalar>
 inline void k_rhs_terms(const Scalar *q, const Scalar *u, const Scalar *r, const Scalar *p, Scalar t, Scalar *out_Kqd, Scalar *out_kr, Scalar *out_M, Scalar *out_f, Scalar *out_A, Scalar *out_a) noexcept
 {
@@ -199,18 +224,8 @@ inline void k_rhs_terms(const Scalar *q, const Scalar *u, const Scalar *r, const
     (void)p;
     (void)t;
     const Scalar w0 = (q[1]*q[1]);
-    const Scalar w1 = (q[0]*q[0]);
-    const Scalar w2 = w0 + w1;
-    const Scalar w3 = std::sqrt(w2/w0);
-    const Scalar w4 = (Scalar(1.0)/(w2));
-    const Scalar w5 = w3*w4;
-    const Scalar w6 = q[1]*w5;
-    const Scalar w7 = w3/(w2*w2);
-    const Scalar w8 = u[1]*w7;
-    const Scalar w9 = q[0]*u[0];
-    const Scalar w10 = (q[1]*q[1]*q[1]);
-    const Scalar w11 = -w2/w10 + (Scalar(1.0)/(q[1]));
-    const Scalar w12 = w7*w9;
+    const Scalar w1 = (q[0]*q[0]) + w0;
+    const Scalar w2 = std::sqrt(w1/w0)/w1;
     out_Kqd[0] = 0;
     out_Kqd[1] = 1;
     out_Kqd[2] = 1;
@@ -223,9 +238,9 @@ inline void k_rhs_terms(const Scalar *q, const Scalar *u, const Scalar *r, const
     out_M[3] = p[1];
     out_f[0] = 0;
     out_f[1] = p[1]*p[2];
-    out_A[0] = q[0]*w6;
-    out_A[1] = w0*w5;
-    out_a[0] = u[0]*(-q[0]*w0*w8 - q[1]*u[0]*w1*w7 + q[1]*u[0]*w3*w4) + u[1]*((q[1]*q[1]*q[1]*q[1])*w11*w8 + 2*u[1]*w6 - 2*w0*w12 + w10*w11*w12 - 2*w10*w8 + w5*w9);
+    out_A[0] = q[0]*q[1]*w2;
+    out_A[1] = w0*w2;
+    out_a[0] = 0;
 }
 
 /* f_c(q) (0 temporaries) */
@@ -294,9 +309,9 @@ inline void k_energy(const Scalar *q, const Scalar *u, const Scalar *p, Scalar t
     out_E[0] = -p[1]*p[2]*q[1] + (Scalar(1)/Scalar(2))*p[1]*((u[0]*u[0]) + (u[1]*u[1]));
 }
 
-/* Jacobian blocks of the linearization (77 temporaries) */
+/* Jacobian blocks of the linearization (79 temporaries) */
 template <typename Scalar>
-inline void k_lin_terms(const Scalar *q, const Scalar *u, const Scalar *qd, const Scalar *ud, const Scalar *lam, const Scalar *r, const Scalar *p, Scalar t, Scalar *out_Kqd, Scalar *out_Ku, Scalar *out_M, Scalar *out_A, Scalar *out_Kq, Scalar *out_Rq, Scalar *out_Ru, Scalar *out_Sq, Scalar *out_Su, Scalar *out_Vq, Scalar *out_Jc) noexcept
+inline void k_lin_terms(const Scalar *q, const Scalar *u, const Scalar *qd, const Scalar *ud, const Scalar *lam, const Scalar *r, const Scalar *p, Scalar t, Scalar *out_Kqd, Scalar *out_Ku, Scalar *out_M, Scalar *out_A, Scalar *out_Kq, Scalar *out_Rq, Scalar *out_Ru, Scalar *out_Sq, Scalar *out_Su, Scalar *out_Vq, Scalar *out_Jc, Scalar *out_Sqd) noexcept
 {
     (void)q;
     (void)u;
@@ -329,22 +344,22 @@ inline void k_lin_terms(const Scalar *q, const Scalar *u, const Scalar *qd, cons
     const Scalar v10 = 2*w14;
     const Scalar v11 = (q[1]*q[1]*q[1]*q[1]);
     const Scalar v12 = v11*w15;
-    const Scalar v13 = u[0]*w0;
-    const Scalar v14 = -q[0]*v13 + u[1]*(-v10 + v12);
-    const Scalar v15 = 2*(u[1]*u[1]);
-    const Scalar v16 = w14*w16;
-    const Scalar v17 = u[1]*(v11*w12 + v16);
-    const Scalar v18 = 2*w0;
-    const Scalar v19 = u[1]*(-v18 + w14*w15);
-    const Scalar v20 = u[1]*w13;
-    const Scalar v21 = u[1]*w5;
-    const Scalar v22 = (u[0]*u[0]);
-    const Scalar v23 = q[1]*v22;
-    const Scalar v24 = q[1]*w11;
-    const Scalar v25 = v23*w1;
-    const Scalar v26 = q[0]*w12;
-    const Scalar v27 = v9*w1;
-    const Scalar v28 = 4*u[1];
+    const Scalar v13 = qd[0]*w0;
+    const Scalar v14 = -q[0]*v13 + qd[1]*(-v10 + v12);
+    const Scalar v15 = w14*w16;
+    const Scalar v16 = qd[1]*(v11*w12 + v15);
+    const Scalar v17 = 2*w0;
+    const Scalar v18 = qd[1]*(-v17 + w14*w15);
+    const Scalar v19 = qd[1]*w13;
+    const Scalar v20 = qd[1]*w5;
+    const Scalar v21 = 2*qd[1];
+    const Scalar v22 = u[1]*v21;
+    const Scalar v23 = q[1]*qd[0];
+    const Scalar v24 = u[0]*v23;
+    const Scalar v25 = q[1]*w1;
+    const Scalar v26 = qd[0]*u[0]*v25;
+    const Scalar v27 = q[0]*w12;
+    const Scalar v28 = v9*w1;
     const Scalar v29 = (Scalar(1)/Scalar(2))/std::sqrt(w2);
     const Scalar d0 = 2*q[1];
     const Scalar d1 = 2*q[0];
@@ -358,8 +373,10 @@ inline void k_lin_terms(const Scalar *q, const Scalar *u, const Scalar *qd, cons
     const Scalar d24 = -d1*v8;
     const Scalar d26 = d19*w13 + v9;
     const Scalar d27 = q[0]*w11;
-    const Scalar d30 = q[0]*v21 + q[1]*u[0]*v0 - q[1]*v27 + u[0]*(q[1]*w3*w4 - v24*w1) + d27*v19 - v26*w0;
-    const Scalar d31 = -v10*w12 + v12*w12 + v14*w11 + v16*w15 - v18*w16 + v28*w6 + w13*w5;
+    const Scalar d30 = q[1]*u[0]*w3*w4 - q[1]*v28 - v27*w0;
+    const Scalar d31 = 2*u[1]*w6 - v10*w12 + v12*w12 + v15*w15 - v17*w16 + w13*w5;
+    const Scalar d32 = q[0]*v20 + qd[0]*(q[1]*w3*w4 - v25*w11) + d27*v18;
+    const Scalar d33 = v14*w11 + v21*w6;
     const Scalar v1 = (Scalar(1)/Scalar(2))*d0;
     const Scalar v4 = d4*w3;
     const Scalar v5 = d3*w4;
@@ -374,7 +391,7 @@ inline void k_lin_terms(const Scalar *q, const Scalar *u, const Scalar *qd, cons
     const Scalar d18 = -d0*v7 + d2*v2;
     const Scalar d20 = u[1]*d18;
     const Scalar d25 = d18*w13;
-    const Scalar d28 = u[0]*v21 + ud[0]*d10 + ud[1]*d13 - d1*v22*v24 - d19*v25 + d21*v14 + d24*v17 + d26*v19 + d7*v20 + d9*v15 - v13*w12 + v23*v5 + v23*v6;
+    const Scalar d28 = u[0]*v20 + ud[0]*d10 + ud[1]*d13 - d1*v23*v9 - d19*v26 + d21*v14 + d24*v16 + d26*v18 + d7*v19 + d9*v22 - v13*w12 + v24*v5 + v24*v6;
     const Scalar v3 = d2*w4;
     const Scalar d6 = v3 + v4;
     const Scalar d8 = q[1]*d6 + w5;
@@ -382,7 +399,7 @@ inline void k_lin_terms(const Scalar *q, const Scalar *u, const Scalar *qd, cons
     const Scalar d12 = d0*w5 + d6*w0;
     const Scalar d15 = -lam[0]*d11;
     const Scalar d16 = -lam[0]*d12;
-    const Scalar d29 = u[0]*(u[0]*w3*w4 - v27) + u[1]*d22*(-2*w12 + w15*w16) + ud[0]*d11 + ud[1]*d12 + d0*(-u[0]*v26 - 2*u[1]*w16) - d18*v25 + d20*v14 + d23*v17 + d25*v19 + d6*v20 + d8*v15 + v23*v3 + v23*v4 + v28*w12*w14*w15;
+    const Scalar d29 = qd[0]*(u[0]*w3*w4 - v28) + qd[1]*d22*(-2*w12 + w15*w16) + 4*qd[1]*w12*w14*w15 + ud[0]*d11 + ud[1]*d12 + d0*(-qd[0]*v27 - v21*w16) - d18*v26 + d20*v14 + d23*v16 + d25*v18 + d6*v19 + d8*v22 + v24*v3 + v24*v4;
     out_Kqd[0] = 0;
     out_Kqd[1] = 1;
     out_Kqd[2] = 1;
@@ -411,12 +428,14 @@ inline void k_lin_terms(const Scalar *q, const Scalar *u, const Scalar *qd, cons
     out_Ru[3] = 0;
     out_Sq[0] = d28;
     out_Sq[1] = d29;
-    out_Su[0] = d30;
-    out_Su[1] = d31;
+    out_Su[0] = d32;
+    out_Su[1] = d33;
     out_Vq[0] = u[0]*d10 + u[1]*d13;
     out_Vq[1] = u[0]*d11 + u[1]*d12;
     out_Jc[0] = d1*v29;
     out_Jc[1] = d0*v29;
+    out_Sqd[0] = d30;
+    out_Sqd[1] = d31;
 }
 
 // ------------------------------------------------------------ the traits
@@ -483,7 +502,13 @@ struct Model {
     static void lin_terms(const S *q, const S *u, const S *qd, const S *ud, const S *lam,
                           const S *r, const S *p, S t, const gen_rt::LinOut<S> &o) noexcept
     {
-        k_lin_terms<S>(q, u, qd, ud, lam, r, p, t, o.Kqd, o.Ku, o.M, o.A, o.Kq, o.Rq, o.Ru, o.Sq, o.Su, o.Vq, o.Jc);
+        k_lin_terms<S>(q, u, qd, ud, lam, r, p, t, o.Kqd, o.Ku, o.M, o.A, o.Kq, o.Rq, o.Ru, o.Sq, o.Su, o.Vq, o.Jc, o.Sqd);
+    }
+    static constexpr bool HAS_ACCEL_TERMS = true;
+    template <class S>
+    static void accel_terms(const S *q, const S *u, const S *qd, const S *p, S t, S *a) noexcept
+    {
+        k_accel_terms<S>(q, u, qd, p, t, a);
     }
 };
 
