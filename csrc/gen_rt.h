@@ -35,7 +35,7 @@ typedef double gen_rt_real;
 #define GEN_RT_STATUS_ENUM_(name, value, text) GEN_RT_##name = (value),
 enum gen_rt_status { GEN_RT_STATUS_TABLE(GEN_RT_STATUS_ENUM_) GEN_RT_STATUS_END_ = 1 };
 #undef GEN_RT_STATUS_ENUM_
-#define GEN_RT_STATUS_MIN (-11)
+#define GEN_RT_STATUS_MIN (-12)
 
 /* A state with an entry beyond this magnitude has diverged: a model that
  * evaluates to NaN/inf there reports GEN_RT_ERR_DIVERGED, not a singular
@@ -293,6 +293,7 @@ typedef struct {
  *   (nq, nu, mc, mv, nr, explicit_kinematics, accel)                     */
 #define GEN_RT_MAX_(a, b) ((a) > (b) ? (a) : (b))
 #define GEN_RT_NX_(nq, nu) ((nq) + (nu))
+#define GEN_RT_NS_(nq, nu, mc, mv) ((nq) - (mc) + (nu) - (mv))
 #define GEN_RT_MODEL_KIN_WORK(nq, nu, mc, mv, nr, ek, acc) ((ek) ? 1 : (nq) * (nq) + 1)
 #define GEN_RT_MODEL_KIN_IWORK(nq, nu, mc, mv, nr, ek, acc) ((nq) + 1)
 #define GEN_RT_MODEL_RHS_WORK(nq, nu, mc, mv, nr, ek, acc)                      \
@@ -332,6 +333,11 @@ typedef struct {
      GEN_RT_MODEL_ADVANCE_WORK(nq, nu, mc, mv, nr, ek, acc))
 #define GEN_RT_MODEL_SIMULATE_IWORK(nq, nu, mc, mv, nr, ek, acc)                \
     GEN_RT_MODEL_RHS_IWORK(nq, nu, mc, mv, nr, ek, acc)
+/* simulate_input: simulate's, plus the inputs held and evaluated */
+#define GEN_RT_MODEL_SIMULATE_INPUT_WORK(nq, nu, mc, mv, nr, ek, acc)           \
+    (GEN_RT_MODEL_SIMULATE_WORK(nq, nu, mc, mv, nr, ek, acc) + 2 * (nr) + 2)
+#define GEN_RT_MODEL_SIMULATE_INPUT_IWORK(nq, nu, mc, mv, nr, ek, acc)          \
+    GEN_RT_MODEL_SIMULATE_IWORK(nq, nu, mc, mv, nr, ek, acc)
 #define GEN_RT_MODEL_LINEARIZE_WORK(nq, nu, mc, mv, nr, ek, acc)                \
     ((nq) + (nu) + (mv) + 1 + (nu) * (nu) + (nu) + (mv) * (nu) + (mv) +          \
      2 * (nq) * (nq) + (nq) * (nu) + (nu) * (nq) + (nu) * (nu) + (nu) * (nr) +   \
@@ -412,12 +418,75 @@ int gen_rt_model_simulate(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_r
                           const gen_rt_real *p, const gen_rt_sim_options *o, int capacity,
                           gen_rt_real *work, int *iwork, gen_rt_real *t_out,
                           gen_rt_real *x_out, gen_rt_real *lam_out, gen_rt_sim_stats *s);
+/* ---- inputs during a simulation: tables, feedback, controllers --------
+ * Where the inputs r come from at each evaluation of the right-hand side:
+ *   base       the constant r (NULL: zero) or, with n_table > 0, the table
+ *              (t_table strictly increasing, r_table n_table rows of nr):
+ *              GEN_RT_HOLD_ZOH holds the row of the last knot at or before t,
+ *              GEN_RT_HOLD_LINEAR interpolates; both hold the first and last
+ *              rows outside the table. Knots are step boundaries.
+ *   feedback   with K (nr x ns, row-major, on the independent state
+ *              [q_ind, u_ind], the state of linearize) and x_op (nx, NULL:
+ *              zero): r = base - K (x_ind - x_op_ind);
+ *   controller with controller != NULL, called last with r holding the
+ *              above; it may overwrite r (a nonzero return stops the run with
+ *              GEN_RT_ERR_CONTROLLER).
+ *   period     0: r is evaluated at every right-hand-side evaluation (a
+ *              continuous controller); > 0: r is evaluated at t0 + k period
+ *              (from the state there) and held until the next sample (a
+ *              digital controller); the integrator steps to every sample. */
+typedef int (*gen_rt_controller_fn)(void *ctx, gen_rt_real t, const gen_rt_real *x,
+                                    gen_rt_real *r);
+#define GEN_RT_HOLD_ZOH 0
+#define GEN_RT_HOLD_LINEAR 1
+typedef struct {
+    const gen_rt_real *r;
+    int n_table;
+    const gen_rt_real *t_table;
+    const gen_rt_real *r_table;
+    int hold;
+    const gen_rt_real *K;
+    const gen_rt_real *x_op;
+    gen_rt_controller_fn controller;
+    void *ctx;
+    gen_rt_real period;
+} gen_rt_input;
+
+/* the inputs at (t, x) from in (sampling aside: the base at t, feedback,
+ * controller); work: ns reals. A bad description is GEN_RT_ERR_BAD_ARG
+ * (unsorted table, unknown hold, negative period) or _NONFINITE_INPUT. */
+int gen_rt_model_eval_input(const gen_rt_model *m, const gen_rt_input *in, gen_rt_real t,
+                            const gen_rt_real *x, gen_rt_real *r);
+/* simulate with inputs from in; r_out (nr per row, may be NULL) gets the
+ * inputs in effect from each output time on */
+int gen_rt_model_simulate_input(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,
+                                gen_rt_real t_end, gen_rt_real dt, const gen_rt_input *in,
+                                const gen_rt_real *p, const gen_rt_sim_options *o,
+                                int capacity, gen_rt_real *work, int *iwork,
+                                gen_rt_real *t_out, gen_rt_real *x_out, gen_rt_real *lam_out,
+                                gen_rt_real *r_out, gen_rt_sim_stats *s);
+
 int gen_rt_model_linearize(const gen_rt_model *m, const gen_rt_real *x_op,
                            const gen_rt_real *r_op, const gen_rt_real *p, gen_rt_real t,
                            gen_rt_real *work, int *iwork, gen_rt_real *A_lin,
                            gen_rt_real *B_lin);
+/* the zero-order-hold discretization of the linearization over a step dt:
+ * Ad = exp(A dt), Bd = int_0^dt exp(A s) ds B (gen_rt_c2d_zoh, gen_rt_expm.h) */
+#define GEN_RT_MODEL_LINEARIZE_DISCRETE_WORK(nq, nu, mc, mv, nr, ek, acc)       \
+    (GEN_RT_MODEL_LINEARIZE_WORK(nq, nu, mc, mv, nr, ek, acc) +                 \
+     GEN_RT_NS_(nq, nu, mc, mv) * (GEN_RT_NS_(nq, nu, mc, mv) + (nr)) + 1 +     \
+     GEN_RT_C2D_WORK(GEN_RT_NS_(nq, nu, mc, mv), nr))
+#define GEN_RT_MODEL_LINEARIZE_DISCRETE_IWORK(nq, nu, mc, mv, nr, ek, acc)      \
+    GEN_RT_MAX_(GEN_RT_MODEL_LINEARIZE_IWORK(nq, nu, mc, mv, nr, ek, acc),      \
+                GEN_RT_C2D_IWORK(GEN_RT_NS_(nq, nu, mc, mv), nr))
+int gen_rt_model_linearize_discrete(const gen_rt_model *m, const gen_rt_real *x_op,
+                                    const gen_rt_real *r_op, const gen_rt_real *p,
+                                    gen_rt_real t, gen_rt_real dt, gen_rt_real *work,
+                                    int *iwork, gen_rt_real *Ad, gen_rt_real *Bd);
 
 #ifdef __cplusplus
 }
 #endif
+/* the matrix exponential (linearize_discrete's work sizes use its macros) */
+#include "gen_rt_expm.h"
 #endif /* GEN_RT_H */

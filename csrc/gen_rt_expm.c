@@ -130,7 +130,32 @@ int gen_rt_expm(int n, const gen_rt_real *A, gen_rt_real *work, int *iwork,
     }
 
     /* r_m = (V - U)^-1 (V + U), U the odd and V the even part of p_m(A) */
-    if (m <= 9) {
+#ifndef GEN_RT_REAL_FLOAT
+    if (m == 13) {
+        /* m = 13 (Higham 2005, (2.11)): A^2, A^4, A^6 in w0, w1, w2;
+         * U = A [A^6 (b13 A^6 + b11 A^4 + b9 A^2) + b7 A^6 + b5 A^4 + b3 A^2 + b1 I]
+         * V = A^6 (b12 A^6 + b10 A^4 + b8 A^2) + b6 A^6 + b4 A^4 + b2 A^2 + b0 I */
+        gen_rt_matmul(n, n, n, a, a, w[0]);
+        gen_rt_matmul(n, n, n, w[0], w[0], w[1]);
+        gen_rt_matmul(n, n, n, w[1], w[0], w[2]);
+        for (i = 0; i < nn; ++i)
+            w[3][i] = b[13] * w[2][i] + b[11] * w[1][i] + b[9] * w[0][i];
+        gen_rt_matmul(n, n, n, w[2], w[3], w[4]);
+        for (i = 0; i < nn; ++i)
+            w[4][i] += b[7] * w[2][i] + b[5] * w[1][i] + b[3] * w[0][i];
+        expm_add_identity(n, b[1], w[4]);
+        gen_rt_matmul(n, n, n, a, w[4], w[3]); /* U; a (maybe w5) used up */
+        for (i = 0; i < nn; ++i)
+            w[4][i] = b[12] * w[2][i] + b[10] * w[1][i] + b[8] * w[0][i];
+        gen_rt_matmul(n, n, n, w[2], w[4], w[5]);
+        for (i = 0; i < nn; ++i)
+            w[5][i] += b[6] * w[2][i] + b[4] * w[1][i] + b[2] * w[0][i];
+        expm_add_identity(n, b[0], w[5]);
+        u = w[3];
+        v = w[5];
+    } else
+#endif
+    {
         /* the even powers A^2, A^4, A^6, A^8 in w0, w1, w2, w5 (A^8 only
          * for m = 9, never scaled: w5 is free then) */
         gen_rt_real *pw[5];
@@ -153,28 +178,6 @@ int gen_rt_expm(int n, const gen_rt_real *A, gen_rt_real *work, int *iwork,
         gen_rt_matmul(n, n, n, a, w[3], w[0]); /* U = A w3 (A^2 used up) */
         u = w[0];
         v = w[4];
-    } else {
-        /* m = 13 (Higham 2005, (2.11)): A^2, A^4, A^6 in w0, w1, w2;
-         * U = A [A^6 (b13 A^6 + b11 A^4 + b9 A^2) + b7 A^6 + b5 A^4 + b3 A^2 + b1 I]
-         * V = A^6 (b12 A^6 + b10 A^4 + b8 A^2) + b6 A^6 + b4 A^4 + b2 A^2 + b0 I */
-        gen_rt_matmul(n, n, n, a, a, w[0]);
-        gen_rt_matmul(n, n, n, w[0], w[0], w[1]);
-        gen_rt_matmul(n, n, n, w[1], w[0], w[2]);
-        for (i = 0; i < nn; ++i)
-            w[3][i] = b[13] * w[2][i] + b[11] * w[1][i] + b[9] * w[0][i];
-        gen_rt_matmul(n, n, n, w[2], w[3], w[4]);
-        for (i = 0; i < nn; ++i)
-            w[4][i] += b[7] * w[2][i] + b[5] * w[1][i] + b[3] * w[0][i];
-        expm_add_identity(n, b[1], w[4]);
-        gen_rt_matmul(n, n, n, a, w[4], w[3]); /* U; a (maybe w5) used up */
-        for (i = 0; i < nn; ++i)
-            w[4][i] = b[12] * w[2][i] + b[10] * w[1][i] + b[8] * w[0][i];
-        gen_rt_matmul(n, n, n, w[2], w[4], w[5]);
-        for (i = 0; i < nn; ++i)
-            w[5][i] += b[6] * w[2][i] + b[4] * w[1][i] + b[2] * w[0][i];
-        expm_add_identity(n, b[0], w[5]);
-        u = w[3];
-        v = w[5];
     }
     for (i = 0; i < nn; ++i) {
         gen_rt_real ui = u[i], vi = v[i];

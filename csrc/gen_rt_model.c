@@ -331,12 +331,106 @@ typedef struct {
     int proj_max_iter;
     gen_rt_real *work;  /* GEN_RT_MODEL_CB_WORK_ reals, shared by rhs and projection */
     int *iwork;
+    /* inputs from a description (NULL: r is constant) */
+    const gen_rt_input *in;
+    gen_rt_real *r_buf;   /* nr: r at the current evaluation (continuous) */
+    gen_rt_real *r_held;  /* nr: r held since the last sample (period > 0) */
+    gen_rt_real t_seg;    /* start of the current sub-interval: a ZOH table's row */
+    gen_rt_real t0;       /* start of the simulation: samples at t0 + k period */
+    gen_rt_real t_sampled; /* time of the held sample (each sample is taken once) */
+    int sampled;          /* 1 once a sample is held */
 } model_ctx;
+
+/* the last knot index k with T[k] <= t (0 before the first) */
+static int table_row(int n, const gen_rt_real *T, gen_rt_real t)
+{
+    int lo = 0, hi = n - 1;
+    if (t < T[0]) return 0;
+    if (t >= T[n - 1]) return n - 1;
+    while (hi - lo > 1) {
+        int mid = lo + (hi - lo) / 2;
+        if (T[mid] <= t) lo = mid;
+        else hi = mid;
+    }
+    return lo;
+}
+
+/* base, feedback and controller at t (a ZOH table at t_zoh) */
+static int input_at(const gen_rt_model *m, const gen_rt_input *in, gen_rt_real t,
+                    gen_rt_real t_zoh, const gen_rt_real *x, gen_rt_real *r)
+{
+    int nr = m->nr, nq = m->nq, niq = m->nq - m->mc, niu = m->nu - m->mv, ns = niq + niu;
+    int i, j, k;
+    if (in->n_table > 0) {
+        const gen_rt_real *T = in->t_table, *R = in->r_table;
+        int n = in->n_table;
+        if (in->hold == GEN_RT_HOLD_LINEAR && n > 1 && t > T[0] && t < T[n - 1]) {
+            gen_rt_real w;
+            k = table_row(n, T, t);
+            w = (t - T[k]) / (T[k + 1] - T[k]);
+            for (i = 0; i < nr; ++i)
+                r[i] = R[(long)k * nr + i] + w * (R[(long)(k + 1) * nr + i] - R[(long)k * nr + i]);
+        } else {
+            k = table_row(n, T, in->hold == GEN_RT_HOLD_LINEAR ? t : t_zoh);
+            for (i = 0; i < nr; ++i) r[i] = R[(long)k * nr + i];
+        }
+    } else {
+        for (i = 0; i < nr; ++i) r[i] = in->r ? in->r[i] : 0;
+    }
+    if (in->K) {
+        for (i = 0; i < nr; ++i) {
+            gen_rt_real s = 0;
+            for (j = 0; j < ns; ++j) {
+                int idx = j < niq ? m->q_ind[j] : nq + m->u_ind[j - niq];
+                s += in->K[(long)i * ns + j] * (x[idx] - (in->x_op ? in->x_op[idx] : 0));
+            }
+            r[i] -= s;
+        }
+    }
+    if (in->controller && in->controller(in->ctx, t, x, r)) return GEN_RT_ERR_CONTROLLER;
+    if (!finite_n(nr, r)) return GEN_RT_ERR_NONFINITE_INPUT;
+    return GEN_RT_OK;
+}
+
+static int input_check(const gen_rt_model *m, const gen_rt_input *in)
+{
+    int i, nr = m->nr, ns = m->nq - m->mc + m->nu - m->mv;
+    if (!in) return GEN_RT_ERR_NULL;
+    if (in->n_table < 0 || (in->hold != GEN_RT_HOLD_ZOH && in->hold != GEN_RT_HOLD_LINEAR))
+        return GEN_RT_ERR_BAD_ARG;
+    if (!finite_n(1, &in->period) || in->period < 0) return GEN_RT_ERR_BAD_ARG;
+    if (in->n_table > 0) {
+        if (!in->t_table || (nr > 0 && !in->r_table)) return GEN_RT_ERR_NULL;
+        if (!finite_n(in->n_table, in->t_table) || !finite_n(in->n_table * nr, in->r_table))
+            return GEN_RT_ERR_NONFINITE_INPUT;
+        for (i = 1; i < in->n_table; ++i)
+            if (!(in->t_table[i] > in->t_table[i - 1])) return GEN_RT_ERR_BAD_ARG;
+    } else if (in->r && !finite_n(nr, in->r)) {
+        return GEN_RT_ERR_NONFINITE_INPUT;
+    }
+    if (in->K && !finite_n(nr * ns, in->K)) return GEN_RT_ERR_NONFINITE_INPUT;
+    if (in->x_op && !finite_n(NX_(m), in->x_op)) return GEN_RT_ERR_NONFINITE_INPUT;
+    return GEN_RT_OK;
+}
+
+int gen_rt_model_eval_input(const gen_rt_model *m, const gen_rt_input *in, gen_rt_real t,
+                            const gen_rt_real *x, gen_rt_real *r)
+{
+    int st = input_check(m, in);
+    if (st) return st;
+    return input_at(m, in, t, t, x, r);
+}
 
 static int rhs_cb(void *ctx, gen_rt_real t, const gen_rt_real *x, gen_rt_real *dxdt)
 {
     const model_ctx *c = (const model_ctx *)ctx;
-    return gen_rt_model_rhs(c->m, t, x, c->r, c->p, c->work, c->iwork, dxdt, NULL);
+    const gen_rt_real *r = c->r;
+    if (c->in && !(c->in->period > 0)) {
+        int st = input_at(c->m, c->in, t, c->t_seg, x, c->r_buf);
+        if (st) return st;
+        r = c->r_buf;
+    }
+    return gen_rt_model_rhs(c->m, t, x, r, c->p, c->work, c->iwork, dxdt, NULL);
 }
 
 static int post_cb(void *ctx, gen_rt_real t, gen_rt_real *x)
@@ -355,6 +449,8 @@ int gen_rt_model_step_rk4(const gen_rt_model *m, gen_rt_real t, gen_rt_real h,
     c.m = m; c.r = r; c.p = p;
     c.proj_tol = 16 * GEN_RT_EPS; c.proj_max_iter = 10;
     c.work = xn + nx; c.iwork = iwork;
+    c.in = NULL; c.r_buf = c.r_held = NULL; c.t_seg = t; c.t0 = t;
+    c.t_sampled = t; c.sampled = 0;
     copy_n(nx, x, xn);
     st = gen_rt_rk4_step(rhs_cb, &c, nx, t, h, rk, xn);
     if (st) return st;
@@ -366,26 +462,20 @@ int gen_rt_model_step_rk4(const gen_rt_model *m, gen_rt_real t, gen_rt_real h,
     return GEN_RT_OK;
 }
 
-int gen_rt_model_advance(const gen_rt_model *m, gen_rt_real t0, gen_rt_real t1,
-                         const gen_rt_real *r, const gen_rt_real *p,
-                         const gen_rt_sim_options *o, gen_rt_real *work, int *iwork,
-                         gen_rt_sim_stats *s, gen_rt_real *x)
+/* one integration from t0 to t1 (one RK4 step, or DOPRI5 steps) */
+static int integrate_(model_ctx *c, gen_rt_real t0, gen_rt_real t1,
+                      const gen_rt_sim_options *o, gen_rt_real *work, gen_rt_sim_stats *s,
+                      gen_rt_real *x)
 {
+    const gen_rt_model *m = c->m;
     int nx = NX_(m), st;
-    int nint = GEN_RT_RK4_WORK(nx) + nx > GEN_RT_DOPRI5_WORK(nx) ? GEN_RT_RK4_WORK(nx) + nx
-                                                                 : GEN_RT_DOPRI5_WORK(nx);
-    model_ctx c;
-    if (!(t1 >= t0)) return GEN_RT_ERR_BAD_ARG;
-    c.m = m; c.r = r; c.p = p;
-    c.proj_tol = o->proj_tol; c.proj_max_iter = o->proj_max_iter;
-    c.work = work + nint; c.iwork = iwork;
     if (o->method == GEN_RT_METHOD_RK4) {
         gen_rt_real *rk = work, *xn = rk + GEN_RT_RK4_WORK(nx);
         copy_n(nx, x, xn);
-        st = gen_rt_rk4_step(rhs_cb, &c, nx, t0, t1 - t0, rk, xn);
+        st = gen_rt_rk4_step(rhs_cb, c, nx, t0, t1 - t0, rk, xn);
         s->n_rhs += 4;
         if (!st && o->project)
-            st = gen_rt_model_project(m, t1, p, c.proj_tol, c.proj_max_iter, c.work, xn);
+            st = gen_rt_model_project(m, t1, c->p, c->proj_tol, c->proj_max_iter, c->work, xn);
         if (st) {
             s->t_last = t0;
             copy_n(nx, x, s->x_last);
@@ -400,7 +490,7 @@ int gen_rt_model_advance(const gen_rt_model *m, gen_rt_real t0, gen_rt_real t1,
         d.rtol = o->rtol; d.atol = o->atol; d.h_init = o->h_init;
         d.h_min = o->h_min; d.h_max = o->h_max; d.max_steps = o->max_steps;
         ds.n_accepted = 0; ds.n_rejected = 0; ds.n_rhs = 0; ds.h_last = s->h_next;
-        st = gen_rt_dopri5_integrate(rhs_cb, o->project ? post_cb : NULL, &c, nx, t0, t1, &d,
+        st = gen_rt_dopri5_integrate(rhs_cb, o->project ? post_cb : NULL, c, nx, t0, t1, &d,
                                      work, &ds, &t_reached, x);
         s->n_accepted += ds.n_accepted;
         s->n_rejected += ds.n_rejected;
@@ -419,6 +509,92 @@ int gen_rt_model_advance(const gen_rt_model *m, gen_rt_real t0, gen_rt_real t1,
     return GEN_RT_OK;
 }
 
+/* a time within a relative rounding of a sample or knot counts as it */
+static gen_rt_real time_tol(gen_rt_real t)
+{
+    gen_rt_real a = t < 0 ? -t : t;
+    return 64 * GEN_RT_EPS * (a > 1 ? a : 1);
+}
+
+/* is t a sample time t0 + k period? */
+static int is_sample(const model_ctx *c, gen_rt_real t)
+{
+    gen_rt_real per = c->in->period, k;
+    if (!(per > 0)) return 0;
+    k = (gen_rt_real)(long)((t - c->t0) / per + GEN_RT_C(0.5));
+    return (t - (c->t0 + k * per)) <= time_tol(t) && (c->t0 + k * per - t) <= time_tol(t);
+}
+
+/* the end of the sub-interval from t towards t1: the next sample or knot */
+static gen_rt_real next_break(const model_ctx *c, gen_rt_real t, gen_rt_real t1)
+{
+    const gen_rt_input *in = c->in;
+    gen_rt_real tb = t1, tol = time_tol(t);
+    if (in->period > 0) {
+        long k = (long)((t - c->t0) / in->period) + 1;
+        gen_rt_real ts = c->t0 + (gen_rt_real)k * in->period;
+        if (ts <= t + tol) ts = c->t0 + (gen_rt_real)(k + 1) * in->period;
+        if (ts < tb - time_tol(tb)) tb = ts;
+    }
+    if (in->n_table > 0) {
+        int k = table_row(in->n_table, in->t_table, t + tol);
+        gen_rt_real tk;
+        if (in->t_table[k] <= t + tol) ++k;
+        if (k < in->n_table) {
+            tk = in->t_table[k];
+            if (tk > t + tol && tk < tb - time_tol(tb)) tb = tk;
+        }
+    }
+    return tb;
+}
+
+/* integrate t0 -> t1 with inputs from c->in: sub-intervals end at samples
+ * and knots; at a sample the held r is refreshed from the state there */
+static int advance_input_(model_ctx *c, gen_rt_real t0, gen_rt_real t1,
+                          const gen_rt_sim_options *o, gen_rt_real *work, gen_rt_sim_stats *s,
+                          gen_rt_real *x)
+{
+    gen_rt_real t = t0;
+    int st;
+    if (!c->in) return integrate_(c, t0, t1, o, work, s, x);
+    while (t < t1) {
+        gen_rt_real tb = next_break(c, t, t1);
+        if (is_sample(c, t) && !(c->sampled && c->t_sampled == t)) {
+            c->sampled = 1;
+            c->t_sampled = t;
+            st = input_at(c->m, c->in, t, t, x, c->r_held);
+            if (st) {
+                s->t_last = t;
+                copy_n(NX_(c->m), x, s->x_last);
+                return st;
+            }
+        }
+        c->t_seg = t;
+        st = integrate_(c, t, tb, o, work, s, x);
+        if (st) return st;
+        t = tb;
+    }
+    return GEN_RT_OK;
+}
+
+int gen_rt_model_advance(const gen_rt_model *m, gen_rt_real t0, gen_rt_real t1,
+                         const gen_rt_real *r, const gen_rt_real *p,
+                         const gen_rt_sim_options *o, gen_rt_real *work, int *iwork,
+                         gen_rt_sim_stats *s, gen_rt_real *x)
+{
+    int nx = NX_(m);
+    int nint = GEN_RT_RK4_WORK(nx) + nx > GEN_RT_DOPRI5_WORK(nx) ? GEN_RT_RK4_WORK(nx) + nx
+                                                                 : GEN_RT_DOPRI5_WORK(nx);
+    model_ctx c;
+    if (!(t1 >= t0)) return GEN_RT_ERR_BAD_ARG;
+    c.m = m; c.r = r; c.p = p;
+    c.proj_tol = o->proj_tol; c.proj_max_iter = o->proj_max_iter;
+    c.work = work + nint; c.iwork = iwork;
+    c.in = NULL; c.r_buf = c.r_held = NULL; c.t_seg = t0; c.t0 = t0;
+    c.t_sampled = t0; c.sampled = 0;
+    return integrate_(&c, t0, t1, o, work, s, x);
+}
+
 int gen_rt_simulate_rows(gen_rt_real t0, gen_rt_real t_end, gen_rt_real dt)
 {
     long n;
@@ -430,14 +606,21 @@ int gen_rt_simulate_rows(gen_rt_real t0, gen_rt_real t_end, gen_rt_real dt)
     return (int)(n + 1);
 }
 
-int gen_rt_model_simulate(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,
-                          gen_rt_real t_end, gen_rt_real dt, const gen_rt_real *r,
-                          const gen_rt_real *p, const gen_rt_sim_options *o, int capacity,
-                          gen_rt_real *work, int *iwork, gen_rt_real *t_out,
-                          gen_rt_real *x_out, gen_rt_real *lam_out, gen_rt_sim_stats *s)
+/* simulate and simulate_input: in == NULL for a constant r */
+static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,
+                     gen_rt_real t_end, gen_rt_real dt, const gen_rt_real *r,
+                     const gen_rt_input *in, const gen_rt_real *p,
+                     const gen_rt_sim_options *o, int capacity, gen_rt_real *work, int *iwork,
+                     gen_rt_real *t_out, gen_rt_real *x_out, gen_rt_real *lam_out,
+                     gen_rt_real *r_out, gen_rt_sim_stats *s)
 {
-    int nx = NX_(m), mv = m->mv, ldl = mv > 0 ? mv : 1, rows, k, i, st;
+    int nx = NX_(m), nr = m->nr, mv = m->mv, ldl = mv > 0 ? mv : 1, rows, k, i, st;
+    int nint = GEN_RT_RK4_WORK(nx) + nx > GEN_RT_DOPRI5_WORK(nx) ? GEN_RT_RK4_WORK(nx) + nx
+                                                                 : GEN_RT_DOPRI5_WORK(nx);
     gen_rt_real *x = work, *dx = x + nx, *lam = dx + nx, *w = lam + mv + 1;
+    gen_rt_real *rb = w + GEN_RT_MODEL_ADVANCE_WORK(m->nq, m->nu, m->mc, mv, nr,
+                                                    m->explicit_kinematics, m->accel);
+    model_ctx c;
     s->n_accepted = 0; s->n_rejected = 0; s->n_rhs = 0;
     s->n_out = 0; s->t_last = t0; s->h_next = 0;
     copy_n(nx, x0, x);
@@ -445,17 +628,44 @@ int gen_rt_model_simulate(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_r
     rows = gen_rt_simulate_rows(t0, t_end, dt);
     if (rows < 0) return rows;
     if (capacity < rows) return GEN_RT_ERR_OUTPUT_FULL;
+    c.m = m; c.p = p;
+    c.proj_tol = o->proj_tol; c.proj_max_iter = o->proj_max_iter;
+    c.work = w + nint; c.iwork = iwork;
+    c.in = in; c.t_seg = t0; c.t0 = t0; c.t_sampled = t0; c.sampled = 0;
+    c.r_buf = in ? rb : NULL;
+    c.r_held = in ? rb + nr + 1 : NULL;
+    c.r = in ? (in->period > 0 ? c.r_held : c.r_buf) : r;
     if (o->project) {
         st = gen_rt_model_project(m, t0, p, o->proj_tol, o->proj_max_iter, w, x);
         if (st) return st;
     }
     for (k = 0; k < rows; ++k) {
         gen_rt_real tk = (k == rows - 1) ? t_end : t0 + (gen_rt_real)k * dt;
+        const gen_rt_real *rk = r;
         if (k > 0) {
-            st = gen_rt_model_advance(m, t_out[k - 1], tk, r, p, o, w, iwork, s, x);
+            st = advance_input_(&c, t_out[k - 1], tk, o, w, s, x);
             if (st) return st;
         }
-        st = gen_rt_model_rhs(m, tk, x, r, p, w, iwork, dx, lam);
+        if (in) {
+            /* the inputs in effect from tk on: a new sample at a sample time,
+             * else the held one; continuous: evaluated here */
+            if (in->period > 0 && (k == 0 || is_sample(&c, tk))) {
+                c.sampled = 1;
+                c.t_sampled = tk;
+                st = input_at(m, in, tk, tk, x, c.r_held);
+            } else if (!(in->period > 0)) {
+                st = input_at(m, in, tk, tk, x, c.r_buf);
+            } else {
+                st = GEN_RT_OK;
+            }
+            if (st) {
+                s->t_last = tk;
+                copy_n(nx, x, s->x_last);
+                return st;
+            }
+            rk = c.r;
+        }
+        st = gen_rt_model_rhs(m, tk, x, rk, p, w, iwork, dx, lam);
         if (st) {
             s->t_last = tk;
             copy_n(nx, x, s->x_last);
@@ -465,9 +675,37 @@ int gen_rt_model_simulate(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_r
         copy_n(nx, x, x_out + (long)k * nx);
         if (lam_out)
             for (i = 0; i < mv; ++i) lam_out[(long)k * ldl + i] = lam[i];
+        if (r_out)
+            for (i = 0; i < nr; ++i) r_out[(long)k * nr + i] = rk ? rk[i] : 0;
         s->n_out = k + 1;
     }
     return GEN_RT_OK;
+}
+
+int gen_rt_model_simulate(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,
+                          gen_rt_real t_end, gen_rt_real dt, const gen_rt_real *r,
+                          const gen_rt_real *p, const gen_rt_sim_options *o, int capacity,
+                          gen_rt_real *work, int *iwork, gen_rt_real *t_out,
+                          gen_rt_real *x_out, gen_rt_real *lam_out, gen_rt_sim_stats *s)
+{
+    return simulate_(m, x0, t0, t_end, dt, r, NULL, p, o, capacity, work, iwork, t_out, x_out,
+                     lam_out, NULL, s);
+}
+
+int gen_rt_model_simulate_input(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,
+                                gen_rt_real t_end, gen_rt_real dt, const gen_rt_input *in,
+                                const gen_rt_real *p, const gen_rt_sim_options *o,
+                                int capacity, gen_rt_real *work, int *iwork,
+                                gen_rt_real *t_out, gen_rt_real *x_out, gen_rt_real *lam_out,
+                                gen_rt_real *r_out, gen_rt_sim_stats *s)
+{
+    int st = input_check(m, in);
+    s->n_accepted = 0; s->n_rejected = 0; s->n_rhs = 0;
+    s->n_out = 0; s->t_last = t0; s->h_next = 0;
+    copy_n(NX_(m), x0, s->x_last);
+    if (st) return st;
+    return simulate_(m, x0, t0, t_end, dt, NULL, in, p, o, capacity, work, iwork, t_out, x_out,
+                     lam_out, r_out, s);
 }
 
 /* ------------------------------------------------------------------ */
@@ -534,4 +772,17 @@ int gen_rt_model_linearize(const gen_rt_model *m, const gen_rt_real *x_op,
         (b.Sqd && !finite_n(mv * nq, Sqd)))
         return GEN_RT_ERR_NONFINITE_MODEL;
     return gen_rt_linearize(&d, &b, scratch + sw, iwork, A_lin, nr ? B_lin : Bdummy);
+}
+
+int gen_rt_model_linearize_discrete(const gen_rt_model *m, const gen_rt_real *x_op,
+                                    const gen_rt_real *r_op, const gen_rt_real *p,
+                                    gen_rt_real t, gen_rt_real dt, gen_rt_real *work,
+                                    int *iwork, gen_rt_real *Ad, gen_rt_real *Bd)
+{
+    int ns = m->nq - m->mc + m->nu - m->mv, nr = m->nr, st;
+    gen_rt_real *A = work, *B = A + ns * ns, *w = B + ns * nr + 1;
+    if (!(dt > 0) || !finite_n(1, &dt)) return GEN_RT_ERR_BAD_ARG;
+    st = gen_rt_model_linearize(m, x_op, r_op, p, t, w, iwork, A, B);
+    if (st) return st;
+    return gen_rt_c2d_zoh(ns, nr, A, nr ? B : NULL, dt, w, iwork, Ad, Bd);
 }

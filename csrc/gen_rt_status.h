@@ -28,7 +28,8 @@
                                     "from Kqd(q) q' + Ku(q) u + kf = 0 at this "          \
                                     "configuration (with Euler angles: gimbal lock)")  \
     X(ERR_DIVERGED, -11, "the state diverged: it grew beyond the range of the scalar "  \
-                         "type (overflow) during integration")
+                         "type (overflow) during integration")                          \
+    X(ERR_CONTROLLER, -12, "the controller callback returned an error")
 
 /* the message of a code outside the table */
 #define GEN_RT_STATUS_UNKNOWN "unknown status code"

@@ -16,6 +16,8 @@ from .render import generate  # noqa: E402
 from .build import compile  # noqa: E402,A001
 from .symbolic import linearize_symbolic  # noqa: E402
 from .verify import VerifyReport, verify  # noqa: E402
+from .control import LinearFeedback  # noqa: E402
 
 __all__ = ["Model", "generate", "compile", "EomgenError", "ModelError", "BuildError",
-           "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "linearize_symbolic", "verify", "VerifyReport", "__version__"]
+           "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
+           "__version__"]

@@ -81,7 +81,8 @@ METHODS = {"rk4": 0, "dopri5": 1}
 @dataclass(frozen=True)
 class Field:
     name: str
-    ctype: str              # "int", "long" or "real"
+    ctype: str              # "int", "long", "real", "creal*" (const real array),
+                            # "controller" (the controller callback) or "void*"
     doc: str
     default: object = 0     # a number, or "eps16" (16 machine epsilons of the scalar type)
     count: str | None = None    # an array of this many (a size such as "NX")
@@ -107,6 +108,23 @@ STRUCTS = (
         Field("max_steps", "long", "dopri5 step budget per output interval", 100000),
         Field("proj_tol", "real", "projection: relative tolerance on the correction", "eps16"),
         Field("proj_max_iter", "int", "projection: Newton iterations", 10),
+    )),
+    Struct("input", "Input", "Inputs during a simulation (simulate_input): a constant or a "
+           "table, a linear feedback on the independent state, a controller callback; "
+           "continuous or sampled. Zero-fill it (memset) and set what you use.", (
+        Field("r", "creal*", "NR constant inputs (NULL: zero); the base of the feedback", 0),
+        Field("n_table", "int", "> 0: the base from a table of n_table rows instead", 0),
+        Field("t_table", "creal*", "n_table strictly increasing times", 0),
+        Field("r_table", "creal*", "n_table x NR inputs, row-major", 0),
+        Field("hold", "int", "table: <P>_HOLD_ZOH (the last knot's row) or <P>_HOLD_LINEAR", 0),
+        Field("K", "creal*", "NR x NS gain on the independent state (NULL: none): "
+              "r = base - K (x_ind - x_op_ind)", 0),
+        Field("x_op", "creal*", "NX operating state of the gain (NULL: zero)", 0),
+        Field("controller", "controller", "called last with r holding the above; may "
+              "overwrite r; nonzero return: ERR_CONTROLLER (NULL: none)", 0),
+        Field("ctx", "void*", "passed to the controller", 0),
+        Field("period", "real", "0: r evaluated at every stage; > 0: sampled at t0 + k period "
+              "and held", 0.0),
     )),
     Struct("sim_stats", "SimStats", "Integration statistics (advance accumulates them).", (
         Field("n_accepted", "long", "accepted steps"),
@@ -229,10 +247,24 @@ FUNCTIONS = (
              "rows of t_out, x_out (NX each), lam_out (MV each, may be NULL). On failure the rows "
              "written are stats->n_out and stats->x_last holds the last good state.",
              work="SIMULATE", iwork=True),
+    Function("simulate_input",
+             _params("x0:in:NX, t0:value, t_end:value, dt:value, in:struct::input, "
+                     "p:in?:NP=p, opts:struct?::sim_options, capacity:value::int, t_out:rows, "
+                     "x_out:rows, lam_out:out?, r_out:out?, stats:struct_out::sim_stats"),
+             "simulate() with the inputs from in (a table, a linear feedback, a controller "
+             "callback; continuous or sampled): r_out (NR per row, may be NULL) gets the "
+             "inputs in effect from each output time on.",
+             work="SIMULATE_INPUT", iwork=True),
     Function("linearize", _params("x_op:in:NX, r_op:in?:NR=r, p:in?:NP=p, t:scalar, "
                                   "A:out:NS*NS, B:out:NS*NR"),
              "Linearize about any operating point: A (NS x NS) and B (NS x NR) for the independent "
              "state [q_ind, u_ind].", work="LINEARIZE", iwork=True),
+    Function("linearize_discrete", _params("x_op:in:NX, r_op:in?:NR=r, p:in?:NP=p, t:scalar, "
+                                           "dt:scalar, Ad:out:NS*NS, Bd:out:NS*NR"),
+             "The zero-order-hold discretization of the linearization over a step dt: "
+             "Ad = exp(A dt) (NS x NS), Bd = int_0^dt exp(A s) ds B (NS x NR), by scaling and "
+             "squaring (GEN_RT_ERR_BAD_ARG unless dt > 0).",
+             work="LINEARIZE_DISCRETE", iwork=True),
 )
 
 # Loops over the public API compiled into the Python module (not into the

@@ -27,6 +27,7 @@ EXCEPTIONS = {
     "ERR_OUTPUT_FULL": SolverError,
     "ERR_SINGULAR_KINEMATICS": SingularError,
     "ERR_DIVERGED": DivergenceError,
+    "ERR_CONTROLLER": SolverError,
 }
 
 
@@ -304,10 +305,19 @@ class Simulator:
     # ------------------------------------------------------- simulation
     def simulate(self, x0, t_end, dt, method="rk4", rtol=1e-8, atol=1e-10, r=None, p=None,
                  project=True, t0=0.0, max_steps=100000, return_multipliers=False,
-                 return_stats=False):
+                 return_stats=False, controller=None, input_period=None, input_hold="zoh",
+                 return_inputs=False):
         """Simulate from x0 to t_end. dt is the RK4 step, or the output
         interval of the adaptive DOPRI5. Returns (t, X) with one row per
-        output time (plus the multipliers and/or stats when asked)."""
+        output time, then, when asked, the multipliers, the inputs in effect
+        from each output time on (return_inputs) and the stats.
+
+        r: None or NR constant inputs; a table (t_grid, R) held or
+        interpolated inside C (input_hold "zoh" or "linear"); or a callable
+        r(t, x) sampled every input_period (default dt; 0: every stage).
+        controller: a gen.LinearFeedback, computed inside C (README,
+        "Closed loops")."""
+        from .control import plan_inputs
         if method not in METHODS:
             raise ValueError(f"method must be one of {sorted(METHODS)}, got {method!r}")
         if not (np.isfinite(dt) and dt > 0):
@@ -315,7 +325,9 @@ class Simulator:
         if not (np.isfinite(t_end) and t_end >= t0):
             raise ValueError(f"t_end must be a number >= t0 = {t0}, got {t_end!r}")
         x0 = self._vec(x0, self.nx, "state x0")
-        r = None if r is None else self._vec(r, self.nr, "inputs r")
+        plan = plan_inputs(self, r, controller, dt, method, input_period, input_hold)
+        if plan is None:
+            r = None if r is None else self._vec(r, self.nr, "inputs r")
         rows = self._fn("simulate_rows")(t0, t_end, dt)
         if rows < 0:
             self._check(rows, "simulate_rows")
@@ -330,15 +342,28 @@ class Simulator:
         t = np.empty(rows, dtype=self.dtype)
         X = np.empty((rows, self.nx), dtype=self.dtype)
         lam = np.empty((rows, max(1, self.mv)), dtype=self.dtype)
-        st = self._fn("simulate")(self._ptr(x0), t0, t_end, dt, self._ptr(r),
-                                  self._ptr(self._params(p)), opts, rows, self._ptr(t),
-                                  self._ptr(X), self._ptr(lam), stats)
+        R = np.empty((rows, max(1, self.nr)), dtype=self.dtype)
+        if plan is None:
+            st = self._fn("simulate")(self._ptr(x0), t0, t_end, dt, self._ptr(r),
+                                      self._ptr(self._params(p)), opts, rows, self._ptr(t),
+                                      self._ptr(X), self._ptr(lam), stats)
+            if return_inputs:
+                R[:, :self.nr] = 0 if r is None else r
+        else:
+            st = self._fn("simulate_input")(self._ptr(x0), t0, t_end, dt, plan.struct,
+                                            self._ptr(self._params(p)), opts, rows,
+                                            self._ptr(t), self._ptr(X), self._ptr(lam),
+                                            self._ptr(R), stats)
+            if plan.error is not None:
+                raise plan.error
         if st != 0:
             last = np.array([stats.x_last[i] for i in range(self.nx)])
             self._check(st, "simulate", stats.t_last, last)
         out = [t, X]
         if return_multipliers:
             out.append(lam[:, :self.mv].copy())
+        if return_inputs:
+            out.append(R[:, :self.nr].copy())
         if return_stats:
             out.append({"n_accepted": stats.n_accepted, "n_rejected": stats.n_rejected,
                         "n_rhs": stats.n_rhs, "n_out": stats.n_out})
@@ -354,17 +379,29 @@ class Simulator:
         return x
 
     # ---------------------------------------------------- linearization
-    def linearize(self, x_op, r_op=None, p=None, t=0.0):
+    def linearize(self, x_op, r_op=None, p=None, t=0.0, dt=None):
         """(A, B) about the operating point for the independent state
         [q_ind, u_ind] (sympy's A_and_B=True partition): A (ns, ns), B (ns, nr).
-        The operating point need not be an equilibrium."""
+        The operating point need not be an equilibrium.
+
+        dt: (Ad, Bd), the zero-order-hold discretization over a step dt
+        (Ad = exp(A dt), Bd = int_0^dt exp(A s) ds B), computed in C by
+        scaling and squaring."""
         x = self._vec(x_op, self.nx, "state x_op")
         r = None if r_op is None else self._vec(r_op, self.nr, "inputs r_op")
         A = np.empty(self.ns * self.ns, dtype=self.dtype)
         B = np.zeros(max(1, self.ns * self.nr), dtype=self.dtype)
-        st = self._fn("linearize")(self._ptr(x), self._ptr(r), self._ptr(self._params(p)), t,
-                                   self._ptr(A), self._ptr(B))
-        self._check(st, "linearize", t, x)
+        if dt is not None:
+            if not (np.isfinite(dt) and dt > 0):
+                raise ValueError(f"dt must be a positive number, got {dt!r}")
+            st = self._fn("linearize_discrete")(self._ptr(x), self._ptr(r),
+                                                self._ptr(self._params(p)), t, dt,
+                                                self._ptr(A), self._ptr(B))
+            self._check(st, "linearize_discrete", t, x)
+        else:
+            st = self._fn("linearize")(self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
+                                       t, self._ptr(A), self._ptr(B))
+            self._check(st, "linearize", t, x)
         return (A.reshape(self.ns, self.ns),
                 B[:self.ns * self.nr].reshape(self.ns, self.nr).copy())
 
@@ -465,7 +502,9 @@ class Simulator:
         if X0.ndim == 1:
             X0 = X0[None, :]
         P = None if p is None else np.asarray(p, dtype=float)
-        R = None if r is None else np.asarray(r, dtype=float)
+        # a callable r(t, x) or a table (t_grid, R) is the same for every run
+        shared_r = callable(r) or (isinstance(r, tuple) and len(r) == 2)
+        R = None if r is None or shared_r else np.asarray(r, dtype=float)
         n = max(len(X0), 1 if P is None or P.ndim == 1 else len(P),
                 1 if R is None or R.ndim == 1 else len(R))
         if len(X0) not in (1, n):
@@ -478,7 +517,8 @@ class Simulator:
 
         def one(i):
             x0 = X0[0] if len(X0) == 1 else X0[i]
-            return self.simulate(x0, t_end, dt, r=row(R, i), p=row(P, i), **kw)
+            return self.simulate(x0, t_end, dt, r=r if shared_r else row(R, i), p=row(P, i),
+                                 **kw)
 
         workers = workers or os.cpu_count() or 1
         with ThreadPoolExecutor(max_workers=workers) as ex:

@@ -241,9 +241,14 @@ def cmd_linearize(a, progress):
     m = load_model(a.file, progress)
     sim = _compile(m, a, progress)
     x, p, r = _state(sim, a, a.at)
+    discrete = None
     with progress.stage("linearize"):
         A, B = sim.linearize(x, r_op=r, p=p)
-    print_linearization(sim, x, r, A, B)
+        if getattr(a, "dt", None) is not None:
+            if not a.dt > 0:
+                raise UsageError(f"--dt must be positive, got {a.dt}")
+            discrete = (a.dt,) + sim.linearize(x, r_op=r, p=p, dt=a.dt)
+    print_linearization(sim, x, r, A, B, discrete)
     return 0
 
 
@@ -256,9 +261,17 @@ def cmd_simulate(a, progress):
         raise UsageError(f"--t-end must be positive, got {a.t_end}")
     if not a.dt > 0:
         raise UsageError(f"--dt must be positive, got {a.dt}")
+    varying = False
+    if getattr(a, "input_csv", None):
+        if a.input:
+            raise UsageError("give the inputs either with --input or with --input-csv")
+        r = _read_input_table(sim, a.input_csv)
+        varying = True
     with progress.stage(f"simulate {a.t_end:g} s ({a.method})"):
-        t, X, lam = sim.simulate(x, a.t_end, a.dt, method=a.method, r=r, p=p,
-                                 rtol=a.rtol, atol=a.atol, return_multipliers=True)
+        t, X, lam, R = sim.simulate(x, a.t_end, a.dt, method=a.method, r=r, p=p,
+                                    rtol=a.rtol, atol=a.atol, return_multipliers=True,
+                                    return_inputs=True,
+                                    input_hold=getattr(a, "hold", "zoh"))
     cols = ["t"] + sim.state_names
     data = [t[:, None], X]
     res_names, res = [], []
@@ -275,13 +288,17 @@ def cmd_simulate(a, progress):
         E = np.array([sim.energy(xi, p=p) for xi in X])
     aux = None
     if sim.na:
-        aux = np.array([sim.auxiliary_forces(ti, xi, r=r, p=p) for ti, xi in zip(t, X)])
+        aux = np.array([sim.auxiliary_forces(ti, xi, r=ri, p=p) for ti, xi, ri in zip(t, X, R)])
+    if varying:   # the inputs in effect from each row on, as the binary writes them
+        aux = R if aux is None else np.hstack([aux, R])
     for out in (a.csv, a.plot):
         if out:
             Path(out).resolve().parent.mkdir(parents=True, exist_ok=True)
     if a.csv:
         with progress.stage(f"write {a.csv}"):
-            write_csv(a.csv, sim, cols, data, lam, res_names, res, E, aux)
+            write_csv(a.csv, sim, cols, data, lam, res_names, res, E, aux,
+                      aux_names=(list(sim.auxiliary_names)
+                                 + (list(sim.input_names) if varying else [])))
         print(f"wrote {len(t)} rows to {a.csv}")
     if a.plot:
         with progress.stage(f"plot {a.plot}"):
@@ -291,9 +308,47 @@ def cmd_simulate(a, progress):
                 raise UsageError(str(e)) from None
         print(f"wrote {a.plot}")
     if not a.csv and not a.plot:
-        print_csv(cols + (list(sim.auxiliary_names) if aux is not None else []),
+        extra = list(sim.auxiliary_names) + (list(sim.input_names) if varying else [])
+        print_csv(cols + (extra if aux is not None else []),
                   np.hstack(data + ([aux] if aux is not None else [])))
     return 0
+
+
+def _read_input_table(sim, path):
+    """(t_grid, R) from a CSV with a header 't,<input names>' (any order)."""
+    import numpy as np
+    try:
+        lines = [ln.strip() for ln in Path(path).read_text().splitlines()
+                 if ln.strip() and not ln.lstrip().startswith("#")]
+    except OSError as e:
+        raise UsageError(f"cannot read the input table {path}: {e.strerror}") from None
+    if not lines:
+        raise UsageError(f"the input table {path} is empty")
+    head = [h.strip() for h in lines[0].split(",")]
+    if head[0] != "t":
+        raise UsageError(f"{path}: the header must be 't,<input names>' "
+                         f"(inputs: {', '.join(sim.input_names)}), got {lines[0]!r}")
+    unknown = [h for h in head[1:] if h not in sim.input_names]
+    missing = [n for n in sim.input_names if n not in head[1:]]
+    if unknown or missing:
+        raise UsageError(f"{path}: " + "; ".join(
+            ([f"unknown input(s) {', '.join(unknown)}"] if unknown else [])
+            + ([f"no column for input(s) {', '.join(missing)}"] if missing else []))
+            + f" (inputs: {', '.join(sim.input_names)})")
+    rows = []
+    for k, ln in enumerate(lines[1:], start=2):
+        try:
+            vals = [float(v) for v in ln.split(",")]
+        except ValueError:
+            raise UsageError(f"{path}:{k}: not a row of numbers: {ln!r}") from None
+        if len(vals) != len(head):
+            raise UsageError(f"{path}:{k}: expected {len(head)} values, got {len(vals)}")
+        rows.append(vals)
+    if not rows:
+        raise UsageError(f"the input table {path} has a header but no rows")
+    data = np.array(rows)
+    R = data[:, [head.index(n) for n in sim.input_names]]
+    return data[:, 0], R
 
 
 def cmd_verify(a, progress):
@@ -414,8 +469,13 @@ def build_parser():
     s.add_argument("--param", action="append", metavar="NAME=VALUE", help="constant value")
     s.add_argument("--input", action="append", metavar="NAME=VALUE",
                    help="constant input value")
+    s.add_argument("--input-csv", metavar="FILE",
+                   help="inputs from a table: a header 't,<input names>' then rows; held "
+                        "(--hold zoh, default) or interpolated (--hold linear) inside C")
+    s.add_argument("--hold", default="zoh", choices=["zoh", "linear"],
+                   help="the input table between rows")
     s.add_argument("--csv", help="write the trajectory (t, states, lam, residuals, energy, "
-                        "reaction forces)")
+                        "reaction forces, inputs when they vary)")
     s.add_argument("--plot", help="write a PNG plot")
     _add_real(s)
     s.set_defaults(fn=cmd_simulate, backend="c")
@@ -427,6 +487,8 @@ def build_parser():
                     help="operating-point entry (repeat); dependent entries are solved")
     li.add_argument("--param", action="append", metavar="NAME=VALUE", help="constant value")
     li.add_argument("--input", action="append", metavar="NAME=VALUE", help="input value")
+    li.add_argument("--dt", type=float, metavar="TS",
+                    help="also print the zero-order-hold discretization Ad, Bd over TS")
     _add_real(li)
     li.set_defaults(fn=cmd_linearize, backend="c")
 

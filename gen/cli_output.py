@@ -75,9 +75,10 @@ def format_matrix(rows, cols, M, w):
     return "\n".join(out)
 
 
-def print_linearization(sim, x, r, A, B):
+def print_linearization(sim, x, r, A, B, discrete=None):
     """The operating point, A and B labelled by state and input names, and
-    the eigenvalues of A (sorted; no negative zeros)."""
+    the eigenvalues of A (sorted; no negative zeros); with discrete =
+    (dt, Ad, Bd) also the zero-order-hold discretization."""
     import numpy as np
     names = sim.independent_state_names
     w = max(len(n) for n in names + sim.input_names + ["x"]) + 2
@@ -92,20 +93,29 @@ def print_linearization(sim, x, r, A, B):
     ev = np.linalg.eigvals(A)
     ev = ev[np.lexsort((ev.imag, ev.real))]
     print("eigenvalues of A:", "  ".join(f"{e.real + 0.0:.9g}{e.imag + 0.0:+.9g}j" for e in ev))
+    if discrete is not None:
+        dt, Ad, Bd = discrete
+        print(f"zero-order hold, dt = {dt:g}:")
+        print("Ad =")
+        print(format_matrix(names, names, Ad, w))
+        print("Bd =" + (" (no inputs)" if sim.nr == 0 else ""))
+        if sim.nr:
+            print(format_matrix(names, sim.input_names, Bd, w))
 
 
-def write_csv(path, sim, cols, data, lam, res_names, res, E, aux=None):
+def write_csv(path, sim, cols, data, lam, res_names, res, E, aux=None, aux_names=None):
     """The trajectory as CSV: the columns cols of data, then the multipliers
     (when the model has velocity constraints), the constraint residuals, the
     energy when present and the reaction forces of the auxiliary speeds
     (aux: rows of sim.auxiliary_names, as the standalone binary writes)."""
     import numpy as np
     extra = [lam] if sim.mv else []
-    has_aux = aux is not None and sim.na
+    names = list(sim.auxiliary_names) if aux_names is None else list(aux_names)
+    has_aux = aux is not None and len(names) > 0
     table = np.hstack(data + extra + res + ([E[:, None]] if E is not None else [])
                       + ([aux] if has_aux else []))
     header = cols + [f"lam{i}" for i in range(sim.mv)] + res_names + \
-        (["energy"] if E is not None else []) + (list(sim.auxiliary_names) if has_aux else [])
+        (["energy"] if E is not None else []) + (names if has_aux else [])
     with open(path, "w") as fh:
         fh.write(",".join(header) + "\n")
         for row in table:

@@ -223,6 +223,8 @@ _RUNTIME_INDIRECT = {
     "gen_rt_model_consistent_state": ["constraint_jacobian", "velocity_constraint_matrix"],
     "gen_rt_model_linearize": ["mass_matrix", "forcing", "rhs_terms", "accel_terms", "lin_terms",
                                "mass_solve"],
+    "gen_rt_model_linearize_discrete": ["mass_matrix", "forcing", "rhs_terms", "accel_terms",
+                                        "lin_terms", "mass_solve"],
 }
 _CALLBACKS = ["rhs_cb", "post_cb"]
 

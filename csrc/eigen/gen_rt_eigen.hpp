@@ -79,6 +79,7 @@
 #include <Eigen/LU>
 
 #include "gen_rt_dopri5.h"
+#include "gen_rt_expm.hpp"
 #include "gen_rt_status.h"
 
 #if !EIGEN_VERSION_AT_LEAST(3, 4, 0)
@@ -123,6 +124,13 @@ struct Tolerances {
     static constexpr S partition_cmax = single ? S(1e5) : S(1e9);
     static constexpr S diverged_abs = single ? S(1e15) : S(1e150); // GEN_RT_DIVERGED_ABS
 };
+
+/* A controller for simulate_input (the C runtime's gen_rt_controller_fn):
+ * r holds the inputs so far and may be overwritten; nonzero stops the run
+ * with ERR_CONTROLLER. */
+template <typename S>
+using ControllerFn = int (*)(void *ctx, S t, const S *x, S *r);
+constexpr int HOLD_ZOH = 0, HOLD_LINEAR = 1;
 
 /* The outputs of Model::lin_terms (row-major blocks; those the model does
  * not have are 0 x n and their pointers may be null). */
@@ -837,6 +845,15 @@ struct Runtime {
         auto f = [&](S tt, const State &xx, State &dx) noexcept {
             return rhs_unchecked(tt, xx, r, p, dx, nullptr);
         };
+        return integrate_f(f, p, t0, t1, opts, stats, x);
+    }
+
+    /* one integration t0 -> t1 over the right-hand side f (one RK4 step or
+     * DOPRI5 steps), projection after each step when asked */
+    template <class F, class Opts, class Stats>
+    static int integrate_f(F &f, const Params &p, S t0, S t1, const Opts &opts, Stats &stats,
+                           State &x) noexcept
+    {
         auto post = [&](S tt, State &xx) noexcept {
             return project_unchecked(tt, p, opts.proj_tol, opts.proj_max_iter, xx);
         };
@@ -926,11 +943,227 @@ struct Runtime {
         return OK;
     }
 
+    // ---------------------------------------------- inputs during a simulation
+
+    /* the last knot k with T[k] <= t (0 before the first) */
+    static int table_row(int n, const S *T, S t) noexcept
+    {
+        if (t < T[0]) return 0;
+        if (t >= T[n - 1]) return n - 1;
+        int lo = 0, hi = n - 1;
+        while (hi - lo > 1) {
+            const int mid = lo + (hi - lo) / 2;
+            if (T[mid] <= t) lo = mid;
+            else hi = mid;
+        }
+        return lo;
+    }
+
+    /* base (constant or table, a ZOH table at t_zoh), feedback, controller
+     * at t (gen_rt_model.c: input_at, the same arithmetic) */
+    template <class In>
+    static int input_at(const In &in, S t, S t_zoh, const State &x, Inputs &r) noexcept
+    {
+        if (in.n_table > 0) {
+            const S *T = in.t_table, *R = in.r_table;
+            const int n = in.n_table;
+            if (in.hold == HOLD_LINEAR && n > 1 && t > T[0] && t < T[n - 1]) {
+                const int k = table_row(n, T, t);
+                const S w = (t - T[k]) / (T[k + 1] - T[k]);
+                for (int i = 0; i < NR; ++i)
+                    r[i] = R[static_cast<long>(k) * NR + i] +
+                           w * (R[static_cast<long>(k + 1) * NR + i] -
+                                R[static_cast<long>(k) * NR + i]);
+            } else {
+                const int k = table_row(n, T, in.hold == HOLD_LINEAR ? t : t_zoh);
+                for (int i = 0; i < NR; ++i) r[i] = R[static_cast<long>(k) * NR + i];
+            }
+        } else {
+            for (int i = 0; i < NR; ++i) r[i] = in.r ? in.r[i] : S(0);
+        }
+        if (in.K) {
+            for (int i = 0; i < NR; ++i) {
+                S s = 0;
+                for (int j = 0; j < NS; ++j) {
+                    const int idx = j < NQI ? Model::q_ind[j] : NQ + Model::u_ind[j - NQI];
+                    s += in.K[static_cast<long>(i) * NS + j] *
+                         (x[idx] - (in.x_op ? in.x_op[idx] : S(0)));
+                }
+                r[i] -= s;
+            }
+        }
+        if (in.controller && in.controller(in.ctx, t, x.data(), r.data())) return ERR_CONTROLLER;
+        if (!finite(r)) return ERR_NONFINITE_INPUT;
+        return OK;
+    }
+
+    template <class In>
+    static int input_check(const In &in) noexcept
+    {
+        if (in.n_table < 0 || (in.hold != HOLD_ZOH && in.hold != HOLD_LINEAR)) return ERR_BAD_ARG;
+        if (!finite(in.period) || in.period < 0) return ERR_BAD_ARG;
+        if (in.n_table > 0) {
+            if (!in.t_table || (NR > 0 && !in.r_table)) return ERR_NULL;
+            for (int i = 0; i < in.n_table; ++i)
+                if (!finite(in.t_table[i])) return ERR_NONFINITE_INPUT;
+            for (long i = 0; i < static_cast<long>(in.n_table) * NR; ++i)
+                if (!finite(in.r_table[i])) return ERR_NONFINITE_INPUT;
+            for (int i = 1; i < in.n_table; ++i)
+                if (!(in.t_table[i] > in.t_table[i - 1])) return ERR_BAD_ARG;
+        } else if (in.r) {
+            for (int i = 0; i < NR; ++i)
+                if (!finite(in.r[i])) return ERR_NONFINITE_INPUT;
+        }
+        if (in.K)
+            for (int i = 0; i < NR * NS; ++i)
+                if (!finite(in.K[i])) return ERR_NONFINITE_INPUT;
+        if (in.x_op)
+            for (int i = 0; i < NX; ++i)
+                if (!finite(in.x_op[i])) return ERR_NONFINITE_INPUT;
+        return OK;
+    }
+
+    static S time_tol(S t) noexcept
+    {
+        const S a = t < 0 ? -t : t;
+        return 64 * Tol::eps * (a > 1 ? a : S(1));
+    }
+
+    /* simulate() with the inputs from in (a table, a linear feedback, a
+     * controller; continuous or sampled): see gen_rt.h, gen_rt_input */
+    template <class In, class Opts, class Stats>
+    static int simulate_input(const State &x0, S t0, S t_end, S dt, const In &in, const Params &p,
+                              const Opts &opts, int capacity, S *t_out, S *x_out, S *lam_out,
+                              S *r_out, Stats &stats) noexcept
+    {
+        constexpr int LAM_STRIDE = MV > 0 ? MV : 1;
+        stats = Stats();
+        stats.t_last = t0;
+        stats.x_last = x0;
+        if (!t_out || !x_out) return ERR_NULL;
+        if (!finite(x0) || !finite(p)) return ERR_NONFINITE_INPUT;
+        int st = input_check(in);
+        if (st) return st;
+        const bool sampled = in.period > 0;
+        Inputs r_buf = Inputs::Zero(), r_held = Inputs::Zero();
+        S t_seg = t0, t_sampled = t0;
+        bool has_sample = false;
+        auto is_sample = [&](S t) noexcept {
+            if (!sampled) return false;
+            const S k = static_cast<S>(static_cast<long>((t - t0) / in.period + S(0.5)));
+            return (t - (t0 + k * in.period)) <= time_tol(t) &&
+                   (t0 + k * in.period - t) <= time_tol(t);
+        };
+        auto next_break = [&](S t, S t1) noexcept {
+            S tb = t1;
+            const S tol = time_tol(t);
+            if (sampled) {
+                const long k = static_cast<long>((t - t0) / in.period) + 1;
+                S ts = t0 + static_cast<S>(k) * in.period;
+                if (ts <= t + tol) ts = t0 + static_cast<S>(k + 1) * in.period;
+                if (ts < tb - time_tol(tb)) tb = ts;
+            }
+            if (in.n_table > 0) {
+                int k = table_row(in.n_table, in.t_table, t + tol);
+                if (in.t_table[k] <= t + tol) ++k;
+                if (k < in.n_table) {
+                    const S tk = in.t_table[k];
+                    if (tk > t + tol && tk < tb - time_tol(tb)) tb = tk;
+                }
+            }
+            return tb;
+        };
+        int cb_status = OK;
+        auto f = [&](S tt, const State &xx, State &dx) noexcept {
+            if (sampled) return rhs_unchecked(tt, xx, r_held, p, dx, nullptr);
+            Inputs rr;
+            const int s2 = input_at(in, tt, t_seg, xx, rr);
+            if (s2) {
+                cb_status = s2;
+                return s2;
+            }
+            return rhs_unchecked(tt, xx, rr, p, dx, nullptr);
+        };
+        (void)cb_status;
+        State x = x0, dx;
+        Multipliers lam;
+        const int rows = simulate_rows(t0, t_end, dt);
+        if (rows < 0) return rows;
+        if (capacity < rows) return ERR_OUTPUT_FULL;
+        if (opts.project) {
+            st = project_unchecked(t0, p, opts.proj_tol, opts.proj_max_iter, x);
+            if (st) return st;
+        }
+        for (int k = 0; k < rows; ++k) {
+            const S tk = (k == rows - 1) ? t_end : t0 + static_cast<S>(k) * dt;
+            if (k > 0) {
+                S t = t_out[k - 1];
+                while (t < tk) {
+                    const S tb = next_break(t, tk);
+                    if (is_sample(t) && !(has_sample && t_sampled == t)) {
+                        has_sample = true;
+                        t_sampled = t;
+                        st = input_at(in, t, t, x, r_held);
+                        if (st) {
+                            stats.t_last = t;
+                            stats.x_last = x;
+                            return st;
+                        }
+                    }
+                    t_seg = t;
+                    st = integrate_f(f, p, t, tb, opts, stats, x);
+                    if (st) return st;
+                    t = tb;
+                }
+            }
+            Inputs *rk = &r_buf;
+            if (sampled) {
+                rk = &r_held;
+                if (k == 0 || is_sample(tk)) {
+                    has_sample = true;
+                    t_sampled = tk;
+                    st = input_at(in, tk, tk, x, r_held);
+                } else {
+                    st = OK;
+                }
+            } else {
+                st = input_at(in, tk, tk, x, r_buf);
+            }
+            if (!st) st = rhs_unchecked(tk, x, *rk, p, dx, &lam);
+            if (st) {
+                stats.t_last = tk;
+                stats.x_last = x;
+                return st;
+            }
+            t_out[k] = tk;
+            for (int i = 0; i < NX; ++i) x_out[k * NX + i] = x[i];
+            if (lam_out)
+                for (int i = 0; i < MV; ++i) lam_out[k * LAM_STRIDE + i] = lam[i];
+            if (r_out)
+                for (int i = 0; i < NR; ++i) r_out[k * NR + i] = (*rk)[i];
+            stats.n_out = k + 1;
+        }
+        return OK;
+    }
+
     // -------------------------------------------------------- linearization
 
     /* A (NS x NS) and B (NS x NR) for the independent state [q_ind, u_ind]
      * about any operating point, by the elimination of Peterson, Gede and
      * Hubbard done numerically. */
+    /* the zero-order-hold discretization of the linearization over dt:
+     * Ad = exp(A dt), Bd = int_0^dt exp(A s) ds B (gen_rt::c2d_zoh) */
+    static int linearize_discrete(const State &x_op, const Inputs &r_op, const Params &p, S t,
+                                  S dt, StateMatrix &Ad, InputMatrix &Bd) noexcept
+    {
+        if (!finite(dt) || !(dt > 0)) return ERR_BAD_ARG;
+        StateMatrix A;
+        InputMatrix B;
+        const int st = linearize(x_op, r_op, p, t, A, B);
+        if (st) return st;
+        return c2d_zoh(A, B, dt, Ad, Bd);
+    }
+
     static int linearize(const State &x_op, const Inputs &r_op, const Params &p, S t,
                          StateMatrix &A_lin, InputMatrix &B_lin) noexcept
     {

@@ -138,6 +138,44 @@ int lu_solve_inplace(Square<S, N> &den, Square<S, N> &x) noexcept
     return OK;
 }
 
+// U and V, the odd and even parts of p_m(a), for m = 3, 5, 7, 9
+template <class S, int N>
+void pade_low(const Square<S, N> &a, int m, const double *b, Square<S, N> &U,
+              Square<S, N> &V) noexcept
+{
+    using M = Square<S, N>;
+    const M I = M::Identity();
+    const M A2 = a.lazyProduct(a);
+    M P = S(b[1]) * I + S(b[3]) * A2;
+    V = S(b[0]) * I + S(b[2]) * A2;
+    M Ak = A2;
+    for (int j = 2; 2 * j < m; ++j) {
+        const M next = Ak.lazyProduct(A2); // A^4, A^6, A^8
+        Ak = next;
+        P += S(b[2 * j + 1]) * Ak;
+        V += S(b[2 * j]) * Ak;
+    }
+    U = a.lazyProduct(P);
+}
+
+// the same for m = 13 (Higham 2005, (2.11)); b = b13
+template <class S, int N>
+void pade_13(const Square<S, N> &a, const double *b, Square<S, N> &U, Square<S, N> &V) noexcept
+{
+    using M = Square<S, N>;
+    const M I = M::Identity();
+    const M A2 = a.lazyProduct(a);
+    const M A4 = A2.lazyProduct(A2);
+    const M A6 = A4.lazyProduct(A2);
+    M T = S(b[13]) * A6 + S(b[11]) * A4 + S(b[9]) * A2;
+    M W = A6.lazyProduct(T);
+    W += S(b[7]) * A6 + S(b[5]) * A4 + S(b[3]) * A2 + S(b[1]) * I;
+    U = a.lazyProduct(W);
+    T = S(b[12]) * A6 + S(b[10]) * A4 + S(b[8]) * A2;
+    V = A6.lazyProduct(T);
+    V += S(b[6]) * A6 + S(b[4]) * A4 + S(b[2]) * A2 + S(b[0]) * I;
+}
+
 // exp(a) by the Pade approximant of degree d.m, then s squarings. The
 // products are Eigen's coefficient-based ones (lazyProduct): no GEMM kernel
 // to instantiate per size, and nothing on the heap.
@@ -145,33 +183,14 @@ template <class S, int N>
 int pade_square(const Square<S, N> &a, const Degree &d, int s, Square<S, N> &E) noexcept
 {
     using M = Square<S, N>;
-    const double *b = d.b;
-    const M I = M::Identity();
     M U, V;
-    if (d.m <= 9) {
-        const M A2 = a.lazyProduct(a);
-        M P = S(b[1]) * I + S(b[3]) * A2;
-        V = S(b[0]) * I + S(b[2]) * A2;
-        M Ak = A2;
-        for (int j = 2; 2 * j < d.m; ++j) {
-            const M next = Ak.lazyProduct(A2); // A^4, A^6, A^8
-            Ak = next;
-            P += S(b[2 * j + 1]) * Ak;
-            V += S(b[2 * j]) * Ak;
-        }
-        U = a.lazyProduct(P);
+    if constexpr (std::is_same<S, float>::value) {
+        pade_low<S, N>(a, d.m, d.b, U, V); // degrees 3, 5, 7 only
     } else {
-        // Higham 2005, (2.11)
-        const M A2 = a.lazyProduct(a);
-        const M A4 = A2.lazyProduct(A2);
-        const M A6 = A4.lazyProduct(A2);
-        M T = S(b[13]) * A6 + S(b[11]) * A4 + S(b[9]) * A2;
-        M W = A6.lazyProduct(T);
-        W += S(b[7]) * A6 + S(b[5]) * A4 + S(b[3]) * A2 + S(b[1]) * I;
-        U = a.lazyProduct(W);
-        T = S(b[12]) * A6 + S(b[10]) * A4 + S(b[8]) * A2;
-        V = A6.lazyProduct(T);
-        V += S(b[6]) * A6 + S(b[4]) * A4 + S(b[2]) * A2 + S(b[0]) * I;
+        if (d.m == 13)
+            pade_13<S, N>(a, d.b, U, V);
+        else
+            pade_low<S, N>(a, d.m, d.b, U, V);
     }
     // r_m = (V - U)^-1 (V + U)
     M den = V - U;

@@ -82,7 +82,7 @@ void closed_forms()
         const double th = double(A(0, 1));
         Md2 ref;
         ref << std::cos(th), std::sin(th), -std::sin(th), std::cos(th);
-        CHECK(gen_rt::expm(A, E) == 0);
+        CHECK((gen_rt::expm<S, 2>(A, E)) == 0); // the explicit form deduces the rest
         CHECK_ERR(rel_err(E, ref), tol * (th > 1 ? th : 1));
     }
 
@@ -171,7 +171,7 @@ void closed_forms()
             Md2 refA;
             refA << 1, h, 0, 1;
             const Eigen::Vector2d refB(b * h * h / 2, b * h);
-            CHECK(gen_rt::c2d_zoh(A, B, dt, Ad, Bd) == 0);
+            CHECK((gen_rt::c2d_zoh<S, 2, 1>(A, B, dt, Ad, Bd)) == 0);
             CHECK_ERR(rel_err(Ad, refA), tol / 10);
             CHECK_ERR(rel_err(Bd, refB), tol / 10);
         }

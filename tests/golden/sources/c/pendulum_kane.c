@@ -635,6 +635,61 @@ int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, 
     return st;
 }
 
+int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_input *in, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_real *r_out, pendulum_kane_sim_stats *stats)
+{
+    pendulum_kane_real work[GEN_RT_MODEL_SIMULATE_INPUT_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_SIMULATE_INPUT_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    gen_rt_input in_rt;
+    gen_rt_sim_options opts_rt;
+    gen_rt_sim_stats stats_rt;
+    pendulum_kane_sim_options opts_default;
+    int st;
+    PENDULUM_KANE_CHECK_IN(x0, 4);
+    PENDULUM_KANE_CHECK_OUT(in);
+    if (!p) p = pendulum_kane_p_default;
+    PENDULUM_KANE_CHECK_IN(p, 3);
+    PENDULUM_KANE_CHECK_OUT(t_out);
+    PENDULUM_KANE_CHECK_OUT(x_out);
+    PENDULUM_KANE_CHECK_OUT(stats);
+    in_rt.r = in->r;
+    in_rt.n_table = in->n_table;
+    in_rt.t_table = in->t_table;
+    in_rt.r_table = in->r_table;
+    in_rt.hold = in->hold;
+    in_rt.K = in->K;
+    in_rt.x_op = in->x_op;
+    in_rt.controller = in->controller;
+    in_rt.ctx = in->ctx;
+    in_rt.period = in->period;
+    if (!opts) { pendulum_kane_sim_options_default(&opts_default); opts = &opts_default; }
+    opts_rt.method = opts->method;
+    opts_rt.project = opts->project;
+    opts_rt.rtol = opts->rtol;
+    opts_rt.atol = opts->atol;
+    opts_rt.h_init = opts->h_init;
+    opts_rt.h_min = opts->h_min;
+    opts_rt.h_max = opts->h_max;
+    opts_rt.max_steps = opts->max_steps;
+    opts_rt.proj_tol = opts->proj_tol;
+    opts_rt.proj_max_iter = opts->proj_max_iter;
+    stats_rt.n_accepted = stats->n_accepted;
+    stats_rt.n_rejected = stats->n_rejected;
+    stats_rt.n_rhs = stats->n_rhs;
+    stats_rt.n_out = stats->n_out;
+    stats_rt.t_last = stats->t_last;
+    stats_rt.h_next = stats->h_next;
+    stats_rt.x_last = stats->x_last;
+    st = gen_rt_model_simulate_input(&pendulum_kane_model, x0, t0, t_end, dt, &in_rt, p, &opts_rt, capacity, work, iwork, t_out, x_out, lam_out, r_out, &stats_rt);
+    stats->n_accepted = stats_rt.n_accepted;
+    stats->n_rejected = stats_rt.n_rejected;
+    stats->n_rhs = stats_rt.n_rhs;
+    stats->n_out = stats_rt.n_out;
+    stats->t_last = stats_rt.t_last;
+    stats->h_next = stats_rt.h_next;
+    (void)opts_default;
+    return st;
+}
+
 int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B)
 {
     pendulum_kane_real work[GEN_RT_MODEL_LINEARIZE_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
@@ -647,4 +702,19 @@ int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(A);
     return gen_rt_model_linearize(&pendulum_kane_model, x_op, r_op, p, t, work, iwork, A, B);
+}
+
+int pendulum_kane_linearize_discrete(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real dt, pendulum_kane_real *Ad, pendulum_kane_real *Bd)
+{
+    pendulum_kane_real work[GEN_RT_MODEL_LINEARIZE_DISCRETE_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_LINEARIZE_DISCRETE_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    PENDULUM_KANE_CHECK_IN(x_op, 4);
+    if (!r_op) r_op = pendulum_kane_r_zero;
+    PENDULUM_KANE_CHECK_IN(r_op, 0);
+    if (!p) p = pendulum_kane_p_default;
+    PENDULUM_KANE_CHECK_IN(p, 3);
+    PENDULUM_KANE_CHECK_REAL(t);
+    PENDULUM_KANE_CHECK_REAL(dt);
+    PENDULUM_KANE_CHECK_OUT(Ad);
+    return gen_rt_model_linearize_discrete(&pendulum_kane_model, x_op, r_op, p, t, dt, work, iwork, Ad, Bd);
 }

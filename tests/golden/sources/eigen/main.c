@@ -36,7 +36,13 @@ static void usage(FILE *out)
         "  --x0 NAME=V        initial value of a state (repeatable), or\n"
         "  --x0 V1,V2,...     all 4 states in order\n"
         "  --param NAME=V     constant value (repeatable)\n"
-        "  --input NAME=V     constant input value (repeatable)\n"
+        "  --input NAME=V     constant input value (repeatable); with --gain: r_op\n"
+        "  --input-csv FILE   inputs from a table: a header 't,<input names>' then rows\n"
+        "  --hold H           the table between rows: zoh (default) or linear\n"
+        "  --gain FILE        linear feedback r = r_op - K (x_ind - x_op_ind): K as NR rows\n"
+        "                     of NS comma-separated numbers (on the independent state)\n"
+        "  --x-op NAME=V      operating state of the gain (repeatable), or V1,V2,...\n"
+        "  --period TS        sample the feedback every TS and hold it (default: continuous)\n"
         "  --no-consistent    do not solve the dependent states from the independent ones\n"
         "  --no-project       do not project onto the constraints after each step\n"
         "  --output FILE      write the CSV to FILE\n"
@@ -97,6 +103,23 @@ static int assign(const char *arg, const char *const *names, int n, pendulum_kan
     return 0;
 }
 
+/* a list V1,V2,... of exactly n numbers into vals[]; returns 0 or a usage error */
+static int parse_list(const char *v, pendulum_kane_real *vals, int n, const char *what)
+{
+    char buf[4096];
+    char *tok;
+    int k = 0;
+    if (strlen(v) >= sizeof buf) return fail_usage("list too long", what);
+    strcpy(buf, v);
+    for (tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
+        if (k >= n) return fail_usage("too many values", what);
+        if (parse_real(tok, &vals[k])) return fail_usage("not a finite number", tok);
+        ++k;
+    }
+    if (k != n) return fail_usage("the list needs one value per state", what);
+    return 0;
+}
+
 static void print_matrix(FILE *out, const char *label, const pendulum_kane_real *a, int rows,
                          int cols)
 {
@@ -116,11 +139,17 @@ int main(int argc, char **argv)
     pendulum_kane_sim_options opts;
     pendulum_kane_sim_stats stats;
     int consistent = 1, linearize = 0, i, k, rows, st;
-    const char *output = NULL;
+    const char *output = NULL, *input_csv = NULL, *gain_file = NULL;
+    pendulum_kane_real x_op[NX], period = 0;
+    int hold = PENDULUM_KANE_HOLD_ZOH;
+    pendulum_kane_input in;
+    pendulum_kane_real *t_table = NULL, *r_table = NULL, *K = NULL;
     FILE *out = stdout;
     const pendulum_kane_real p_default[3] = { 1.0, 1.0, 9.81 };
 
     for (i = 0; i < NX; ++i) x[i] = 0;
+    for (i = 0; i < NX; ++i) x_op[i] = 0;
+    memset(&in, 0, sizeof in);
     for (i = 0; i < 3; ++i) p[i] = p_default[i];
     for (i = 0; i < 1; ++i) r[i] = 0;
     pendulum_kane_sim_options_default(&opts);
@@ -133,7 +162,9 @@ int main(int argc, char **argv)
                     strcmp(a, "--method") == 0 || strcmp(a, "--rtol") == 0 ||
                     strcmp(a, "--atol") == 0 || strcmp(a, "--x0") == 0 ||
                     strcmp(a, "--param") == 0 || strcmp(a, "--input") == 0 ||
-                    strcmp(a, "--output") == 0;
+                    strcmp(a, "--output") == 0 || strcmp(a, "--input-csv") == 0 ||
+                    strcmp(a, "--hold") == 0 || strcmp(a, "--gain") == 0 ||
+                    strcmp(a, "--x-op") == 0 || strcmp(a, "--period") == 0;
         if (needs && !v) return fail_usage("missing value after", a);
         if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) { usage(stdout); return 0; }
         else if (strcmp(a, "--t-end") == 0) { if (parse_real(v, &t_end)) return fail_usage("--t-end needs a number", v); ++i; }
@@ -168,6 +199,23 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--input") == 0) {
             return fail_usage("this model has no inputs", v);
             ++i;
+        } else if (strcmp(a, "--input-csv") == 0) { input_csv = v; ++i; }
+        else if (strcmp(a, "--gain") == 0) { gain_file = v; ++i; }
+        else if (strcmp(a, "--hold") == 0) {
+            if (strcmp(v, "zoh") == 0) hold = PENDULUM_KANE_HOLD_ZOH;
+            else if (strcmp(v, "linear") == 0) hold = PENDULUM_KANE_HOLD_LINEAR;
+            else return fail_usage("--hold must be zoh or linear", v);
+            ++i;
+        } else if (strcmp(a, "--period") == 0) {
+            if (parse_real(v, &period) || !(period > 0)) return fail_usage("--period needs a positive number", v);
+            ++i;
+        } else if (strcmp(a, "--x-op") == 0) {
+            if (strchr(v, '=')) {
+                if ((st = assign(v, state_names, NX, x_op, "state"))) return st;
+            } else if ((st = parse_list(v, x_op, NX, "--x-op"))) {
+                return st;
+            }
+            ++i;
         } else if (strcmp(a, "--output") == 0) { output = v; ++i; }
         else if (strcmp(a, "--no-consistent") == 0) consistent = 0;
         else if (strcmp(a, "--no-project") == 0) opts.project = 0;
@@ -175,6 +223,15 @@ int main(int argc, char **argv)
         else return fail_usage("unknown option", a);
     }
     if (!(t_end >= 0)) return fail_usage("--t-end must be >= 0", NULL);
+    in.r = r;
+    in.hold = hold;
+    in.period = period;
+    if (input_csv) {
+        return fail_usage("this model has no inputs", input_csv);
+    }
+    if (gain_file) {
+        return fail_usage("this model has no inputs", gain_file);
+    }
 
     if (consistent) {
         st = pendulum_kane_consistent_state(0, p, 0, 0, x);
@@ -214,52 +271,61 @@ int main(int argc, char **argv)
     for (i = 0; i < MC; ++i) fprintf(out, ",fc%d", i);
     fprintf(out, ",energy");
     fprintf(out, "\n");
-    if (opts.project) {
-        st = pendulum_kane_project(0, p, opts.proj_tol, opts.proj_max_iter, x);
-        if (st) {
-            fprintf(stderr, "pendulum_kane_sim: initial projection failed: %s\n", pendulum_kane_status_message(st));
-            if (out != stdout) fclose(out);
-            return 1;
-        }
-    }
     {
-        pendulum_kane_real t = 0;
-        for (k = 0; k < rows; ++k) {
-            pendulum_kane_real tk = (k == rows - 1) ? t_end : (pendulum_kane_real)k * dt;
-            pendulum_kane_real dx[NX], lam[1], fc[1];
-            if (k > 0) {
-                st = pendulum_kane_advance(t, tk, r, p, &opts, &stats, x);
-                if (st) {
-                    fprintf(stderr, "pendulum_kane_sim: step failed at t=%.17g: %s; CSV truncated after %d rows\n",
-                            (double)stats.t_last, pendulum_kane_status_message(st), k);
-                    fprintf(stderr, "pendulum_kane_sim: last good state:");
-                    for (i = 0; i < NX; ++i) fprintf(stderr, " %s=%.17g", state_names[i], (double)stats.x_last[i]);
-                    fprintf(stderr, "\n");
-                    if (out != stdout) fclose(out);
-                    return 1;
-                }
+        /* the whole run in one call (the inputs' samples and table knots
+         * are the runtime's business), rows on the heap of this program */
+        pendulum_kane_real *t_out = (pendulum_kane_real *)malloc((size_t)rows * sizeof *t_out);
+        pendulum_kane_real *x_out = (pendulum_kane_real *)malloc((size_t)rows * NX * sizeof *x_out);
+        pendulum_kane_real *l_out = (pendulum_kane_real *)malloc((size_t)rows * 1 * sizeof *l_out);
+        pendulum_kane_real *r_out = (pendulum_kane_real *)malloc((size_t)rows * 1 * sizeof *r_out);
+        int failed = 0, written;
+        if (!t_out || !x_out || !l_out || !r_out) {
+            fprintf(stderr, "pendulum_kane_sim: out of memory for %d rows\n", rows);
+            failed = 1;
+            rows = 0;
+        }
+        if (!failed) {
+            st = pendulum_kane_simulate_input(x, 0, t_end, dt, &in, p, &opts, rows, t_out, x_out, l_out,
+                                    r_out, &stats);
+            if (st) {
+                fprintf(stderr, "pendulum_kane_sim: step failed at t=%.17g: %s; CSV truncated after %d rows\n",
+                        (double)stats.t_last, pendulum_kane_status_message(st), stats.n_out);
+                fprintf(stderr, "pendulum_kane_sim: last good state:");
+                for (i = 0; i < NX; ++i) fprintf(stderr, " %s=%.17g", state_names[i], (double)stats.x_last[i]);
+                fprintf(stderr, "\n");
+                failed = 1;
             }
-            t = tk;
-            st = pendulum_kane_eval_rhs(t, x, r, p, dx, lam);
-            if (!st) st = pendulum_kane_eval_constraints(x, p, t, fc);
+        }
+        written = failed ? stats.n_out : rows;
+        for (k = 0; k < written; ++k) {
+            pendulum_kane_real t = t_out[k], *xk = x_out + (long)k * NX, *rk = r_out + (long)k * 1;
+            pendulum_kane_real fc[1];
+            st = pendulum_kane_eval_constraints(xk, p, t, fc);
             if (st) {
                 fprintf(stderr, "pendulum_kane_sim: evaluation failed at t=%.17g: %s; CSV truncated after %d rows\n",
                         (double)t, pendulum_kane_status_message(st), k);
-                if (out != stdout) fclose(out);
-                return 1;
+                failed = 1;
+                break;
             }
             fprintf(out, "%.17g", (double)t);
-            for (i = 0; i < NX; ++i) fprintf(out, ",%.17g", (double)x[i]);
-            for (i = 0; i < MV; ++i) fprintf(out, ",%.17g", (double)lam[i]);
+            for (i = 0; i < NX; ++i) fprintf(out, ",%.17g", (double)xk[i]);
+            for (i = 0; i < MV; ++i) fprintf(out, ",%.17g", (double)l_out[(long)k * 1 + i]);
             for (i = 0; i < MC; ++i) fprintf(out, ",%.17g", (double)fc[i]);
             {
                 pendulum_kane_real E = 0;
-                if (pendulum_kane_eval_energy(x, x + PENDULUM_KANE_NQ, p, t, &E) == 0)
+                if (pendulum_kane_eval_energy(xk, xk + PENDULUM_KANE_NQ, p, t, &E) == 0)
                     fprintf(out, ",%.17g", (double)E);
                 else
                     fprintf(out, ",nan");
             }
+            (void)rk;
             fprintf(out, "\n");
+        }
+        free(t_out); free(x_out); free(l_out); free(r_out);
+        free(t_table); free(r_table); free(K);
+        if (failed) {
+            if (out != stdout) fclose(out);
+            return 1;
         }
     }
     if (out != stdout) {

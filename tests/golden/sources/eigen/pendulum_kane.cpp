@@ -364,6 +364,55 @@ int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, 
     return st;
 }
 
+int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_input *in, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_real *r_out, pendulum_kane_sim_stats *stats)
+{
+    PENDULUM_KANE_CHECK_IN(x0, 4);
+    PENDULUM_KANE_CHECK_OUT(in);
+    if (!p) p = mdl::p_default<S>;
+    PENDULUM_KANE_CHECK_IN(p, 3);
+    PENDULUM_KANE_CHECK_OUT(t_out);
+    PENDULUM_KANE_CHECK_OUT(x_out);
+    PENDULUM_KANE_CHECK_OUT(stats);
+    mdl::SimOptions<S> o;
+    if (opts) o = options_from(opts);
+    mdl::Input<S> u;
+    u.r = in->r;
+    u.n_table = in->n_table;
+    u.t_table = in->t_table;
+    u.r_table = in->r_table;
+    u.hold = in->hold;
+    u.K = in->K;
+    u.x_op = in->x_op;
+    u.controller = in->controller;
+    u.ctx = in->ctx;
+    u.period = in->period;
+    mdl::SimStats<S> s;
+    const int st = mdl::simulate_input<S>(In<mdl::NX, 1>(x0), t0, t_end, dt, u, In<mdl::NP, 1>(p),
+                                          o, capacity, t_out, x_out, lam_out, r_out, s);
+    stats_to(s, stats);
+    return st;
+}
+
+int pendulum_kane_linearize_discrete(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real dt, pendulum_kane_real *Ad, pendulum_kane_real *Bd)
+{
+    PENDULUM_KANE_CHECK_IN(x_op, 4);
+    if (!r_op) r_op = r_zero;
+    PENDULUM_KANE_CHECK_IN(r_op, 0);
+    if (!p) p = mdl::p_default<S>;
+    PENDULUM_KANE_CHECK_IN(p, 3);
+    PENDULUM_KANE_CHECK_REAL(t);
+    PENDULUM_KANE_CHECK_REAL(dt);
+    PENDULUM_KANE_CHECK_OUT(Ad);
+    (void)Bd;
+    mdl::StateMatrix<S> Al;
+    mdl::InputMatrix<S> Bl;
+    const int st = mdl::linearize_discrete<S>(In<mdl::NX, 1>(x_op), In<mdl::NR, 1>(r_op),
+                                              In<mdl::NP, 1>(p), t, dt, Al, Bl);
+    if (st) return st;
+    store(Ad, Al);
+    return PENDULUM_KANE_OK;
+}
+
 int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B)
 {
     PENDULUM_KANE_CHECK_IN(x_op, 4);

@@ -39,7 +39,8 @@ typedef double pendulum_kane_real;
 #define PENDULUM_KANE_ERR_OUTPUT_FULL (-9) /* the output buffer is too small */
 #define PENDULUM_KANE_ERR_SINGULAR_KINEMATICS (-10) /* singular kinematic equations: q' cannot be solved from Kqd(q) q' + Ku(q) u + kf = 0 at this configuration (with Euler angles: gimbal lock) */
 #define PENDULUM_KANE_ERR_DIVERGED (-11) /* the state diverged: it grew beyond the range of the scalar type (overflow) during integration */
-#define PENDULUM_KANE_STATUS_MIN (-11) /* the most negative code */
+#define PENDULUM_KANE_ERR_CONTROLLER (-12) /* the controller callback returned an error */
+#define PENDULUM_KANE_STATUS_MIN (-12) /* the most negative code */
 
 /* Integration methods for pendulum_kane_sim_options.method */
 #define PENDULUM_KANE_METHOD_RK4 0
@@ -70,6 +71,15 @@ typedef double pendulum_kane_real;
  * of the velocity constraints.
  */
 
+/* Table holds for pendulum_kane_input.hold */
+#define PENDULUM_KANE_HOLD_ZOH 0
+#define PENDULUM_KANE_HOLD_LINEAR 1
+
+/* A controller for pendulum_kane_input: r holds the inputs so far (base and
+ * feedback) and may be overwritten; x is the full state (NX). Return 0, or
+ * nonzero to stop the simulation with PENDULUM_KANE_ERR_CONTROLLER. */
+typedef int (*pendulum_kane_controller)(void *ctx, pendulum_kane_real t, const pendulum_kane_real *x, pendulum_kane_real *r);
+
 /* Integration options (fill with pendulum_kane_sim_options_default). */
 typedef struct {
     int method; /* PENDULUM_KANE_METHOD_RK4 or PENDULUM_KANE_METHOD_DOPRI5 */
@@ -83,6 +93,20 @@ typedef struct {
     pendulum_kane_real proj_tol; /* projection: relative tolerance on the correction */
     int proj_max_iter; /* projection: Newton iterations */
 } pendulum_kane_sim_options;
+
+/* Inputs during a simulation (simulate_input): a constant or a table, a linear feedback on the independent state, a controller callback; continuous or sampled. Zero-fill it (memset) and set what you use. */
+typedef struct {
+    const pendulum_kane_real *r; /* NR constant inputs (NULL: zero); the base of the feedback */
+    int n_table; /* > 0: the base from a table of n_table rows instead */
+    const pendulum_kane_real *t_table; /* n_table strictly increasing times */
+    const pendulum_kane_real *r_table; /* n_table x NR inputs, row-major */
+    int hold; /* table: PENDULUM_KANE_HOLD_ZOH (the last knot's row) or PENDULUM_KANE_HOLD_LINEAR */
+    const pendulum_kane_real *K; /* NR x NS gain on the independent state (NULL: none): r = base - K (x_ind - x_op_ind) */
+    const pendulum_kane_real *x_op; /* NX operating state of the gain (NULL: zero) */
+    pendulum_kane_controller controller; /* called last with r holding the above; may overwrite r; nonzero return: ERR_CONTROLLER (NULL: none) */
+    void *ctx; /* passed to the controller */
+    pendulum_kane_real period; /* 0: r evaluated at every stage; > 0: sampled at t0 + k period and held */
+} pendulum_kane_input;
 
 /* Integration statistics (advance accumulates them). */
 typedef struct {
@@ -149,8 +173,14 @@ int pendulum_kane_simulate_rows(pendulum_kane_real t0, pendulum_kane_real t_end,
 /* Simulate from x0 with outputs every dt up to t_end (the last interval clipped): rows of t_out, x_out (NX each), lam_out (MV each, may be NULL). On failure the rows written are stats->n_out and stats->x_last holds the last good state. */
 int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_real *r, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_sim_stats *stats);
 
+/* simulate() with the inputs from in (a table, a linear feedback, a controller callback; continuous or sampled): r_out (NR per row, may be NULL) gets the inputs in effect from each output time on. */
+int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_input *in, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_real *r_out, pendulum_kane_sim_stats *stats);
+
 /* Linearize about any operating point: A (NS x NS) and B (NS x NR) for the independent state [q_ind, u_ind]. */
 int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B);
+
+/* The zero-order-hold discretization of the linearization over a step dt: Ad = exp(A dt) (NS x NS), Bd = int_0^dt exp(A s) ds B (NS x NR), by scaling and squaring (GEN_RT_ERR_BAD_ARG unless dt > 0). */
+int pendulum_kane_linearize_discrete(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real dt, pendulum_kane_real *Ad, pendulum_kane_real *Bd);
 
 #ifdef __cplusplus
 }

@@ -129,6 +129,21 @@ struct SimOptions {
     int proj_max_iter = 10; // projection: Newton iterations
 };
 
+/* Input: the C API's pendulum_kane_input, typed (gen/abi.py). */
+template <typename S>
+struct Input {
+    const S * r = nullptr; // NR constant inputs (NULL: zero); the base of the feedback
+    int n_table = 0; // > 0: the base from a table of n_table rows instead
+    const S * t_table = nullptr; // n_table strictly increasing times
+    const S * r_table = nullptr; // n_table x NR inputs, row-major
+    int hold = 0; // table: HOLD_ZOH (the last knot's row) or HOLD_LINEAR
+    const S * K = nullptr; // NR x NS gain on the independent state (NULL: none): r = base - K (x_ind - x_op_ind)
+    const S * x_op = nullptr; // NX operating state of the gain (NULL: zero)
+    gen_rt::ControllerFn<S> controller = nullptr; // called last with r holding the above; may overwrite r; nonzero return: ERR_CONTROLLER (NULL: none)
+    void * ctx = nullptr; // passed to the controller
+    S period = S(0.0); // 0: r evaluated at every stage; > 0: sampled at t0 + k period and held
+};
+
 /* SimStats: the C API's pendulum_kane_sim_stats, typed (gen/abi.py). */
 template <typename S>
 struct SimStats {
@@ -667,6 +682,19 @@ inline int simulate(const State<S> &x0, S t0, S t_end, S dt, const Inputs<S> &r,
                                    lam_out, stats);
 }
 
+/* simulate() with the inputs from `in` (Input<S>: a table, a linear
+ * feedback on the independent state, a controller callback; continuous or
+ * sampled, see the C header's pendulum_kane_input); r_out (NR per row, may be
+ * nullptr) gets the inputs in effect from each output time on. */
+template <typename S>
+inline int simulate_input(const State<S> &x0, S t0, S t_end, S dt, const Input<S> &in,
+                          const Params<S> &p, const SimOptions<S> &opts, int capacity, S *t_out,
+                          S *x_out, S *lam_out, S *r_out, SimStats<S> &stats) noexcept
+{
+    return detail::RT<S>::simulate_input(x0, t0, t_end, dt, in, p, opts, capacity, t_out, x_out,
+                                         lam_out, r_out, stats);
+}
+
 // ---------------------------------------------------------- linearization
 
 /* Linearize about any operating point (moving or at rest): A (NS x NS) and
@@ -677,6 +705,15 @@ inline int linearize(const State<S> &x_op, const Inputs<S> &r_op, const Params<S
                      StateMatrix<S> &A_lin, InputMatrix<S> &B_lin) noexcept
 {
     return detail::RT<S>::linearize(x_op, r_op, p, t, A_lin, B_lin);
+}
+
+/* The zero-order-hold discretization of the linearization over a step dt:
+ * Ad = exp(A dt), Bd = int_0^dt exp(A s) ds B (scaling and squaring). */
+template <typename S>
+inline int linearize_discrete(const State<S> &x_op, const Inputs<S> &r_op, const Params<S> &p, S t,
+                              S dt, StateMatrix<S> &Ad, InputMatrix<S> &Bd) noexcept
+{
+    return detail::RT<S>::linearize_discrete(x_op, r_op, p, t, dt, Ad, Bd);
 }
 
 } // namespace pendulum_kane

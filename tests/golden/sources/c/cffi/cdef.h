@@ -1,4 +1,5 @@
 typedef double pendulum_kane_real;
+typedef int (*pendulum_kane_controller)(void *ctx, pendulum_kane_real t, const pendulum_kane_real *x, pendulum_kane_real *r);
 typedef struct {
     int method;
     int project;
@@ -11,6 +12,18 @@ typedef struct {
     pendulum_kane_real proj_tol;
     int proj_max_iter;
 } pendulum_kane_sim_options;
+typedef struct {
+    const pendulum_kane_real *r;
+    int n_table;
+    const pendulum_kane_real *t_table;
+    const pendulum_kane_real *r_table;
+    int hold;
+    const pendulum_kane_real *K;
+    const pendulum_kane_real *x_op;
+    pendulum_kane_controller controller;
+    void *ctx;
+    pendulum_kane_real period;
+} pendulum_kane_input;
 typedef struct {
     long n_accepted;
     long n_rejected;
@@ -38,7 +51,9 @@ int pendulum_kane_step_rk4(pendulum_kane_real t, pendulum_kane_real h, const pen
 int pendulum_kane_advance(pendulum_kane_real t0, pendulum_kane_real t1, const pendulum_kane_real *r, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, pendulum_kane_sim_stats *stats, pendulum_kane_real *x);
 int pendulum_kane_simulate_rows(pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt);
 int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_real *r, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_sim_stats *stats);
+int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_input *in, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_real *r_out, pendulum_kane_sim_stats *stats);
 int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B);
+int pendulum_kane_linearize_discrete(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real dt, pendulum_kane_real *Ad, pendulum_kane_real *Bd);
 int pendulum_kane_rhs_batch(int n, const pendulum_kane_real *t, int t_stride, const pendulum_kane_real *x, const pendulum_kane_real *r, int r_stride, const pendulum_kane_real *p, int p_stride, pendulum_kane_real *dxdt, int *status);
 int pendulum_kane_mass_matrix_batch(int n, const pendulum_kane_real *q, int q_stride, const pendulum_kane_real *p, int p_stride, pendulum_kane_real *M, int *status);
 int pendulum_kane_linearize_batch(int n, const pendulum_kane_real *x, const pendulum_kane_real *r, int r_stride, const pendulum_kane_real *p, int p_stride, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B, int *status);

@@ -1,0 +1,190 @@
+"""Closed loops: where a simulation's inputs come from.
+
+``sim.simulate(x0, t_end, dt, r=..., controller=...)`` takes, for r:
+
+- None or an array of NR values: constant inputs;
+- a table ``(t_grid, R)`` with R of shape (len(t_grid), NR), held
+  (``input_hold="zoh"``) or interpolated (``"linear"``) inside C;
+- a Python callable ``r(t, x) -> array``, sampled with a zero-order hold
+  once per ``input_period`` (default: the RK4 step dt, or DOPRI5's output
+  interval), called from C through a cffi callback;
+
+and for controller a :class:`LinearFeedback`, evaluated inside the
+generated C at every stage (period None) or sampled (period Ts).
+
+All of them become one ``<p>_input`` description for the C function
+``<p>_simulate_input`` (README, "Closed loops").
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["LinearFeedback", "InputPlan", "plan_inputs"]
+
+HOLDS = {"zoh": 0, "linear": 1}
+
+
+@dataclass
+class LinearFeedback:
+    """r = r_op - K (x_ind - x_op_ind), computed in the generated C.
+
+    K: (NR, NS) gain on the independent state [q_ind, u_ind] (the state of
+    ``sim.linearize``); x_op: the operating state, full (NX) or independent
+    (NS); r_op: the inputs at the operating point (NR, default zero);
+    period: None evaluates the law at every stage (a continuous
+    controller), Ts > 0 samples it every Ts and holds it (a digital one)."""
+    K: object
+    x_op: object = None
+    r_op: object = None
+    period: float | None = None
+
+    def arrays(self, sim):
+        """(K (NR, NS), x_op (NX), r_op (NR)) as float arrays, checked."""
+        K = np.asarray(self.K, dtype=float)
+        if K.ndim == 1 and sim.nr == 1:
+            K = K[None, :]
+        if K.shape != (sim.nr, sim.ns):
+            raise ValueError(f"LinearFeedback: K must have shape (nr, ns) = ({sim.nr}, {sim.ns}) "
+                             f"(inputs {sim.input_names} by the independent state "
+                             f"{sim.independent_state_names}), got {K.shape}")
+        if self.x_op is None:
+            x_op = np.zeros(sim.nx)
+        else:
+            x = np.asarray(self.x_op, dtype=float).ravel()
+            if x.shape == (sim.nx,):
+                x_op = x
+            elif x.shape == (sim.ns,):
+                x_op = np.zeros(sim.nx)
+                idx = list(sim.q_ind) + [sim.nq + i for i in sim.u_ind]
+                x_op[idx] = x
+            else:
+                raise ValueError(f"LinearFeedback: x_op must have nx = {sim.nx} (the state "
+                                 f"{sim.state_names}) or ns = {sim.ns} values, got {x.shape}")
+        r_op = (np.zeros(sim.nr) if self.r_op is None
+                else np.asarray(self.r_op, dtype=float).ravel())
+        if r_op.shape != (sim.nr,):
+            raise ValueError(f"LinearFeedback: r_op must have nr = {sim.nr} values "
+                             f"({sim.input_names}), got {r_op.shape}")
+        for name, a in (("K", K), ("x_op", x_op), ("r_op", r_op)):
+            if not np.all(np.isfinite(a)):
+                raise ValueError(f"LinearFeedback: {name} holds NaN or infinity")
+        if self.period is not None and not (np.isfinite(self.period) and self.period > 0):
+            raise ValueError(f"LinearFeedback: period must be None (continuous) or a positive "
+                             f"number, got {self.period!r}")
+        return K, x_op, r_op
+
+    def __call__(self, sim, t, x):
+        """The law in numpy (for checks): r at the full state x."""
+        K, x_op, r_op = self.arrays(sim)
+        idx = list(sim.q_ind) + [sim.nq + i for i in sim.u_ind]
+        x = np.asarray(x, dtype=float)
+        return r_op - K @ (x[idx] - x_op[idx])
+
+
+class InputPlan:
+    """The <p>_input struct and everything it points to, kept alive for the
+    duration of one C call. ``error`` holds an exception raised by a Python
+    callable (re-raised after the call)."""
+
+    def __init__(self, sim):
+        self.sim = sim
+        self.keep = []
+        self.error = None
+        self.struct = sim._ffi.new(f"{sim._p}_input *")
+
+    def array(self, a):
+        a = np.ascontiguousarray(a, dtype=sim_dtype(self.sim))
+        self.keep.append(a)
+        return self.sim._ffi.from_buffer(self.sim._arr_t, a)
+
+    def callback(self, fn):
+        sim, ffi = self.sim, self.sim._ffi
+        nx, nr, dtype = sim.nx, sim.nr, sim_dtype(sim)
+        size = np.dtype(dtype).itemsize
+
+        def cb(ctx, t, x, r):
+            try:
+                xs = np.frombuffer(ffi.buffer(x, nx * size), dtype=dtype).astype(float)
+                val = np.asarray(fn(float(t), xs), dtype=float).ravel()
+                if val.shape != (nr,):
+                    raise ValueError(f"the input function r(t, x) must return nr = {nr} values "
+                                     f"({sim.input_names}), got shape {val.shape}")
+                if not np.all(np.isfinite(val)):
+                    raise ValueError(f"the input function r(t, x) returned NaN or infinity at "
+                                     f"t = {float(t)}: {val}")
+                for i in range(nr):
+                    r[i] = val[i]
+                return 0
+            except BaseException as e:  # re-raised after the C call
+                if self.error is None:
+                    self.error = e
+                return 1
+
+        handle = ffi.callback(f"{sim._p}_controller", cb)
+        self.keep.append(handle)
+        return handle
+
+
+def sim_dtype(sim):
+    return sim.dtype
+
+
+def plan_inputs(sim, r, controller, dt, method, input_period, input_hold):
+    """The InputPlan of simulate's r / controller arguments, or None when
+    the inputs are constant (the plain simulate path)."""
+    table = isinstance(r, tuple) and len(r) == 2
+    if controller is None and not callable(r) and not table:
+        if input_period is not None:
+            raise ValueError("input_period applies to a callable r(t, x); r is constant")
+        return None
+    if input_hold not in HOLDS:
+        raise ValueError(f"input_hold must be one of {sorted(HOLDS)}, got {input_hold!r}")
+    plan = InputPlan(sim)
+    s = plan.struct
+    s.hold = HOLDS[input_hold]
+    if controller is not None:
+        if not isinstance(controller, LinearFeedback):
+            raise TypeError(f"controller must be a gen.LinearFeedback, got "
+                            f"{type(controller).__name__} (for a Python function, pass it as "
+                            "r=lambda t, x: ...)")
+        if r is not None:
+            raise ValueError("give the inputs at the operating point as LinearFeedback(r_op=...), "
+                             "not also as r")
+        K, x_op, r_op = controller.arrays(sim)
+        s.K = plan.array(K)
+        s.x_op = plan.array(x_op)
+        s.r = plan.array(r_op)
+        s.period = 0.0 if controller.period is None else float(controller.period)
+        if input_period is not None:
+            raise ValueError("the LinearFeedback has its own period; input_period is for a "
+                             "callable r(t, x)")
+        return plan
+    if table:
+        tg = np.asarray(r[0], dtype=float).ravel()
+        R = np.asarray(r[1], dtype=float)
+        if R.ndim == 1 and sim.nr == 1:
+            R = R[:, None]
+        if tg.ndim != 1 or len(tg) < 1 or R.shape != (len(tg), sim.nr):
+            raise ValueError(f"an input table is (t_grid, R) with R of shape (len(t_grid), nr) = "
+                             f"({len(tg)}, {sim.nr}) (inputs {sim.input_names}), got {R.shape}")
+        if not (np.all(np.isfinite(tg)) and np.all(np.isfinite(R))):
+            raise ValueError("the input table holds NaN or infinity")
+        if np.any(np.diff(tg) <= 0):
+            raise ValueError("the input table's times must be strictly increasing")
+        s.n_table = len(tg)
+        s.t_table = plan.array(tg)
+        s.r_table = plan.array(R)
+        if input_period is not None:
+            raise ValueError("input_period applies to a callable r(t, x); a table is "
+                             "evaluated inside C")
+        return plan
+    # a Python callable, sampled
+    period = dt if input_period is None else float(input_period)
+    if not (np.isfinite(period) and period >= 0):
+        raise ValueError(f"input_period must be a number >= 0 (0: every stage), got "
+                         f"{input_period!r}")
+    s.controller = plan.callback(r)
+    s.period = period
+    return plan
