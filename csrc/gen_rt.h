@@ -181,6 +181,12 @@ typedef struct {
     const gen_rt_real *Jc;  /* mc x nq: d f_c / dq */
     const gen_rt_real *Sqd; /* mv x nq: dS/dq' when the acceleration-constraint term
                              * holds q' (implicit kinematics); NULL otherwise */
+    /* optional outputs y(q, u, r): ny > 0 with Yq (ny x nq), Yu (ny x nu), Yr
+     * (ny x nr) gives C_lin (ny x ns) = dy/dx_ind and D_lin (ny x nr) = dy/dr
+     * (written when C_lin is not NULL) */
+    int ny;
+    const gen_rt_real *Yq, *Yu, *Yr;
+    gen_rt_real *C_lin, *D_lin;
 } gen_rt_lin_blocks;
 
 #define GEN_RT_LIN_WORK(nq, nu, mc, mv, nr)                                   \
@@ -265,6 +271,14 @@ typedef struct gen_rt_model {
      * writes a at q' = 0 and this overwrites it); NULL otherwise */
     void (*accel_terms)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *qd,
                         const gen_rt_real *p, gen_rt_real t, gen_rt_real *a);
+    /* outputs y (ny) and their Jacobians Yq (ny x nq), Yu (ny x nu), Yr (ny x
+     * nr); ny == 0 and NULL when the model has none */
+    int ny;
+    void (*outputs)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
+                    const gen_rt_real *p, gen_rt_real t, gen_rt_real *y);
+    void (*output_jacobian)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
+                            const gen_rt_real *p, gen_rt_real t, gen_rt_real *Yq,
+                            gen_rt_real *Yu, gen_rt_real *Yr);
 } gen_rt_model;
 
 /* integration methods (gen_rt_sim_options.method) */
@@ -470,6 +484,21 @@ int gen_rt_model_linearize(const gen_rt_model *m, const gen_rt_real *x_op,
                            const gen_rt_real *r_op, const gen_rt_real *p, gen_rt_real t,
                            gen_rt_real *work, int *iwork, gen_rt_real *A_lin,
                            gen_rt_real *B_lin);
+/* the outputs y(q, u, r, t) (ny): OK and nothing written when ny == 0 */
+int gen_rt_model_eval_outputs(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                              const gen_rt_real *r, const gen_rt_real *p, gen_rt_real *y);
+/* linearize, and C (ny x ns) = dy/dx_ind, D (ny x nr) = dy/dr for the
+ * outputs (the dependent entries follow the constraints, as for A) */
+#define GEN_RT_MODEL_LINEARIZE_OUTPUTS_WORK(nq, nu, mc, mv, nr, ek, acc, ny)     \
+    (GEN_RT_MODEL_LINEARIZE_WORK(nq, nu, mc, mv, nr, ek, acc) +                 \
+     (ny) * ((nq) + (nu) + (nr)) + 1)
+#define GEN_RT_MODEL_LINEARIZE_OUTPUTS_IWORK(nq, nu, mc, mv, nr, ek, acc, ny)    \
+    GEN_RT_MODEL_LINEARIZE_IWORK(nq, nu, mc, mv, nr, ek, acc)
+int gen_rt_model_linearize_outputs(const gen_rt_model *m, const gen_rt_real *x_op,
+                                   const gen_rt_real *r_op, const gen_rt_real *p,
+                                   gen_rt_real t, gen_rt_real *work, int *iwork,
+                                   gen_rt_real *A_lin, gen_rt_real *B_lin, gen_rt_real *C_lin,
+                                   gen_rt_real *D_lin);
 /* the zero-order-hold discretization of the linearization over a step dt:
  * Ad = exp(A dt), Bd = int_0^dt exp(A s) ds B (gen_rt_c2d_zoh, gen_rt_expm.h) */
 #define GEN_RT_MODEL_LINEARIZE_DISCRETE_WORK(nq, nu, mc, mv, nr, ek, acc)       \

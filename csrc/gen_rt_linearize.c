@@ -158,5 +158,27 @@ int gen_rt_linearize(const gen_rt_lin_dims *d, const gen_rt_lin_blocks *b,
     }
     if (!gen_rt_all_finite(ns * ns, A_lin) || (nr > 0 && !gen_rt_all_finite(ns * nr, B_lin)))
         return GEN_RT_ERR_SINGULAR;
+    /* 6. outputs: dy = Yq dq + Yu du + Yr dr = [Yq Q + Yu Uq | Yu Uu] dx_ind + Yr dr */
+    if (b->ny > 0 && b->C_lin) {
+        int ny = b->ny;
+        if (!b->Yq || !b->Yu || (nr > 0 && (!b->Yr || !b->D_lin))) return GEN_RT_ERR_NULL;
+        for (i = 0; i < ny; ++i) {
+            for (k = 0; k < niq; ++k) {
+                gen_rt_real s = 0;
+                for (j = 0; j < nq; ++j) s += b->Yq[i * nq + j] * Q[j * niq + k];
+                for (j = 0; j < nu; ++j) s += b->Yu[i * nu + j] * Uq[j * niq + k];
+                b->C_lin[i * ns + k] = s;
+            }
+            for (k = 0; k < niu; ++k) {
+                gen_rt_real s = 0;
+                for (j = 0; j < nu; ++j) s += b->Yu[i * nu + j] * Uu[j * niu + k];
+                b->C_lin[i * ns + niq + k] = s;
+            }
+            for (k = 0; k < nr; ++k) b->D_lin[i * nr + k] = b->Yr[i * nr + k];
+        }
+        if (!gen_rt_all_finite(ny * ns, b->C_lin) ||
+            (nr > 0 && !gen_rt_all_finite(ny * nr, b->D_lin)))
+            return GEN_RT_ERR_NONFINITE_MODEL;
+    }
     return GEN_RT_OK;
 }

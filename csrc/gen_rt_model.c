@@ -712,10 +712,45 @@ int gen_rt_model_simulate_input(const gen_rt_model *m, const gen_rt_real *x0, ge
 /* Linearization about any operating point                             */
 /* ------------------------------------------------------------------ */
 
+static int linearize_(const gen_rt_model *m, const gen_rt_real *x_op,
+                      const gen_rt_real *r_op, const gen_rt_real *p, gen_rt_real t,
+                      gen_rt_real *work, int *iwork, gen_rt_real *A_lin, gen_rt_real *B_lin,
+                      gen_rt_real *Y, gen_rt_real *C_lin, gen_rt_real *D_lin);
+
 int gen_rt_model_linearize(const gen_rt_model *m, const gen_rt_real *x_op,
                            const gen_rt_real *r_op, const gen_rt_real *p, gen_rt_real t,
                            gen_rt_real *work, int *iwork, gen_rt_real *A_lin,
                            gen_rt_real *B_lin)
+{
+    return linearize_(m, x_op, r_op, p, t, work, iwork, A_lin, B_lin, NULL, NULL, NULL);
+}
+
+int gen_rt_model_linearize_outputs(const gen_rt_model *m, const gen_rt_real *x_op,
+                                   const gen_rt_real *r_op, const gen_rt_real *p,
+                                   gen_rt_real t, gen_rt_real *work, int *iwork,
+                                   gen_rt_real *A_lin, gen_rt_real *B_lin, gen_rt_real *C_lin,
+                                   gen_rt_real *D_lin)
+{
+    int ny = m->ny, nq = m->nq, nu = m->nu, nr = m->nr;
+    gen_rt_real *Y = work, *w = work + ny * (nq + nu + nr) + 1;
+    if (ny <= 0 || !m->output_jacobian)
+        return linearize_(m, x_op, r_op, p, t, work, iwork, A_lin, B_lin, NULL, NULL, NULL);
+    return linearize_(m, x_op, r_op, p, t, w, iwork, A_lin, B_lin, Y, C_lin, D_lin);
+}
+
+int gen_rt_model_eval_outputs(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                              const gen_rt_real *r, const gen_rt_real *p, gen_rt_real *y)
+{
+    if (m->ny <= 0 || !m->outputs) return GEN_RT_OK;
+    m->outputs(x, x + m->nq, r, p, t, y);
+    return finite_n(m->ny, y) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+}
+
+/* Y: ny (nq + nu + nr) reals for the output Jacobians, or NULL */
+static int linearize_(const gen_rt_model *m, const gen_rt_real *x_op,
+                      const gen_rt_real *r_op, const gen_rt_real *p, gen_rt_real t,
+                      gen_rt_real *work, int *iwork, gen_rt_real *A_lin, gen_rt_real *B_lin,
+                      gen_rt_real *Y, gen_rt_real *C_lin, gen_rt_real *D_lin)
 {
     int nq = m->nq, nu = m->nu, mc = m->mc, mv = m->mv, nr = m->nr, st;
     const gen_rt_real *q = x_op, *u = x_op + nq;
@@ -766,6 +801,14 @@ int gen_rt_model_linearize(const gen_rt_model *m, const gen_rt_real *x_op,
     b.Sq = mv ? Sq : NULL; b.Su = mv ? Su : NULL;
     b.Vq = mv ? Vq : NULL; b.Jc = mc ? Jc : NULL;
     b.Sqd = (mv && m->accel_terms) ? Sqd : NULL;
+    b.ny = 0; b.Yq = b.Yu = b.Yr = NULL; b.C_lin = b.D_lin = NULL;
+    if (Y && C_lin) {
+        int ny = m->ny;
+        gen_rt_real *Yq = Y, *Yu = Yq + ny * nq, *Yr = Yu + ny * nu;
+        m->output_jacobian(q, u, r_op, p, t, Yq, Yu, Yr);
+        b.ny = ny; b.Yq = Yq; b.Yu = Yu; b.Yr = nr ? Yr : NULL;
+        b.C_lin = C_lin; b.D_lin = nr ? D_lin : NULL;
+    }
     if (!finite_n(nq * nq, Kq) || !finite_n(nu * nq, Rq) || !finite_n(nu * nu, Ru) ||
         !finite_n(mv * nq, Sq) || !finite_n(mv * nu, Su) || !finite_n(mc * nq, Jc) ||
         !finite_n(mv * nq, Vq) || !finite_n(nu * nr, Rr) ||

@@ -50,11 +50,17 @@ def derive():
     return km, syms
 
 
+def tip_outputs(s):
+    """The pole tip's position: what a camera over the track measures."""
+    tip = s["tip"].pos_from(s["O"])
+    return {"tip_x": tip.dot(s["N"].x), "tip_y": tip.dot(s["N"].y)}
+
+
 def model(name="cart_pole", **values):
     km, s = derive()
     vals = {**DEFAULTS, **values}
     return gen.Model.from_kanes(km, constants={s[k]: v for k, v in vals.items()},
-                                inputs=[s["F"]], name=name)
+                                inputs=[s["F"]], name=name, outputs=tip_outputs(s))
 
 
 def lqr(A, B, Q, R):
@@ -86,23 +92,25 @@ def main(argv=None):
     }
     out = {}
     for label, kw in runs.items():
-        t, X, R = sim.simulate(x0, 5.0, 1e-3, return_inputs=True, **kw)
-        out[label] = (t, X, R)
+        t, X, R, Y = sim.simulate(x0, 5.0, 1e-3, return_inputs=True, return_outputs=True, **kw)
+        out[label] = (t, X, R, Y)
         print(f"{label:28s} |x(5)| = {np.max(np.abs(X[-1])):.2e}, "
               f"max |F| = {np.max(np.abs(R)):.2f} N")
     if a.plot:
         import matplotlib
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
-        fig, ax = plt.subplots(3, 1, figsize=(7, 7), sharex=True)
-        for label, (t, X, R) in out.items():
+        fig, ax = plt.subplots(4, 1, figsize=(7, 8.5), sharex=True)
+        for label, (t, X, R, Y) in out.items():
             ax[0].plot(t, X[:, 0], label=label)
             ax[1].plot(t, X[:, 1])
-            ax[2].plot(t, R[:, 0])
+            ax[2].plot(t, Y[:, 0])
+            ax[3].plot(t, R[:, 0])
         ax[0].set_ylabel("x [m]")
         ax[1].set_ylabel("theta [rad]")
-        ax[2].set_ylabel("F [N]")
-        ax[2].set_xlabel("t [s]")
+        ax[2].set_ylabel("tip_x [m]")
+        ax[3].set_ylabel("F [N]")
+        ax[3].set_xlabel("t [s]")
         ax[0].legend(fontsize=8)
         fig.suptitle("cart-pole, LQR from 0.3 rad (eomgen, closed loop in C)")
         fig.tight_layout()

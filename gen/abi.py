@@ -259,6 +259,15 @@ FUNCTIONS = (
                                   "A:out:NS*NS, B:out:NS*NR"),
              "Linearize about any operating point: A (NS x NS) and B (NS x NR) for the independent "
              "state [q_ind, u_ind].", work="LINEARIZE", iwork=True),
+    Function("eval_outputs", _params("t:scalar, x:in:NX, r:in?:NR=r, p:in?:NP=p, y:out:NY"),
+             "The outputs y(q, u, r, t), NY (the model's outputs={...}); NY == 0: nothing "
+             "written."),
+    Function("linearize_outputs",
+             _params("x_op:in:NX, r_op:in?:NR=r, p:in?:NP=p, t:scalar, A:out:NS*NS, B:out:NS*NR, "
+                     "C:out:NY*NS, D:out:NY*NR"),
+             "linearize() and the outputs' C = dy/dx_ind (NY x NS), D = dy/dr (NY x NR), "
+             "the dependent entries following the constraints as for A.",
+             work="LINEARIZE_OUTPUTS", iwork=True, work_args="NY"),
     Function("linearize_discrete", _params("x_op:in:NX, r_op:in?:NR=r, p:in?:NP=p, t:scalar, "
                                            "dt:scalar, Ad:out:NS*NS, Bd:out:NS*NR"),
              "The zero-order-hold discretization of the linearization over a step dt: "
@@ -323,6 +332,9 @@ class Interface:
     # the user's sympy spelling
     auxiliary_names: list = field(default_factory=list)
     auxiliary_labels: list = field(default_factory=list)
+    # the outputs y (NY of them): C-safe names and the user's names
+    output_names: list = field(default_factory=list)
+    output_labels: list = field(default_factory=list)
 
     # sizes as attributes: iface.nq, iface.nx, ...
     def __getattr__(self, key):
@@ -389,7 +401,7 @@ def interface(model, real="double", accel="lu"):
     """The Interface of a canonical model (gen.Model); accel: the Plan's."""
     m = model
     sizes = {"NQ": m.nq, "NU": m.nu, "NX": m.nx, "NR": m.nr, "NP": m.np, "MC": m.mc,
-             "MV": m.mv, "NS": m.ns, "NA": getattr(m, "na", 0)}
+             "MV": m.mv, "NS": m.ns, "NA": getattr(m, "na", 0), "NY": getattr(m, "ny", 0)}
     return Interface(
         name=m.name, real=real, method=m.method, sizes=sizes,
         state_names=list(m.state_names), state_labels=list(m.state_labels),
@@ -402,4 +414,6 @@ def interface(model, real="double", accel="lu"):
         accel=accel, functions=FUNCTIONS, batch_functions=BATCH_FUNCTIONS, structs=STRUCTS,
         statuses=tuple(STATUSES),
         auxiliary_names=list(getattr(m, "auxiliary_names", [])),
-        auxiliary_labels=list(getattr(m, "auxiliary_labels", [])))
+        auxiliary_labels=list(getattr(m, "auxiliary_labels", [])),
+        output_names=list(getattr(m, "output_names", [])),
+        output_labels=list(getattr(m, "output_labels", [])))

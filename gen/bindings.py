@@ -55,6 +55,10 @@ class Simulator:
         self.na = iface.sizes.get("NA", 0)
         self.auxiliary_names = list(getattr(iface, "auxiliary_names", []))
         self.auxiliary_labels = list(getattr(iface, "auxiliary_labels", []))
+        # outputs y(q, u, r, t) (Model(..., outputs={...}))
+        self.ny = iface.sizes.get("NY", 0)
+        self.output_names = list(getattr(iface, "output_names", []))
+        self.output_labels = list(getattr(iface, "output_labels", []))
         self.has_energy = iface.has_energy
         self.state_names = list(iface.state_names)
         self.input_names = list(iface.input_names)
@@ -285,6 +289,17 @@ class Simulator:
         return F.copy()
 
     # ---------------------------------------------------- the manifold
+    def outputs(self, t, x, r=None, p=None):
+        """The outputs y(q, u, r, t) at state x, (ny,), named by
+        sim.output_names (empty for a model without outputs)."""
+        x = self._vec(x, self.nx, "state x")
+        r = None if r is None else self._vec(r, self.nr, "inputs r")
+        y = np.zeros(max(1, self.ny), dtype=self.dtype)
+        st = self._fn("eval_outputs")(t, self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
+                                      self._ptr(y))
+        self._check(st, "eval_outputs", t, x)
+        return y[:self.ny].copy()
+
     def project(self, x, p=None, t=0.0, tol=0.0, max_iter=0):
         """x projected onto the configuration and velocity constraints."""
         x = self._vec(x, self.nx, "state x").copy()
@@ -306,11 +321,12 @@ class Simulator:
     def simulate(self, x0, t_end, dt, method="rk4", rtol=1e-8, atol=1e-10, r=None, p=None,
                  project=True, t0=0.0, max_steps=100000, return_multipliers=False,
                  return_stats=False, controller=None, input_period=None, input_hold="zoh",
-                 return_inputs=False):
+                 return_inputs=False, return_outputs=False):
         """Simulate from x0 to t_end. dt is the RK4 step, or the output
         interval of the adaptive DOPRI5. Returns (t, X) with one row per
         output time, then, when asked, the multipliers, the inputs in effect
-        from each output time on (return_inputs) and the stats.
+        from each output time on (return_inputs), the outputs Y (ny per row,
+        return_outputs) and the stats.
 
         r: None or NR constant inputs; a table (t_grid, R) held or
         interpolated inside C (input_hold "zoh" or "linear"); or a callable
@@ -347,7 +363,7 @@ class Simulator:
             st = self._fn("simulate")(self._ptr(x0), t0, t_end, dt, self._ptr(r),
                                       self._ptr(self._params(p)), opts, rows, self._ptr(t),
                                       self._ptr(X), self._ptr(lam), stats)
-            if return_inputs:
+            if return_inputs or return_outputs:
                 R[:, :self.nr] = 0 if r is None else r
         else:
             st = self._fn("simulate_input")(self._ptr(x0), t0, t_end, dt, plan.struct,
@@ -364,6 +380,12 @@ class Simulator:
             out.append(lam[:, :self.mv].copy())
         if return_inputs:
             out.append(R[:, :self.nr].copy())
+        if return_outputs:
+            pp = self._params(p)
+            Y = np.empty((rows, self.ny), dtype=self.dtype)
+            for k in range(rows):
+                Y[k] = self.outputs(t[k], X[k], r=R[k, :self.nr] if self.nr else None, p=pp)
+            out.append(Y)
         if return_stats:
             out.append({"n_accepted": stats.n_accepted, "n_rejected": stats.n_rejected,
                         "n_rhs": stats.n_rhs, "n_out": stats.n_out})
@@ -379,14 +401,16 @@ class Simulator:
         return x
 
     # ---------------------------------------------------- linearization
-    def linearize(self, x_op, r_op=None, p=None, t=0.0, dt=None):
+    def linearize(self, x_op, r_op=None, p=None, t=0.0, dt=None, outputs=False):
         """(A, B) about the operating point for the independent state
         [q_ind, u_ind] (sympy's A_and_B=True partition): A (ns, ns), B (ns, nr).
         The operating point need not be an equilibrium.
 
         dt: (Ad, Bd), the zero-order-hold discretization over a step dt
         (Ad = exp(A dt), Bd = int_0^dt exp(A s) ds B), computed in C by
-        scaling and squaring."""
+        scaling and squaring.
+        outputs=True: also C = dy/dx_ind (ny, ns) and D = dy/dr (ny, nr) of
+        the outputs: (A, B, C, D), or (Ad, Bd, C, D) with dt."""
         x = self._vec(x_op, self.nx, "state x_op")
         r = None if r_op is None else self._vec(r_op, self.nr, "inputs r_op")
         A = np.empty(self.ns * self.ns, dtype=self.dtype)
@@ -402,8 +426,46 @@ class Simulator:
             st = self._fn("linearize")(self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
                                        t, self._ptr(A), self._ptr(B))
             self._check(st, "linearize", t, x)
+        if outputs:
+            A2 = np.empty(self.ns * self.ns, dtype=self.dtype)
+            B2 = np.zeros(max(1, self.ns * self.nr), dtype=self.dtype)
+            C = np.zeros(max(1, self.ny * self.ns), dtype=self.dtype)
+            D = np.zeros(max(1, self.ny * self.nr), dtype=self.dtype)
+            st = self._fn("linearize_outputs")(self._ptr(x), self._ptr(r),
+                                               self._ptr(self._params(p)), t, self._ptr(A2),
+                                               self._ptr(B2), self._ptr(C), self._ptr(D))
+            self._check(st, "linearize_outputs", t, x)
+            return (A.reshape(self.ns, self.ns),
+                    B[:self.ns * self.nr].reshape(self.ns, self.nr).copy(),
+                    C[:self.ny * self.ns].reshape(self.ny, self.ns).copy(),
+                    D[:self.ny * self.nr].reshape(self.ny, self.nr).copy())
         return (A.reshape(self.ns, self.ns),
                 B[:self.ns * self.nr].reshape(self.ns, self.nr).copy())
+
+    def to_statespace(self, x_op, r_op=None, p=None, t=0.0, dt=None):
+        """The linearization as a python-control StateSpace (``pip install
+        eomgen[control]``): states, inputs and outputs named. Outputs are the
+        model's (C, D from linearize(outputs=True)), or the independent state
+        (C = I, D = 0) for a model without outputs. dt: the zero-order-hold
+        discretization (a discrete-time system with that sampling time)."""
+        try:
+            import control
+        except ImportError:
+            raise ImportError("to_statespace needs python-control: pip install "
+                              "'eomgen[control]' (or pip install control)") from None
+        names = list(self.independent_state_names)
+        if self.ny:
+            A, B, C, D = self.linearize(x_op, r_op, p=p, t=t, dt=dt, outputs=True)
+            out_names = list(self.output_names)
+        else:
+            A, B = self.linearize(x_op, r_op, p=p, t=t, dt=dt)
+            C, D = np.eye(self.ns), np.zeros((self.ns, self.nr))
+            out_names = names
+        kw = dict(states=names, inputs=list(self.input_names), outputs=out_names,
+                  name=self.name)
+        if dt is None:
+            return control.ss(A, B, C, D, **kw)
+        return control.ss(A, B, C, D, dt, **kw)
 
     # ------------------------------------------------------------ batches
     def _rows(self, a, n, width, what, allow_none=True):

@@ -456,6 +456,13 @@ def build_kernels(model, mass=None):
             "auxiliary", [Aq, Au, Arg("ud", tuple(m.ud)), Ar, Ap, At],
             [("F", m.aux_F), ("g", m.aux_g)])
 
+    if getattr(m, "ny", 0):
+        # outputs y(q, u, r, p, t) and their Jacobians (C and D of linearize)
+        kernels["outputs"] = make_kernel("outputs", [Aq, Au, Ar, Ap, At], [("y", m.y)])
+        yj = [("Yq", m.y, m.q), ("Yu", m.y, m.u)] + ([("Yr", m.y, m.r)] if m.nr else [])
+        kernels["output_jacobian"] = make_jacobian_kernel(
+            "output_jacobian", [Aq, Au, Ar, Ap, At], [], yj)
+
     # linearization pieces (sympy's Linearizer f_0..f_4, f_c, f_v, f_a)
     kin_res = m.Kqd * sm.Matrix(Qd) + m.Ku * U + m.kf
     R = Msym * sm.Matrix(Ud) - F

@@ -30,6 +30,7 @@ are re-exported here.
 from __future__ import annotations
 
 import hashlib
+import re
 from dataclasses import dataclass, field
 
 import sympy as sm
@@ -284,6 +285,10 @@ class Model:
     # kinematics are implicit (qdot is None) and there are velocity
     # constraints; empty otherwise (a is then a function of q, u, t)
     qd: list = field(default_factory=list)
+    # outputs y(q, u, r, p, t) (from_kanes(..., outputs={name: expr})): NY rows
+    y: sm.Matrix = field(default_factory=lambda: sm.zeros(0, 1))
+    output_names: list = field(default_factory=list)    # C-safe, unique
+    output_labels: list = field(default_factory=list)   # as the user named them
 
     # ------------------------------------------------------------------ sizes
     @property
@@ -297,6 +302,11 @@ class Model:
     @property
     def nx(self):
         return self.nq + self.nu
+
+    @property
+    def ny(self):
+        """Number of outputs."""
+        return self.y.shape[0]
 
     @property
     def na(self):
@@ -346,6 +356,8 @@ class Model:
             parts.append(sm.srepr(mat.xreplace(sub)))
         if self.energy is not None:
             parts.append(sm.srepr(self.energy.xreplace(sub)))
+        if self.ny:
+            parts += [repr(self.output_names), sm.srepr(self.y.xreplace(sub))]
         if self.na:
             sub.update({s: sm.Symbol(f"_ud{i}") for i, s in enumerate(self.ud)})
             parts += [repr(self.auxiliary_names), sm.srepr(self.aux_F.xreplace(sub)),
@@ -358,7 +370,7 @@ class Model:
     # ------------------------------------------------------------ builders
     @classmethod
     def from_kanes(cls, km, constants=None, inputs=None, name="model",
-                   energy=None, reactions=None):
+                   energy=None, reactions=None, outputs=None):
         """Build from a ``KanesMethod`` after ``kanes_equations``.
 
         km may also be a sympy ``System`` or ``JointsMethod`` after
@@ -368,7 +380,10 @@ class Model:
 
         constants: {symbol: value} for every parameter; inputs: symbols or
         functions of time that are inputs r (in this order); energy: an
-        optional expression of the total energy (for diagnostics).
+        optional expression of the total energy (for diagnostics); outputs:
+        {name: expression} of quantities to measure (sensor readings, point
+        positions), in the coordinates, speeds, inputs, constants and t
+        (``sim.outputs``, ``linearize(outputs=True)`` gives C and D).
         """
         validate_name(name)
         container = km
@@ -441,11 +456,11 @@ class Model:
             u_ind=list(range(nu - nud)), u_dep=list(range(nu - nud, nu)),
             Kqd=Kqd, Ku=Ku, kf=kf, M=M, f=f, A=A, b=b, fc=fc,
             qdot_subs=qdot_map, constants=constants, inputs=inputs, energy=energy,
-            speed_names=[_sym_name(x) for x in u], aux=aux)
+            speed_names=[_sym_name(x) for x in u], aux=aux, outputs=outputs)
 
     @classmethod
     def from_lagrange(cls, lm, q_ind=None, qd_ind=None, q_dep=None, qd_dep=None,
-                      constants=None, inputs=None, name="model", energy=None):
+                      constants=None, inputs=None, name="model", energy=None, outputs=None):
         """Build from a ``LagrangesMethod`` after ``form_lagranges_equations``.
 
         q_ind/q_dep partition the coordinates, qd_ind/qd_dep their
@@ -536,11 +551,11 @@ class Model:
             q_ind=qi, q_dep=qdp, u_ind=ui, u_dep=udp,
             Kqd=Kqd, Ku=Ku, kf=kf, M=M, f=f, A=A, b=b, fc=fc,
             qdot_subs={}, constants=constants, inputs=inputs, energy=energy,
-            speed_names=[_sym_name(x) + "_d" for x in q])
+            speed_names=[_sym_name(x) + "_d" for x in q], outputs=outputs)
 
     @classmethod
     def from_system(cls, obj, constants=None, inputs=None, name="model", energy=None,
-                    **partition):
+                    outputs=None, **partition):
         """Build from whatever holds formed equations of motion: a
         ``KanesMethod`` or ``LagrangesMethod``, a sympy ``System`` or
         ``JointsMethod`` after ``form_eoms()`` (either backend), or a PyDy
@@ -576,20 +591,20 @@ class Model:
             raise ModelError(f"{needs}, got {desc} {accepted}")
         # the builder's own further keywords (partition, reactions, ...)
         extra = [k for k in inspect.signature(builder).parameters
-                 if k not in ("km", "lm", "constants", "inputs", "name", "energy")]
+                 if k not in ("km", "lm", "constants", "inputs", "name", "energy", "outputs")]
         bad = sorted(set(partition) - set(extra))
         if bad:
             raise ModelError(
                 f"unknown argument(s) {', '.join(bad)} for Model.from_system with {desc}: "
                 f"accepted are {', '.join(extra) or 'none'}")
         return builder(obj, constants=constants, inputs=inputs, name=name, energy=energy,
-                       **partition)
+                       outputs=outputs, **partition)
 
     # ------------------------------------------------------------ internals
     @classmethod
     def _finish(cls, *, name, method, t, q, u, qdots, udots, q_ind, q_dep, u_ind,
                 u_dep, Kqd, Ku, kf, M, f, A, b, fc, qdot_subs, constants, inputs,
-                energy, speed_names, aux=None):
+                energy, speed_names, aux=None, outputs=None):
         constants = dict(constants or {})
         inputs = list(inputs or [])
         nq, nu = len(q), len(u)
@@ -654,6 +669,10 @@ class Model:
         E_ = None
         if energy is not None:
             E_ = conv(sm.Matrix([energy]), "energy")[0]
+        out_labels, Y_ = [], sm.zeros(0, 1)
+        if outputs is not None:
+            out_labels, exprs = _outputs_of(outputs)
+            Y_ = conv(sm.Matrix(exprs), "outputs") if exprs else sm.zeros(0, 1)
         # auxiliary equations F reactions + g = 0: u' becomes the symbols UD
         UD, aux_F_, aux_g_, reactions = [], None, None, []
         if aux is not None:
@@ -678,7 +697,7 @@ class Model:
 
         # ---- constants that no expression uses: a warning naming them ----
         used = set()
-        for mat in (Kqd_, Ku_, kf_, M_, f_, A_, b_, fc_) + (
+        for mat in (Kqd_, Ku_, kf_, M_, f_, A_, b_, fc_, Y_) + (
                 (aux_F_, aux_g_) if aux_F_ is not None else ()):
             for e in mat:
                 used |= e.free_symbols
@@ -741,18 +760,21 @@ class Model:
         input_labels = [_sym_name(s) for s in inputs]
         constant_labels = [str(s) for s in constants]
         aux_labels = [_sym_name(s) for s in reactions]
-        all_labels = state_labels + input_labels + constant_labels + aux_labels
+        all_labels = state_labels + input_labels + constant_labels + aux_labels + out_labels
         dup = sorted({n_ for n_ in all_labels if all_labels.count(n_) > 1})
         if dup:
-            raise ModelError(f"names used twice among states, inputs and constants: {dup}; "
-                             "give each coordinate, speed, input and constant its own name")
+            raise ModelError(f"names used twice among states, inputs, constants and outputs: "
+                             f"{dup}; give each coordinate, speed, input, constant and output "
+                             "its own name")
         # the names generated files use (CSV columns, --x0 NAME=..., C string
         # literals and comments): plain identifiers, unique after sanitizing
         safe = c_names(all_labels)
         ns_, nr_ = len(state_labels), len(input_labels)
         state_names, input_names = safe[:ns_], safe[ns_:ns_ + nr_]
-        constant_names = safe[ns_ + nr_:len(safe) - len(aux_labels)]
-        aux_names = safe[len(safe) - len(aux_labels):]
+        n_out = len(out_labels)
+        constant_names = safe[ns_ + nr_:len(safe) - len(aux_labels) - n_out]
+        aux_names = safe[len(safe) - len(aux_labels) - n_out:len(safe) - n_out]
+        out_names = safe[len(safe) - n_out:]
 
         model = cls(
             name=name, method=method, q_orig=list(q), u_orig=list(u), r_orig=inputs,
@@ -763,7 +785,8 @@ class Model:
             constant_names=constant_names, state_labels=state_labels,
             input_labels=input_labels, constant_labels=constant_labels,
             aux_F=aux_F_, aux_g=aux_g_, ud=UD, reaction_orig=reactions,
-            auxiliary_names=aux_names, auxiliary_labels=aux_labels, qd=QD)
+            auxiliary_names=aux_names, auxiliary_labels=aux_labels, qd=QD,
+            y=Y_, output_names=out_names, output_labels=list(out_labels))
         model._check_partition()
         return model
 
@@ -895,6 +918,34 @@ def _kane_auxiliary(km, q, u, uaux, inputs, reactions, t, zero):
     g = eqs.xreplace({r_: 0 for r_ in reactions})
     return F, reactions, g
 
+
+
+def _outputs_of(outputs):
+    """(names, expressions) of outputs={name: expr} (or [(name, expr), ...])."""
+    items = list(outputs.items()) if isinstance(outputs, dict) else list(outputs)
+    names, exprs = [], []
+    for item in items:
+        try:
+            name, expr = item
+        except (TypeError, ValueError):
+            raise ModelError("outputs must be a dict {name: expression} or a list of (name, "
+                             f"expression) pairs, got {item!r}") from None
+        if not isinstance(name, str) or not re.match(r"^[A-Za-z_][A-Za-z0-9_]*$", name):
+            raise ModelError(f"output name {name!r} must be an identifier (letters, digits, "
+                             "'_', not starting with a digit)")
+        if isinstance(expr, me.Vector):
+            raise ModelError(f"output {name!r} is a vector: give one scalar expression per "
+                             "output (for example P.pos_from(O).dot(N.x))")
+        try:
+            e = sm.sympify(expr)
+        except (sm.SympifyError, TypeError) as err:
+            raise ModelError(f"output {name!r} is not a sympy expression: {err}") from None
+        if not isinstance(e, sm.Expr):
+            raise ModelError(f"output {name!r} must be a scalar sympy expression, got "
+                             f"{type(e).__name__}")
+        names.append(name)
+        exprs.append(e)
+    return names, exprs
 
 
 def _eliminate_reactions(M, f, aux, udots, coords):

@@ -94,6 +94,8 @@ _KERNEL_DOCS = {
     "energy": "total energy",
     "auxiliary": "F and g of the auxiliary equations F reactions + g = 0",
     "accel_terms": "the acceleration-constraint term a at the q' solved at run time",
+    "outputs": "the outputs y(q, u, r, t)",
+    "output_jacobian": "dy/dq, dy/du, dy/dr",
     "lin_terms": "Jacobian blocks of the linearization",
 }
 

@@ -260,11 +260,12 @@ def test_binary_with_gain_and_input_table_reproduces_the_c_path(cart, tmp_path):
                 str(tmp_path / "K.csv")] + (["--period", str(period)] if period else [])
         head, data = _csv(subprocess.run(args, capture_output=True, text=True,
                                          check=True).stdout)
-        assert head == ["t", "x", "theta", "v", "omega", "F"]
-        t, X, R = sim.simulate(x0, 5.0, 1e-3, controller=gen.LinearFeedback(K, period=period),
-                               return_inputs=True)
+        assert head == ["t", "x", "theta", "v", "omega", "tip_x", "tip_y", "F"]
+        t, X, R, Y = sim.simulate(x0, 5.0, 1e-3, controller=gen.LinearFeedback(K, period=period),
+                                  return_inputs=True, return_outputs=True)
         assert np.max(np.abs(data[:, 1:5] - X)) < 1e-10
-        assert np.max(np.abs(data[:, 5] - R[:, 0])) < 1e-9
+        assert np.max(np.abs(data[:, 5:7] - Y)) < 1e-10
+        assert np.max(np.abs(data[:, 7] - R[:, 0])) < 1e-9
     # an input table, held and interpolated
     tg = np.array([0.0, 0.0125, 0.3, 0.75])
     Rt = np.array([1.0, -2.0, 0.5, 3.0])
@@ -276,7 +277,7 @@ def test_binary_with_gain_and_input_table_reproduces_the_c_path(cart, tmp_path):
         head, data = _csv(out)
         t, X, R = sim.simulate(x0, 1.0, 0.01, r=(tg, Rt), input_hold=hold, return_inputs=True)
         assert np.max(np.abs(data[:, 1:5] - X)) < 1e-12
-        assert np.max(np.abs(data[:, 5] - R[:, 0])) < 1e-12
+        assert np.max(np.abs(data[:, 7] - R[:, 0])) < 1e-12
     # a gain of the wrong shape is named
     (tmp_path / "K2.csv").write_text("1,2\n")
     bad = subprocess.run([str(exe), "--gain", str(tmp_path / "K2.csv")], capture_output=True,

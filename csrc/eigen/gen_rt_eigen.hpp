@@ -42,6 +42,13 @@
  *     static constexpr bool HAS_ACCEL_TERMS = true;
  *     template <class S> static void accel_terms(const S *q, const S *u, const S *qd,
  *                                                const S *p, S t, S *a);
+ *     // optional (outputs): NY > 0 outputs y and their Jacobians Yq (NY x NQ),
+ *     // Yu (NY x NU), Yr (NY x NR, null when NR == 0)
+ *     static constexpr int NY;
+ *     template <class S> static void outputs(const S *q, const S *u, const S *r,
+ *                                            const S *p, S t, S *y);
+ *     template <class S> static void output_jacobian(const S *q, const S *u, const S *r,
+ *                                                    const S *p, S t, S *Yq, S *Yu, S *Yr);
  *     // optional (auxiliary speeds, Kane's u_auxiliary): NA > 0 reaction forces
  *     static constexpr int NA;
  *     template <class S> static void auxiliary(const S *q, const S *u, const S *ud,
@@ -160,6 +167,16 @@ struct AuxiliaryCount {
 template <class M>
 struct AuxiliaryCount<M, std::void_t<decltype(M::NA)>> {
     static constexpr int value = M::NA;
+};
+
+/* Model::NY (outputs y with Model::outputs and Model::output_jacobian), or 0. */
+template <class M, class = void>
+struct OutputCount {
+    static constexpr int value = 0;
+};
+template <class M>
+struct OutputCount<M, std::void_t<decltype(M::NY)>> {
+    static constexpr int value = M::NY;
 };
 
 // ------------------------------------------------------------------ helpers
@@ -1164,8 +1181,45 @@ struct Runtime {
         return c2d_zoh(A, B, dt, Ad, Bd);
     }
 
+    static constexpr int NY = OutputCount<Model>::value;
+    using Outputs = Mat<S, NY, 1>;
+    using OutputMatrix = Mat<S, NY, NS>;
+    using FeedthroughMatrix = Mat<S, NY, NR>;
+
+    /* the outputs y(q, u, r, t) (gen_rt_model_eval_outputs); OK and nothing
+     * written when the model has none */
+    static int eval_outputs(S t, const State &x, const Inputs &r, const Params &p,
+                            Outputs &y) noexcept
+    {
+        if (!finite(t) || !finite(x) || !finite(r) || !finite(p)) return ERR_NONFINITE_INPUT;
+        if constexpr (NY > 0) {
+            Outputs yy;
+            Model::outputs(x.data(), x.data() + NQ, r.data(), p.data(), t, yy.data());
+            if (!finite(yy)) return ERR_NONFINITE_MODEL;
+            y = yy;
+        } else {
+            (void)y;
+        }
+        return OK;
+    }
+
     static int linearize(const State &x_op, const Inputs &r_op, const Params &p, S t,
                          StateMatrix &A_lin, InputMatrix &B_lin) noexcept
+    {
+        return linearize_impl(x_op, r_op, p, t, A_lin, B_lin, nullptr, nullptr);
+    }
+
+    /* linearize, and C = dy/dx_ind, D = dy/dr of the outputs */
+    static int linearize_outputs(const State &x_op, const Inputs &r_op, const Params &p, S t,
+                                 StateMatrix &A_lin, InputMatrix &B_lin, OutputMatrix &C_lin,
+                                 FeedthroughMatrix &D_lin) noexcept
+    {
+        return linearize_impl(x_op, r_op, p, t, A_lin, B_lin, &C_lin, &D_lin);
+    }
+
+    static int linearize_impl(const State &x_op, const Inputs &r_op, const Params &p, S t,
+                              StateMatrix &A_lin, InputMatrix &B_lin, OutputMatrix *C_lin,
+                              FeedthroughMatrix *D_lin) noexcept
     {
         if (!finite(x_op) || !finite(r_op) || !finite(p) || !finite(t))
             return ERR_NONFINITE_INPUT;
@@ -1299,6 +1353,25 @@ struct Runtime {
             B_lin.row(NQI + k) = Z.row(Model::u_ind[k]).template tail<NR>();
         }
         if (!finite(A_lin) || !finite(B_lin)) return ERR_SINGULAR;
+        // 6. outputs: dy = [Yq Q + Yu Uq | Yu Uu] dx_ind + Yr dr
+        if constexpr (NY > 0) {
+            if (C_lin) {
+                Mat<S, NY, NQ> Yq;
+                Mat<S, NY, NU> Yu;
+                Mat<S, NY, NR> Yr;
+                Model::output_jacobian(q.data(), u.data(), r_op.data(), p.data(), t, Yq.data(),
+                                       Yu.data(), NR > 0 ? Yr.data() : nullptr);
+                OutputMatrix C;
+                C.template leftCols<NQI>() = Yq * Q + Yu * Uq;
+                C.template rightCols<NUI>() = Yu * Uu;
+                if (!finite(C) || !finite(Yr)) return ERR_NONFINITE_MODEL;
+                *C_lin = C;
+                if (D_lin) *D_lin = Yr;
+            }
+        } else {
+            (void)C_lin;
+            (void)D_lin;
+        }
         return OK;
     }
 };

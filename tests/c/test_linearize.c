@@ -92,6 +92,7 @@ static int cpend_linearize(const cpend_blocks *p, gen_rt_real *A, gen_rt_real *B
     b.Kqd = p->Kqd; b.Kq = p->Kq; b.Ku = p->Ku; b.M = p->M; b.Rq = p->Rq; b.Ru = p->Ru;
     b.Rr = p->Rr; b.A = p->A; b.Sq = p->Sq; b.Su = p->Su; b.Vq = p->Vq; b.Jc = p->Jc;
     b.Sqd = NULL;
+    b.ny = 0; b.Yq = b.Yu = b.Yr = NULL; b.C_lin = b.D_lin = NULL;
     return gen_rt_linearize(&d, &b, work, iwork, A, B);
 }
 

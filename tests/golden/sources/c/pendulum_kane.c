@@ -343,7 +343,8 @@ static const gen_rt_model pendulum_kane_model = {
     pendulum_kane_lin_terms,
     NULL,
     0, NULL,
-    pendulum_kane_k_accel_terms
+    pendulum_kane_k_accel_terms,
+    0, NULL, NULL
 };
 
 /* ------------------------------------------------------------------ */
@@ -702,6 +703,31 @@ int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(A);
     return gen_rt_model_linearize(&pendulum_kane_model, x_op, r_op, p, t, work, iwork, A, B);
+}
+
+int pendulum_kane_eval_outputs(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *y)
+{
+    PENDULUM_KANE_CHECK_REAL(t);
+    PENDULUM_KANE_CHECK_IN(x, 4);
+    if (!r) r = pendulum_kane_r_zero;
+    PENDULUM_KANE_CHECK_IN(r, 0);
+    if (!p) p = pendulum_kane_p_default;
+    PENDULUM_KANE_CHECK_IN(p, 3);
+    return gen_rt_model_eval_outputs(&pendulum_kane_model, t, x, r, p, y);
+}
+
+int pendulum_kane_linearize_outputs(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B, pendulum_kane_real *C, pendulum_kane_real *D)
+{
+    pendulum_kane_real work[GEN_RT_MODEL_LINEARIZE_OUTPUTS_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED, 0)];
+    int iwork[GEN_RT_MODEL_LINEARIZE_OUTPUTS_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED, 0)];
+    PENDULUM_KANE_CHECK_IN(x_op, 4);
+    if (!r_op) r_op = pendulum_kane_r_zero;
+    PENDULUM_KANE_CHECK_IN(r_op, 0);
+    if (!p) p = pendulum_kane_p_default;
+    PENDULUM_KANE_CHECK_IN(p, 3);
+    PENDULUM_KANE_CHECK_REAL(t);
+    PENDULUM_KANE_CHECK_OUT(A);
+    return gen_rt_model_linearize_outputs(&pendulum_kane_model, x_op, r_op, p, t, work, iwork, A, B, C, D);
 }
 
 int pendulum_kane_linearize_discrete(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real dt, pendulum_kane_real *Ad, pendulum_kane_real *Bd)

@@ -24,6 +24,7 @@ typedef double pendulum_kane_real;
 #define PENDULUM_KANE_MV 1     /* velocity constraints A(q) u + b = 0 (= multipliers) */
 #define PENDULUM_KANE_NS 2     /* independent state [q_ind, u_ind] (linearization) */
 #define PENDULUM_KANE_NA 0     /* auxiliary speeds = reaction forces (eval_auxiliary_forces) */
+#define PENDULUM_KANE_NY 0     /* outputs (eval_outputs) */
 #define PENDULUM_KANE_HAS_ENERGY 1
 
 /* Status codes: 0 ok, negative on failure (the runtime's codes) */
@@ -178,6 +179,12 @@ int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_rea
 
 /* Linearize about any operating point: A (NS x NS) and B (NS x NR) for the independent state [q_ind, u_ind]. */
 int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B);
+
+/* The outputs y(q, u, r, t), NY (the model's outputs={...}); NY == 0: nothing written. */
+int pendulum_kane_eval_outputs(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *y);
+
+/* linearize() and the outputs' C = dy/dx_ind (NY x NS), D = dy/dr (NY x NR), the dependent entries following the constraints as for A. */
+int pendulum_kane_linearize_outputs(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B, pendulum_kane_real *C, pendulum_kane_real *D);
 
 /* The zero-order-hold discretization of the linearization over a step dt: Ad = exp(A dt) (NS x NS), Bd = int_0^dt exp(A s) ds B (NS x NR), by scaling and squaring (GEN_RT_ERR_BAD_ARG unless dt > 0). */
 int pendulum_kane_linearize_discrete(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real dt, pendulum_kane_real *Ad, pendulum_kane_real *Bd);

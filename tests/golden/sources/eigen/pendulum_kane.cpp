@@ -261,6 +261,45 @@ int pendulum_kane_eval_auxiliary_forces(pendulum_kane_real t, const pendulum_kan
     return PENDULUM_KANE_OK;
 }
 
+int pendulum_kane_eval_outputs(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *y)
+{
+    PENDULUM_KANE_CHECK_REAL(t);
+    PENDULUM_KANE_CHECK_IN(x, 4);
+    if (!r) r = r_zero;
+    PENDULUM_KANE_CHECK_IN(r, 0);
+    if (!p) p = mdl::p_default<S>;
+    PENDULUM_KANE_CHECK_IN(p, 3);
+    (void)t;
+    (void)x;
+    (void)r;
+    (void)p;
+    (void)y;
+    return PENDULUM_KANE_OK;
+}
+
+int pendulum_kane_linearize_outputs(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B, pendulum_kane_real *C, pendulum_kane_real *D)
+{
+    PENDULUM_KANE_CHECK_IN(x_op, 4);
+    if (!r_op) r_op = r_zero;
+    PENDULUM_KANE_CHECK_IN(r_op, 0);
+    if (!p) p = mdl::p_default<S>;
+    PENDULUM_KANE_CHECK_IN(p, 3);
+    PENDULUM_KANE_CHECK_REAL(t);
+    PENDULUM_KANE_CHECK_OUT(A);
+    mdl::StateMatrix<S> Al;
+    mdl::InputMatrix<S> Bl;
+    mdl::OutputMatrix<S> Cl;
+    mdl::FeedthroughMatrix<S> Dl;
+    const int st = mdl::linearize_outputs<S>(In<mdl::NX, 1>(x_op), In<mdl::NR, 1>(r_op),
+                                             In<mdl::NP, 1>(p), t, Al, Bl, Cl, Dl);
+    if (st) return st;
+    store(A, Al);
+    (void)B;
+    (void)C;
+    (void)D;
+    return PENDULUM_KANE_OK;
+}
+
 int pendulum_kane_project(pendulum_kane_real t, const pendulum_kane_real *p, pendulum_kane_real tol, int max_iter, pendulum_kane_real *x)
 {
     PENDULUM_KANE_CHECK_REAL(t);

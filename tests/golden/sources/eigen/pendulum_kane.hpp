@@ -61,6 +61,7 @@ inline constexpr int MC = 1;   // configuration constraints f_c(q) = 0
 inline constexpr int MV = 1;   // velocity constraints A(q) u + b = 0 (= multipliers)
 inline constexpr int NS = 2;   // independent state [q_ind, u_ind] (linearization)
 inline constexpr int NA = 0;   // auxiliary speeds = reaction forces (eval_auxiliary_forces)
+inline constexpr int NY = 0;   // outputs (eval_outputs)
 inline constexpr int NQI = NQ - MC; // independent coordinates
 inline constexpr int NUI = NU - MV; // independent speeds
 inline constexpr bool HAS_ENERGY = true;
@@ -92,6 +93,9 @@ template <typename S> using VelocityMatrix = Mat<S, MV, NU>;
 template <typename S> using StateMatrix = Mat<S, NS, NS>;
 template <typename S> using InputMatrix = Mat<S, NS, NR>;
 template <typename S> using AuxiliaryForces = Mat<S, NA, 1>;
+template <typename S> using Outputs = Mat<S, NY, 1>;
+template <typename S> using OutputMatrix = Mat<S, NY, NS>;
+template <typename S> using FeedthroughMatrix = Mat<S, NY, NR>;
 
 // Coordinate partition (indices into q and u)
 inline constexpr int q_ind[1] = { 0 };
@@ -458,7 +462,8 @@ inline void k_lin_terms(const Scalar *q, const Scalar *u, const Scalar *qd, cons
 struct Model {
     static constexpr int NQ = pendulum_kane::NQ, NU = pendulum_kane::NU, NX = pendulum_kane::NX, NR = pendulum_kane::NR,
                          NP = pendulum_kane::NP, MC = pendulum_kane::MC, MV = pendulum_kane::MV, NS = pendulum_kane::NS,
-                         NQI = pendulum_kane::NQI, NUI = pendulum_kane::NUI, NA = pendulum_kane::NA;
+                         NQI = pendulum_kane::NQI, NUI = pendulum_kane::NUI, NA = pendulum_kane::NA,
+                         NY = pendulum_kane::NY;
     static constexpr bool HAS_ENERGY = pendulum_kane::HAS_ENERGY;
     static constexpr bool EXPLICIT_KINEMATICS = false;
     static constexpr gen_rt::Accel ACCEL = gen_rt::ACCEL_PARTITIONED;
@@ -525,6 +530,9 @@ struct Model {
     {
         k_accel_terms<S>(q, u, qd, p, t, a);
     }
+    template <class S> static void outputs(const S *, const S *, const S *, const S *, S, S *) noexcept {}
+    template <class S>
+    static void output_jacobian(const S *, const S *, const S *, const S *, S, S *, S *, S *) noexcept {}
 };
 
 template <typename S> using RT = gen_rt::Runtime<Model, S>;
@@ -606,6 +614,15 @@ inline int eval_auxiliary_forces(S t, const State<S> &x, const Inputs<S> &r, con
                                  AuxiliaryForces<S> &F) noexcept
 {
     return detail::RT<S>::eval_auxiliary_forces(t, x, r, p, F);
+}
+
+/* The outputs y(q, u, r, t) (the model's outputs={...}); NY == 0: OK,
+ * nothing written. */
+template <typename S>
+inline int eval_outputs(S t, const State<S> &x, const Inputs<S> &r, const Params<S> &p,
+                        Outputs<S> &y) noexcept
+{
+    return detail::RT<S>::eval_outputs(t, x, r, p, y);
 }
 
 /* State derivative x' (and the multipliers lam in the first overload). */
@@ -705,6 +722,15 @@ inline int linearize(const State<S> &x_op, const Inputs<S> &r_op, const Params<S
                      StateMatrix<S> &A_lin, InputMatrix<S> &B_lin) noexcept
 {
     return detail::RT<S>::linearize(x_op, r_op, p, t, A_lin, B_lin);
+}
+
+/* linearize, and the outputs' C = dy/dx_ind (NY x NS), D = dy/dr (NY x NR). */
+template <typename S>
+inline int linearize_outputs(const State<S> &x_op, const Inputs<S> &r_op, const Params<S> &p,
+                             S t, StateMatrix<S> &A_lin, InputMatrix<S> &B_lin,
+                             OutputMatrix<S> &C_lin, FeedthroughMatrix<S> &D_lin) noexcept
+{
+    return detail::RT<S>::linearize_outputs(x_op, r_op, p, t, A_lin, B_lin, C_lin, D_lin);
 }
 
 /* The zero-order-hold discretization of the linearization over a step dt:
