@@ -516,6 +516,8 @@ int gen_rt_model_linearize_discrete(const gen_rt_model *m, const gen_rt_real *x_
 #ifdef __cplusplus
 }
 #endif
-/* the matrix exponential (linearize_discrete's work sizes use its macros) */
+/* the matrix exponential (linearize_discrete's work sizes use its macros)
+ * and the step sensitivities */
 #include "gen_rt_expm.h"
+#include "gen_rt_sens.h"
 #endif /* GEN_RT_H */

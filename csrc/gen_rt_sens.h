@@ -35,11 +35,13 @@ extern "C" {
  *   q' rows:  Kqd dq' = -(Kq dq + Ku du)
  *   u' rows:  [M, -A^T; A, 0] [du'; dlam] = -[Rq dq + Ru du + Rr dr;
  *                                              Sq dq + Su du + Sqd dq']
- * with the blocks of the model's lin_terms kernel evaluated at x and the
- * solved q', u' and multipliers lam (Sqd only for a model whose
- * acceleration-constraint term holds q', i.e. with accel_terms). A Kane
- * model's partitioned accelerations solve the same equations as the KKT
- * system, so this is their derivative too. */
+ * with the blocks of the model's lin_terms kernel evaluated at x and at the
+ * q', u' and multipliers lam that gen_rt_model_rhs itself solves there
+ * (Sqd only for a model whose acceleration-constraint term holds q', i.e.
+ * with accel_terms). The kinematics hold no inputs: the q' rows of Jr are
+ * zero. A Kane model's partitioned accelerations solve the same equations
+ * as the KKT system (also off the constraint manifold), so this is their
+ * derivative too. A failure of the right-hand side at x is returned as is. */
 
 /* reals: the blocks of lin_terms, q' rows and the KKT solve, given the
  * point (internal) */
@@ -89,7 +91,8 @@ int gen_rt_model_jacobian(const gen_rt_model *m, gen_rt_real t, const gen_rt_rea
  * perturbing x_ind, completing the dependent entries
  * (gen_rt_model_consistent_state), stepping without projection and reading
  * x1_ind. Without constraints ns = nx and Fx is the full dx1/dx.
- * Fr may be NULL when nr == 0. */
+ * Fr may be NULL when nr == 0. Cost: the four right-hand sides of the step,
+ * four lin_terms evaluations and O(nx^2 (nx + nr)) per stage. */
 #define GEN_RT_MODEL_STEP_SENS_WORK(nq, nu, mc, mv, nr, ek, acc)                \
     (5 * GEN_RT_NX_(nq, nu) + (mv) + 1 +                                        \
      4 * GEN_RT_NX_(nq, nu) * (GEN_RT_NX_(nq, nu) + (nr)) +                     \

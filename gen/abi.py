@@ -259,6 +259,19 @@ FUNCTIONS = (
                                   "A:out:NS*NS, B:out:NS*NR"),
              "Linearize about any operating point: A (NS x NS) and B (NS x NR) for the independent "
              "state [q_ind, u_ind].", work="LINEARIZE", iwork=True),
+    Function("jacobian",
+             _params("t:scalar, x:in:NX, r:in?:NR=r, p:in?:NP=p, Jx:out:NX*NX, Jr:out:NX*NR"),
+             "The full-state Jacobian of the right-hand side, d x'/dx (NX x NX) and d x'/dr "
+             "(NX x NR), every entry of x free (dependent entries included).",
+             work="JACOBIAN", iwork=True),
+    Function("step_sensitivity",
+             _params("t:scalar, h:scalar, r:in?:NR=r, p:in?:NP=p, x:inout:NX, Fx:out:NS*NS, "
+                     "Fr:out:NS*NR"),
+             "One classic RK4 step of size h without projection (x updated; unchanged on "
+             "failure) and its exact derivatives by the variational equations: Fx = dx1_ind/"
+             "dx_ind (NS x NS) with the dependent entries of x following the constraints to "
+             "first order, Fr = dx1_ind/dr (NS x NR).",
+             work="STEP_SENS", iwork=True),
     Function("eval_outputs", _params("t:scalar, x:in:NX, r:in?:NR=r, p:in?:NP=p, y:out:NY"),
              "The outputs y(q, u, r, t), NY (the model's outputs={...}); NY == 0: nothing "
              "written."),

@@ -400,6 +400,48 @@ class Simulator:
         self._check(st, "step_rk4", t, x)
         return x
 
+    def step(self, t, x, h, r=None, p=None, method="rk4", sensitivities=False, project=None):
+        """One integrator step of size h from (t, x); returns the new state,
+        or with sensitivities=True (x1, Fx, Fr): the state after the step and
+        its exact derivatives by the step's variational equations (the
+        generated Jacobian kernels, not finite differences), Fx = dx1/dx and
+        Fr = dx1/dr on the independent state [q_ind, u_ind] (ns x ns, ns x nr).
+
+        Convention for constrained models: the dependent entries of x follow
+        the constraints to first order (perturb x_ind, complete with
+        consistent_state), the step is not projected, and x1's independent
+        entries are differentiated. For an unconstrained model Fx is the full
+        dx1/dx; as h -> 0, Fx -> I + h A. project (default: True without
+        sensitivities) projects the plain step onto the constraints."""
+        if method != "rk4":
+            raise ValueError(f"step supports method='rk4' (a fixed step); got {method!r}")
+        if not sensitivities:
+            return self.step_rk4(t, x, h, r=r, p=p, project=True if project is None else project)
+        if project:
+            raise ValueError("step(sensitivities=True) differentiates the unprojected step; "
+                             "project=True is not available with it")
+        x1 = self._vec(x, self.nx, "state x").copy()
+        r = None if r is None else self._vec(r, self.nr, "inputs r")
+        Fx = np.empty(self.ns * self.ns, dtype=self.dtype)
+        Fr = np.zeros(max(1, self.ns * self.nr), dtype=self.dtype)
+        st = self._fn("step_sensitivity")(t, h, self._ptr(r), self._ptr(self._params(p)),
+                                          self._ptr(x1), self._ptr(Fx), self._ptr(Fr))
+        self._check(st, "step_sensitivity", t, x1)
+        return (x1, Fx.reshape(self.ns, self.ns),
+                Fr[:self.ns * self.nr].reshape(self.ns, self.nr).copy())
+
+    def jacobian(self, t, x, r=None, p=None):
+        """(Jx, Jr): the full-state Jacobian of the right-hand side, d x'/dx
+        (nx, nx) and d x'/dr (nx, nr), every entry of x free."""
+        x = self._vec(x, self.nx, "state x")
+        r = None if r is None else self._vec(r, self.nr, "inputs r")
+        Jx = np.empty(self.nx * self.nx, dtype=self.dtype)
+        Jr = np.zeros(max(1, self.nx * self.nr), dtype=self.dtype)
+        st = self._fn("jacobian")(t, self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
+                                  self._ptr(Jx), self._ptr(Jr))
+        self._check(st, "jacobian", t, x)
+        return Jx.reshape(self.nx, self.nx), Jr[:self.nx * self.nr].reshape(self.nx, self.nr).copy()
+
     # ---------------------------------------------------- linearization
     def linearize(self, x_op, r_op=None, p=None, t=0.0, dt=None, outputs=False):
         """(A, B) about the operating point for the independent state

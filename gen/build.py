@@ -378,7 +378,8 @@ def _runtime_objects(src: Path, cc: str):
     except OSError as e:
         raise BuildError(f"the C compiler {cc!r} cannot be run: {e}") from None
     for name in sorted(RUNTIME_SOURCES) + ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h",
-                                           "gen_rt_expm.h", "gen_rt_config.h"]:
+                                           "gen_rt_expm.h", "gen_rt_sens.h",
+                                           "gen_rt_config.h"]:
         h.update(name.encode() + b"\0" + (src / name).read_bytes() + b"\0")
     folder = cache_dir() / f"runtime_{h.hexdigest()[:16]}"
     objs = [folder / (Path(s).stem + ".o") for s in RUNTIME_SOURCES]

@@ -268,10 +268,10 @@ def cmd_simulate(a, progress):
         r = _read_input_table(sim, a.input_csv)
         varying = True
     with progress.stage(f"simulate {a.t_end:g} s ({a.method})"):
-        t, X, lam, R = sim.simulate(x, a.t_end, a.dt, method=a.method, r=r, p=p,
-                                    rtol=a.rtol, atol=a.atol, return_multipliers=True,
-                                    return_inputs=True,
-                                    input_hold=getattr(a, "hold", "zoh"))
+        t, X, lam, R, Y = sim.simulate(x, a.t_end, a.dt, method=a.method, r=r, p=p,
+                                       rtol=a.rtol, atol=a.atol, return_multipliers=True,
+                                       return_inputs=True, return_outputs=True,
+                                       input_hold=getattr(a, "hold", "zoh"))
     cols = ["t"] + sim.state_names
     data = [t[:, None], X]
     res_names, res = [], []
@@ -289,6 +289,8 @@ def cmd_simulate(a, progress):
     aux = None
     if sim.na:
         aux = np.array([sim.auxiliary_forces(ti, xi, r=ri, p=p) for ti, xi, ri in zip(t, X, R)])
+    if sim.ny:    # the outputs, as the binary writes them
+        aux = Y if aux is None else np.hstack([aux, Y])
     if varying:   # the inputs in effect from each row on, as the binary writes them
         aux = R if aux is None else np.hstack([aux, R])
     for out in (a.csv, a.plot):
@@ -297,18 +299,20 @@ def cmd_simulate(a, progress):
     if a.csv:
         with progress.stage(f"write {a.csv}"):
             write_csv(a.csv, sim, cols, data, lam, res_names, res, E, aux,
-                      aux_names=(list(sim.auxiliary_names)
+                      aux_names=(list(sim.auxiliary_names) + list(sim.output_names)
                                  + (list(sim.input_names) if varying else [])))
         print(f"wrote {len(t)} rows to {a.csv}")
     if a.plot:
         with progress.stage(f"plot {a.plot}"):
             try:
-                plot_simulation(a.plot, m, sim, t, X, res_names, res, E)
+                plot_simulation(a.plot, m, sim, t, X, res_names, res, E, Y=Y,
+                                R=R if varying else None)
             except MissingDependency as e:
                 raise UsageError(str(e)) from None
         print(f"wrote {a.plot}")
     if not a.csv and not a.plot:
-        extra = list(sim.auxiliary_names) + (list(sim.input_names) if varying else [])
+        extra = (list(sim.auxiliary_names) + list(sim.output_names)
+                 + (list(sim.input_names) if varying else []))
         print_csv(cols + (extra if aux is not None else []),
                   np.hstack(data + ([aux] if aux is not None else [])))
     return 0

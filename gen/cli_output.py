@@ -130,9 +130,10 @@ def print_csv(cols, table):
 
 
 # ------------------------------------------------------------------- plot
-def plot_simulation(path, m, sim, t, X, res_names, res, E):
-    """A PNG of the states, the constraint residuals (log scale) and the
-    relative energy error, one panel each (those present)."""
+def plot_simulation(path, m, sim, t, X, res_names, res, E, Y=None, R=None):
+    """A PNG of the states, the outputs, the inputs (when they vary), the
+    constraint residuals (log scale) and the relative energy error, one
+    panel each (those present)."""
     try:
         import matplotlib
         matplotlib.use("Agg")
@@ -140,7 +141,9 @@ def plot_simulation(path, m, sim, t, X, res_names, res, E):
     except ImportError:
         raise MissingDependency("--plot needs matplotlib: pip install 'eomgen[plot]'") from None
     import numpy as np
-    panels = 1 + bool(res) + (E is not None)
+    has_y = Y is not None and sim.ny > 0
+    has_r = R is not None and sim.nr > 0
+    panels = 1 + has_y + has_r + bool(res) + (E is not None)
     fig, axes = plt.subplots(panels, 1, figsize=(8, 2.6 * panels + 0.6), sharex=True,
                              squeeze=False)
     axes = axes[:, 0]
@@ -152,6 +155,16 @@ def plot_simulation(path, m, sim, t, X, res_names, res, E):
     ax.set_title(f"{m.name}: simulation ({m.method}, nq={sim.nq}, nu={sim.nu}, "
                  f"{sim.mc} configuration / {sim.mv} velocity constraints)", fontsize=10)
     k = 1
+    for show, data, names, label in ((has_y, Y, sim.output_names, "output"),
+                                     (has_r, R, sim.input_names, "input")):
+        if not show:
+            continue
+        ax = axes[k]
+        k += 1
+        for i, n in enumerate(names):
+            ax.plot(t, data[:, i], label=n, lw=1.2)
+        ax.set_ylabel(label)
+        ax.legend(loc="upper right", ncol=min(4, len(names)), fontsize=8)
     if res:
         ax = axes[k]
         k += 1

@@ -960,6 +960,191 @@ struct Runtime {
         return OK;
     }
 
+    // ------------------------------------------------ Jacobian and step sensitivity
+
+    using JacobianX = Mat<S, NX, NX>;
+    using JacobianR = Mat<S, NX, NR>;
+
+    /* d f/dx (NX x NX) and d f/dr (NX x NR) of the right-hand side at (t, x,
+     * r), every entry of x free (gen_rt_model_jacobian, gen_rt_sens.c): q'
+     * rows from the kinematics, u' rows from the KKT system with the
+     * multipliers, at the right-hand side's own q', u', lam. A, Vq, Jc are
+     * returned for the elimination when asked. */
+    static int jacobian_at(S t, const State &x, const Inputs &r, const Params &p,
+                           const State &dx, const Multipliers &lam, JacobianX &Jx, JacobianR &Jr,
+                           VelocityMatrix *A_out = nullptr, Mat<S, MV, NQ> *Vq_out = nullptr,
+                           Mat<S, MC, NQ> *Jc_out = nullptr) noexcept
+    {
+        const Coords q = x.template head<NQ>(), qd = dx.template head<NQ>();
+        const Speeds u = x.template tail<NU>(), ud = dx.template tail<NU>();
+        Mat<S, NQ, NQ> Kqd, Kq;
+        Mat<S, NQ, NU> Ku;
+        Mat<S, NU, NQ> Rq;
+        Mat<S, NU, NU> Ru;
+        Mat<S, NU, NR> Rr;
+        MassMatrix M;
+        VelocityMatrix A;
+        Mat<S, MV, NQ> Sq, Vq;
+        Mat<S, MV, NU> Su;
+        Mat<S, MC, NQ> Jc;
+        Mat<S, MV, NQ> Sqd = Mat<S, MV, NQ>::Zero();
+        const LinOut<S> out{Kqd.data(), Ku.data(), M.data(), A.data(), Kq.data(), Rq.data(),
+                            Ru.data(),  Rr.data(), Sq.data(), Su.data(), Vq.data(), Jc.data(),
+                            AccelTerms<Model>::value ? Sqd.data() : nullptr};
+        Model::lin_terms(q.data(), u.data(), qd.data(), ud.data(), lam.data(), r.data(),
+                         p.data(), t, out);
+        if (!finite(Kqd) || !finite(Kq) || !finite(Ku) || !finite(M) || !finite(Rq) ||
+            !finite(Ru) || !finite(Rr) || !finite(A) || !finite(Sq) || !finite(Su) ||
+            !finite(Vq) || !finite(Jc) || !finite(Sqd))
+            return ERR_NONFINITE_MODEL;
+        // q' rows: Kqd dq' = -[Kq | Ku] [dq; du]
+        Mat<S, NQ, NX> T;
+        T.template leftCols<NQ>() = -Kq;
+        T.template rightCols<NU>() = -Ku;
+        Mat<S, NQ, NX> Dq;
+        const Eigen::Matrix<S, NQ, NQ> Kf = Kqd;
+        if (lu_solve(Kf, S(0), T, Dq)) return ERR_SINGULAR_KINEMATICS;
+        // u' rows: [M, -A^T; A, 0] [du'; dlam] = -[Rq Ru Rr; Sq + Sqd Dq, Su + Sqd Dq, 0]
+        constexpr int N = NU + MV, NC = NX + NR;
+        Eigen::Matrix<S, N, N> K;
+        K.template topLeftCorner<NU, NU>() = M;
+        if constexpr (MV > 0) {
+            K.template topRightCorner<NU, MV>() = -A.transpose();
+            K.template bottomLeftCorner<MV, NU>() = A;
+            K.template bottomRightCorner<MV, MV>().setZero();
+        }
+        Mat<S, N, NC> G, Z;
+        G.template block<NU, NQ>(0, 0) = -Rq;
+        G.template block<NU, NU>(0, NQ) = -Ru;
+        if constexpr (NR > 0) G.template block<NU, NR>(0, NX) = -Rr;
+        if constexpr (MV > 0) {
+            G.template block<MV, NQ>(NU, 0) = -Sq;
+            G.template block<MV, NU>(NU, NQ) = -Su;
+            if constexpr (NR > 0) G.template block<MV, NR>(NU, NX).setZero();
+            if constexpr (AccelTerms<Model>::value) G.template block<MV, NX>(NU, 0) -= Sqd * Dq;
+        }
+        int st = lu_solve(K, S(0), G, Z);
+        if (st) return st;
+        if (!finite(Dq) || !finite(Z)) return ERR_SINGULAR;
+        Jx.template topRows<NQ>() = Dq;
+        Jx.template bottomRows<NU>() = Z.template block<NU, NX>(0, 0);
+        Jr.setZero();
+        if constexpr (NR > 0) Jr.template bottomRows<NU>() = Z.template block<NU, NR>(0, NX);
+        if (A_out) *A_out = A;
+        if (Vq_out) *Vq_out = Vq;
+        if (Jc_out) *Jc_out = Jc;
+        return OK;
+    }
+
+    static int jacobian(S t, const State &x, const Inputs &r, const Params &p, JacobianX &Jx,
+                        JacobianR &Jr) noexcept
+    {
+        if (!finite(t) || !finite(x) || !finite(r) || !finite(p)) return ERR_NONFINITE_INPUT;
+        State dx;
+        Multipliers lam = Multipliers::Zero();
+        const int st = rhs_unchecked(t, x, r, p, dx, &lam);
+        if (st) return st;
+        return jacobian_at(t, x, r, p, dx, lam, Jx, Jr);
+    }
+
+    /* One RK4 step without projection (x updated, unchanged on failure) and
+     * its exact derivatives on the independent state: Fx = P_ind Fx_full E,
+     * Fr = P_ind Fr_full, E = [Q, 0; Uq, Uu] at x (gen_rt_model_step_sensitivity) */
+    static int step_sensitivity(S t, S h, const Inputs &r, const Params &p, State &x,
+                                StateMatrix &Fx, InputMatrix &Fr) noexcept
+    {
+        if (!finite(t) || !finite(h) || !finite(r) || !finite(p) || !finite(x))
+            return ERR_NONFINITE_INPUT;
+        constexpr int NC = NX + NR;
+        const S h2 = S(0.5) * h;
+        State k[4], y;
+        Multipliers lam = Multipliers::Zero();
+        JacobianX Jx;
+        JacobianR Jr;
+        Mat<S, NX, NC> D, Ssum, Y;
+        Mat<S, NX, NS> E = Mat<S, NX, NS>::Zero();
+        VelocityMatrix A;
+        Mat<S, MV, NQ> Vq;
+        Mat<S, MC, NQ> Jc;
+        int st;
+        for (int s = 0; s < 4; ++s) {
+            const S ts = s == 0 ? t : (s == 3 ? t + h : t + h2);
+            const S c = s == 3 ? h : h2;
+            if (s == 0) y = x;
+            else y = x + c * k[s - 1];
+            if ((st = rhs_unchecked(ts, y, r, p, k[s], &lam))) return st;
+            if ((st = jacobian_at(ts, y, r, p, k[s], lam, Jx, Jr, s == 0 ? &A : nullptr,
+                                  s == 0 ? &Vq : nullptr, s == 0 ? &Jc : nullptr)))
+                return st;
+            if (s == 0) {
+                if ((st = elimination(A, Vq, Jc, E))) return st;
+                D.template leftCols<NX>() = Jx;
+                if constexpr (NR > 0) D.template rightCols<NR>() = Jr;
+                Ssum = D;
+            } else {
+                Y = c * D;
+                for (int i = 0; i < NX; ++i) Y(i, i) += S(1);
+                Mat<S, NX, NC> Dn = Jx * Y;
+                if constexpr (NR > 0) Dn.template rightCols<NR>() += Jr;
+                D = Dn;
+                Ssum += (s == 3 ? S(1) : S(2)) * D;
+            }
+        }
+        y = x + (h / S(6)) * (k[0] + S(2) * (k[1] + k[2]) + k[3]);
+        if (!finite(y)) return ERR_DIVERGED;
+        Mat<S, NX, NC> F = (h / S(6)) * Ssum;
+        for (int i = 0; i < NX; ++i) F(i, i) += S(1);
+        StateMatrix fx;
+        InputMatrix fr;
+        for (int kk = 0; kk < NS; ++kk) {
+            const int row = kk < NQI ? Model::q_ind[kk] : NQ + Model::u_ind[kk - NQI];
+            fx.row(kk) = F.row(row).template leftCols<NX>() * E;
+            if constexpr (NR > 0) fr.row(kk) = F.row(row).template rightCols<NR>();
+        }
+        if (!finite(fx) || !finite(fr)) return ERR_DIVERGED;
+        x = y;
+        Fx = fx;
+        Fr = fr;
+        return OK;
+    }
+
+    /* E = [Q, 0; Uq, Uu] (NX x NS): an independent perturbation and the
+     * dependent one that keeps the constraints to first order */
+    static int elimination(const VelocityMatrix &A, const Mat<S, MV, NQ> &Vq,
+                           const Mat<S, MC, NQ> &Jc, Mat<S, NX, NS> &E) noexcept
+    {
+        E.setZero();
+        for (int k = 0; k < NQI; ++k) E(Model::q_ind[k], k) = S(1);
+        for (int k = 0; k < NUI; ++k) E(NQ + Model::u_ind[k], NQI + k) = S(1);
+        if constexpr (MC > 0) {
+            Eigen::Matrix<S, MC, MC> Jd;
+            Mat<S, MC, NQI> X, Xs;
+            for (int i = 0; i < MC; ++i) {
+                for (int j = 0; j < MC; ++j) Jd(i, j) = Jc(i, Model::q_dep[j]);
+                for (int k = 0; k < NQI; ++k) X(i, k) = Jc(i, Model::q_ind[k]);
+            }
+            const int st = lu_solve(Jd, Jc.cwiseAbs().maxCoeff(), X, Xs);
+            if (st) return st;
+            for (int j = 0; j < MC; ++j)
+                for (int k = 0; k < NQI; ++k) E(Model::q_dep[j], k) = -Xs(j, k);
+        }
+        if constexpr (MV > 0) {
+            Eigen::Matrix<S, MV, MV> Ad;
+            Mat<S, MV, NS> Y, Ys;
+            const Mat<S, MV, NS> VqE = Vq * E.template topRows<NQ>();
+            for (int i = 0; i < MV; ++i) {
+                for (int j = 0; j < MV; ++j) Ad(i, j) = A(i, Model::u_dep[j]);
+                for (int k = 0; k < NQI; ++k) Y(i, k) = VqE(i, k);
+                for (int k = 0; k < NUI; ++k) Y(i, NQI + k) = A(i, Model::u_ind[k]);
+            }
+            const int st = lu_solve(Ad, A.cwiseAbs().maxCoeff(), Y, Ys);
+            if (st) return st;
+            for (int j = 0; j < MV; ++j)
+                for (int k = 0; k < NS; ++k) E(NQ + Model::u_dep[j], k) = -Ys(j, k);
+        }
+        return finite(E) ? OK : ERR_SINGULAR;
+    }
+
     // ---------------------------------------------- inputs during a simulation
 
     /* the last knot k with T[k] <= t (0 before the first) */

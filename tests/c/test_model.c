@@ -464,8 +464,96 @@ static void auxiliary_tests(int accel)
     CHECK(R[0] == 7);
 }
 
+/* gen_rt_model_simulate_input: a C controller closes the loop. On the
+ * oscillator m x'' = -k x + r, the damping law r = -c x' (continuous) gives
+ * x(t) = e^{-z t} (cos(wd t) + z/wd sin(wd t)), z = c / 2m, wd^2 = k/m - z^2;
+ * the same law sampled every 2 dt equals a loop of RK4 steps with r held. */
+typedef struct { gen_rt_real c; long calls; } damper;
+
+static int damp_law(void *ctx, gen_rt_real t, const gen_rt_real *x, gen_rt_real *r)
+{
+    damper *d = (damper *)ctx;
+    (void)t;
+    d->calls += 1;
+    r[0] = -d->c * x[1];
+    return 0;
+}
+
+static int failing_law(void *ctx, gen_rt_real t, const gen_rt_real *x, gen_rt_real *r)
+{
+    (void)ctx; (void)x; (void)r;
+    return t > GEN_RT_C(0.5);
+}
+
+static void controller_tests(int accel)
+{
+    gen_rt_model m = osc_model(accel);
+    const gen_rt_real p[2] = {PM, PK};
+    const double c = 0.6, z = c / (2 * PM), wd = sqrt(PK / PM - z * z);
+    gen_rt_real x0[2], t_out[101], x_out[202], r_out[101], x[2], xs[2];
+    gen_rt_sim_options o;
+    gen_rt_sim_stats s;
+    gen_rt_input in;
+    damper d;
+    int st, k, n, ni;
+    x0[0] = 1; x0[1] = 0;
+    o.method = GEN_RT_METHOD_RK4; o.project = 0; o.rtol = GEN_RT_C(1e-8); o.atol = GEN_RT_C(1e-10);
+    o.h_init = 0; o.h_min = 0; o.h_max = 0; o.max_steps = 1000; o.proj_tol = 0; o.proj_max_iter = 0;
+    s.x_last = x;
+    memset(&in, 0, sizeof in);
+    d.c = (gen_rt_real)c; d.calls = 0;
+    in.controller = damp_law; in.ctx = &d;
+    n = W(GEN_RT_MODEL_SIMULATE_INPUT_WORK, DIMS_O(accel));
+    ni = W(GEN_RT_MODEL_SIMULATE_INPUT_IWORK, DIMS_O(accel));
+    guard(n, ni);
+    st = gen_rt_model_simulate_input(&m, x0, 0, 1, GEN_RT_C(0.01), &in, p, &o, 101, work, iwork,
+                                     t_out, x_out, NULL, r_out, &s);
+    CHECK_INT(st, GEN_RT_OK);
+    guards_intact(n, ni);
+    CHECK_INT(s.n_out, 101);
+    CHECK_NEAR(x_out[200], exp(-z) * (cos(wd) + z / wd * sin(wd)), TOL(1e-8, 1e-5));
+    CHECK_NEAR(r_out[100], -c * x_out[201], TOL(1e-15, 1e-6));
+    CHECK(d.calls >= 400);                       /* every stage, and every row */
+    /* sampled every 2 dt: RK4 steps with the input computed at the sample */
+    in.period = GEN_RT_C(0.02);
+    d.calls = 0;
+    st = gen_rt_model_simulate_input(&m, x0, 0, 1, GEN_RT_C(0.01), &in, p, &o, 101, work, iwork,
+                                     t_out, x_out, NULL, r_out, &s);
+    CHECK_INT(st, GEN_RT_OK);
+    CHECK_INT((int)d.calls, 51);                 /* once per sample, t = 0, 0.02, ..., 1 */
+    xs[0] = x0[0]; xs[1] = x0[1];
+    for (k = 0; k < 100; ++k) {
+        gen_rt_real r1[1];
+        if (k % 2 == 0) r1[0] = (gen_rt_real)(-c) * xs[1];
+        else r1[0] = r_out[k - 1];
+        CHECK_NEAR(r_out[k], r1[0], TOL(1e-15, 1e-6));
+        st = gen_rt_model_step_rk4(&m, (gen_rt_real)k * GEN_RT_C(0.01), GEN_RT_C(0.01), r1, p, 0,
+                                   work, iwork, xs);
+        CHECK_INT(st, GEN_RT_OK);
+        CHECK_NEAR(x_out[2 * (k + 1)], xs[0], TOL(1e-15, 1e-6));
+    }
+    /* a failing controller stops the run, naming it */
+    in.controller = failing_law;
+    in.period = 0;
+    st = gen_rt_model_simulate_input(&m, x0, 0, 1, GEN_RT_C(0.01), &in, p, &o, 101, work, iwork,
+                                     t_out, x_out, NULL, NULL, &s);
+    CHECK_INT(st, GEN_RT_ERR_CONTROLLER);
+    CHECK(s.n_out >= 50 && s.n_out <= 52 && s.t_last <= GEN_RT_C(0.51));
+    /* a table that is not increasing is a bad argument */
+    {
+        const gen_rt_real tt[3] = {0, 1, 1}, rr[3] = {0, 1, 2};
+        memset(&in, 0, sizeof in);
+        in.n_table = 3; in.t_table = tt; in.r_table = rr;
+        st = gen_rt_model_simulate_input(&m, x0, 0, 1, GEN_RT_C(0.01), &in, p, &o, 101, work,
+                                         iwork, t_out, x_out, NULL, NULL, &s);
+        CHECK_INT(st, GEN_RT_ERR_BAD_ARG);
+    }
+}
+
 int main(void)
 {
+    controller_tests(GEN_RT_ACCEL_LDLT);
+    controller_tests(GEN_RT_ACCEL_LU);
     auxiliary_tests(GEN_RT_ACCEL_LDLT);
     auxiliary_tests(GEN_RT_ACCEL_LU);
     pendulum_tests(GEN_RT_ACCEL_KKT);

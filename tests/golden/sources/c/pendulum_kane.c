@@ -705,6 +705,35 @@ int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_
     return gen_rt_model_linearize(&pendulum_kane_model, x_op, r_op, p, t, work, iwork, A, B);
 }
 
+int pendulum_kane_jacobian(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *Jx, pendulum_kane_real *Jr)
+{
+    pendulum_kane_real work[GEN_RT_MODEL_JACOBIAN_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_JACOBIAN_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    PENDULUM_KANE_CHECK_REAL(t);
+    PENDULUM_KANE_CHECK_IN(x, 4);
+    if (!r) r = pendulum_kane_r_zero;
+    PENDULUM_KANE_CHECK_IN(r, 0);
+    if (!p) p = pendulum_kane_p_default;
+    PENDULUM_KANE_CHECK_IN(p, 3);
+    PENDULUM_KANE_CHECK_OUT(Jx);
+    return gen_rt_model_jacobian(&pendulum_kane_model, t, x, r, p, work, iwork, Jx, Jr);
+}
+
+int pendulum_kane_step_sensitivity(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *x, pendulum_kane_real *Fx, pendulum_kane_real *Fr)
+{
+    pendulum_kane_real work[GEN_RT_MODEL_STEP_SENS_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_STEP_SENS_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    PENDULUM_KANE_CHECK_REAL(t);
+    PENDULUM_KANE_CHECK_REAL(h);
+    if (!r) r = pendulum_kane_r_zero;
+    PENDULUM_KANE_CHECK_IN(r, 0);
+    if (!p) p = pendulum_kane_p_default;
+    PENDULUM_KANE_CHECK_IN(p, 3);
+    PENDULUM_KANE_CHECK_IN(x, 4);
+    PENDULUM_KANE_CHECK_OUT(Fx);
+    return gen_rt_model_step_sensitivity(&pendulum_kane_model, t, h, r, p, work, iwork, x, Fx, Fr);
+}
+
 int pendulum_kane_eval_outputs(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *y)
 {
     PENDULUM_KANE_CHECK_REAL(t);

@@ -180,6 +180,12 @@ int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_rea
 /* Linearize about any operating point: A (NS x NS) and B (NS x NR) for the independent state [q_ind, u_ind]. */
 int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B);
 
+/* The full-state Jacobian of the right-hand side, d x'/dx (NX x NX) and d x'/dr (NX x NR), every entry of x free (dependent entries included). */
+int pendulum_kane_jacobian(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *Jx, pendulum_kane_real *Jr);
+
+/* One classic RK4 step of size h without projection (x updated; unchanged on failure) and its exact derivatives by the variational equations: Fx = dx1_ind/dx_ind (NS x NS) with the dependent entries of x following the constraints to first order, Fr = dx1_ind/dr (NS x NR). */
+int pendulum_kane_step_sensitivity(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *x, pendulum_kane_real *Fx, pendulum_kane_real *Fr);
+
 /* The outputs y(q, u, r, t), NY (the model's outputs={...}); NY == 0: nothing written. */
 int pendulum_kane_eval_outputs(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *y);
 

@@ -261,6 +261,46 @@ int pendulum_kane_eval_auxiliary_forces(pendulum_kane_real t, const pendulum_kan
     return PENDULUM_KANE_OK;
 }
 
+int pendulum_kane_jacobian(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *Jx, pendulum_kane_real *Jr)
+{
+    PENDULUM_KANE_CHECK_REAL(t);
+    PENDULUM_KANE_CHECK_IN(x, 4);
+    if (!r) r = r_zero;
+    PENDULUM_KANE_CHECK_IN(r, 0);
+    if (!p) p = mdl::p_default<S>;
+    PENDULUM_KANE_CHECK_IN(p, 3);
+    PENDULUM_KANE_CHECK_OUT(Jx);
+    mdl::Mat<S, mdl::NX, mdl::NX> J;
+    mdl::Mat<S, mdl::NX, mdl::NR> Jrr;
+    const int st = mdl::jacobian<S>(t, In<mdl::NX, 1>(x), In<mdl::NR, 1>(r), In<mdl::NP, 1>(p),
+                                    J, Jrr);
+    if (st) return st;
+    store(Jx, J);
+    (void)Jr;
+    return PENDULUM_KANE_OK;
+}
+
+int pendulum_kane_step_sensitivity(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *x, pendulum_kane_real *Fx, pendulum_kane_real *Fr)
+{
+    PENDULUM_KANE_CHECK_REAL(t);
+    PENDULUM_KANE_CHECK_REAL(h);
+    if (!r) r = r_zero;
+    PENDULUM_KANE_CHECK_IN(r, 0);
+    if (!p) p = mdl::p_default<S>;
+    PENDULUM_KANE_CHECK_IN(p, 3);
+    PENDULUM_KANE_CHECK_IN(x, 4);
+    PENDULUM_KANE_CHECK_OUT(Fx);
+    mdl::State<S> xs = In<mdl::NX, 1>(x);
+    mdl::StateMatrix<S> F;
+    mdl::InputMatrix<S> G;
+    const int st = mdl::step_sensitivity<S>(t, h, In<mdl::NR, 1>(r), In<mdl::NP, 1>(p), xs, F, G);
+    if (st) return st;
+    store(x, xs);
+    store(Fx, F);
+    (void)Fr;
+    return PENDULUM_KANE_OK;
+}
+
 int pendulum_kane_eval_outputs(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *y)
 {
     PENDULUM_KANE_CHECK_REAL(t);

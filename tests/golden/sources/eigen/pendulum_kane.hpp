@@ -724,6 +724,23 @@ inline int linearize(const State<S> &x_op, const Inputs<S> &r_op, const Params<S
     return detail::RT<S>::linearize(x_op, r_op, p, t, A_lin, B_lin);
 }
 
+/* The full-state Jacobian of the right-hand side: d x'/dx, d x'/dr. */
+template <typename S>
+inline int jacobian(S t, const State<S> &x, const Inputs<S> &r, const Params<S> &p,
+                    Mat<S, NX, NX> &Jx, Mat<S, NX, NR> &Jr) noexcept
+{
+    return detail::RT<S>::jacobian(t, x, r, p, Jx, Jr);
+}
+
+/* One RK4 step without projection (x updated) and its exact derivatives on
+ * the independent state: Fx (NS x NS), Fr (NS x NR). */
+template <typename S>
+inline int step_sensitivity(S t, S h, const Inputs<S> &r, const Params<S> &p, State<S> &x,
+                            StateMatrix<S> &Fx, InputMatrix<S> &Fr) noexcept
+{
+    return detail::RT<S>::step_sensitivity(t, h, r, p, x, Fx, Fr);
+}
+
 /* linearize, and the outputs' C = dy/dx_ind (NY x NS), D = dy/dr (NY x NR). */
 template <typename S>
 inline int linearize_outputs(const State<S> &x_op, const Inputs<S> &r_op, const Params<S> &p,
