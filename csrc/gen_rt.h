@@ -502,9 +502,9 @@ int gen_rt_model_linearize_outputs(const gen_rt_model *m, const gen_rt_real *x_o
 /* the zero-order-hold discretization of the linearization over a step dt:
  * Ad = exp(A dt), Bd = int_0^dt exp(A s) ds B (gen_rt_c2d_zoh, gen_rt_expm.h) */
 #define GEN_RT_MODEL_LINEARIZE_DISCRETE_WORK(nq, nu, mc, mv, nr, ek, acc)       \
-    (GEN_RT_MODEL_LINEARIZE_WORK(nq, nu, mc, mv, nr, ek, acc) +                 \
-     GEN_RT_NS_(nq, nu, mc, mv) * (GEN_RT_NS_(nq, nu, mc, mv) + (nr)) + 1 +     \
-     GEN_RT_C2D_WORK(GEN_RT_NS_(nq, nu, mc, mv), nr))
+    (GEN_RT_NS_(nq, nu, mc, mv) * (GEN_RT_NS_(nq, nu, mc, mv) + (nr)) + 1 +     \
+     GEN_RT_MAX_(GEN_RT_MODEL_LINEARIZE_WORK(nq, nu, mc, mv, nr, ek, acc),      \
+                 GEN_RT_C2D_WORK(GEN_RT_NS_(nq, nu, mc, mv), nr)))
 #define GEN_RT_MODEL_LINEARIZE_DISCRETE_IWORK(nq, nu, mc, mv, nr, ek, acc)      \
     GEN_RT_MAX_(GEN_RT_MODEL_LINEARIZE_IWORK(nq, nu, mc, mv, nr, ek, acc),      \
                 GEN_RT_C2D_IWORK(GEN_RT_NS_(nq, nu, mc, mv), nr))

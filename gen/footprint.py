@@ -223,6 +223,9 @@ _RUNTIME_INDIRECT = {
     "gen_rt_model_consistent_state": ["constraint_jacobian", "velocity_constraint_matrix"],
     "gen_rt_model_linearize": ["mass_matrix", "forcing", "rhs_terms", "accel_terms", "lin_terms",
                                "mass_solve"],
+    # the user's controller callback (simulate_input): its stack is the
+    # user's own and not part of the model's report
+    "input_at": [],
     "gen_rt_model_jacobian": ["rhs_terms", "accel_terms", "mass_solve", "lin_terms"],
     "jacobian_at": ["lin_terms"],
     "gen_rt_model_step_sensitivity": ["rhs_terms", "accel_terms", "mass_solve", "lin_terms"],

@@ -5,8 +5,10 @@ stack), and the seed models run under qemu-arm against the host.
 
 Cross builds use the generated CMake project with arm-none-eabi.cmake and
 -Wall -Wextra -Werror -pedantic -Wdouble-promotion -Wvla -Wstack-usage=BOUND
-(BOUND 4096 bytes per function frame; 8192 for cart4 in double, whose
-linearize frame alone is 5.4 KB).
+(BOUND 4096 bytes per function frame; for cart4, 8192 in float and 12288
+in double: its linearize frame alone is 5.4 KB in double, and
+step_sensitivity, which keeps the stage Jacobians of the variational
+equations, 4.2 KB in float and 8.4 KB in double).
 """
 import re
 import subprocess
@@ -35,7 +37,9 @@ LIBC_OK = {"sinf", "cosf", "tanf", "sqrtf", "powf", "atan2f", "expf", "logf", "f
 
 
 def bound(key, real):
-    return 8192 if (key, real) == ("cart4", "double") else 4096
+    if key == "cart4":
+        return 12288 if real == "double" else 8192
+    return 4096
 
 
 @pytest.fixture(scope="module")

@@ -32,6 +32,7 @@ typedef P(real) real;
 #define MV PU(MV)
 #define NS PU(NS)
 #define NA PU(NA)
+#define NY PU(NY)
 #define ROWS 4
 #define STATUS_MIN PU(STATUS_MIN)
 
@@ -67,7 +68,9 @@ static void exercise(const real *x, const real *r, const real *p, real t, real h
     real dx[NX], lam[MV + 1], M[NU * NU], f[NU], qd[NQ], xc[NX], E[1];
     real A[NS * NS + 1], B[NS * NR + 1];
     real fc[MC + 1], Jc[MC * NQ + 1], fv[MV + 1], Av[MV * NU + 1], bv[MV + 1];
-    real Fa[NA + 1];
+    real Fa[NA + 1], y[NY + 1], Cm[NY * NS + 1], Dm[NY * NR + 1], Jx[NX * NX], Jr[NX * NR + 1];
+    real Fx[NS * NS + 1], Fr[NS * NR + 1], K[NR * NS + 1], rout[ROWS * (NR + 1)];
+    P(input) in;
     real tout[ROWS], xout[ROWS * NX], lout[ROWS * (MV + 1)];
     P(sim_options) o;
     P(sim_stats) s;
@@ -89,6 +92,23 @@ static void exercise(const real *x, const real *r, const real *p, real t, real h
     check("eval_velocity_constraint_matrix (b)", st, bv, MV);
 #endif
     check("eval_auxiliary_forces", P(eval_auxiliary_forces)(t, x, r, p, Fa), Fa, NA);
+    check("eval_outputs", P(eval_outputs)(t, x, r, p, y), y, NY);
+    st = P(linearize_outputs)(x, r, p, t, A, B, Cm, Dm);
+    check("linearize_outputs (A)", st, A, NS * NS);
+    check("linearize_outputs (C)", st, Cm, NY * NS);
+    check("linearize_outputs (D)", st, Dm, NY * NR);
+    st = P(linearize_discrete)(x, r, p, t, (real)fabs(h), A, B);
+    check("linearize_discrete (Ad)", st, A, NS * NS);
+    check("linearize_discrete (Bd)", st, B, NS * NR);
+    st = P(jacobian)(t, x, r, p, Jx, Jr);
+    check("jacobian (Jx)", st, Jx, NX * NX);
+    check("jacobian (Jr)", st, Jr, NX * NR);
+    memcpy(xc, x, sizeof xc);
+    st = P(step_sensitivity)(t, h, r, p, xc, Fx, Fr);
+    check("step_sensitivity (x)", st, xc, NX);
+    check("step_sensitivity (Fx)", st, Fx, NS * NS);
+    check("step_sensitivity (Fr)", st, Fr, NS * NR);
+    unchanged("step_sensitivity", st, x, xc);
 #if PU(HAS_ENERGY)
     check("eval_energy", P(eval_energy)(x, x + NQ, p, t, E), E, 1);
 #endif
@@ -118,6 +138,22 @@ static void exercise(const real *x, const real *r, const real *p, real t, real h
         if (s.n_out < 0 || s.n_out > ROWS) fail("simulate", "n_out out of range", s.n_out);
         if (!finite_all(xout, s.n_out * NX) || !finite_all(tout, s.n_out))
             fail("simulate", "non-finite rows reported as written", st);
+        /* the same with a feedback on every independent state (sampled at |h|
+         * when h < 0) */
+        {
+            int i;
+            memset(&in, 0, sizeof in);
+            for (i = 0; i < NR * NS; ++i) K[i] = (real)(i % 3) - 1;
+            in.r = r; in.K = K; in.x_op = x;
+            in.period = (h < 0) ? (real)fabs(h) : 0;
+            memset(&s, 0, sizeof s);
+            st = P(simulate_input)(x, t, t + 2 * fabs(h), fabs(h), &in, p, &o, ROWS, tout, xout,
+                                   lout, rout, &s);
+            check("simulate_input", st, NULL, 0);
+            if (s.n_out < 0 || s.n_out > ROWS) fail("simulate_input", "n_out out of range", s.n_out);
+            if (!finite_all(xout, s.n_out * NX) || !finite_all(rout, s.n_out * NR))
+                fail("simulate_input", "non-finite rows reported as written", st);
+        }
     }
 }
 
@@ -141,6 +177,8 @@ static void null_checks(void)
         fail("eval_auxiliary_forces", "NULL x accepted", 0);
     if (NA > 0 && P(eval_auxiliary_forces)(0, x, r, NULL, NULL) != -1)
         fail("eval_auxiliary_forces", "NULL F accepted", 0);
+    if (P(simulate_input)(x, 0, 1, (real)0.1, NULL, NULL, NULL, 4, dx, dx, NULL, NULL, NULL) != -1)
+        fail("simulate_input", "NULL input accepted", 0);
     if (P(status_message)(-3) == NULL || P(status_message)(12345) == NULL)
         fail("status_message", "NULL message", 0);
 }
