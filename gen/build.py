@@ -302,13 +302,28 @@ def build(rendered: Rendered, verbose=False, timings=None):
             # the model and the runtime as objects, compiled in parallel (the
             # runtime's objects are shared by every model with the same runtime
             # sources, scalar type and flags); cffi then compiles its wrapper
+            ffi.set_source(modname, wrapper, include_dirs=[str(src)],
+                           extra_compile_args=list(C_FLAGS), libraries=["m"])
+            # cffi's wrapper is compiled with the model and the runtime, all in
+            # parallel, then linked here (cffi's own compile would come after)
+            wrap = None
+            if _can_link_directly():
+                try:
+                    import contextlib
+                    import io
+                    wrap = tmp / f"{modname}.c"
+                    with contextlib.redirect_stdout(io.StringIO()):   # cffi says "generating"
+                        ffi.emit_c_code(str(wrap))
+                except OSError as e:
+                    raise _cache_error(e, root, "write the sources") from None
             try:
-                objects = _c_objects(name, src, tmp)
+                objects = _c_objects(name, src, tmp, wrap)
             except OSError as e:
                 raise _cache_error(e, root, "compile") from None
-            ffi.set_source(modname, wrapper, extra_objects=[str(o) for o in objects],
-                           include_dirs=[str(src)], extra_compile_args=list(C_FLAGS),
-                           libraries=["m"])
+            if wrap is None:
+                ffi.set_source(modname, wrapper, extra_objects=[str(o) for o in objects],
+                               include_dirs=[str(src)], extra_compile_args=list(C_FLAGS),
+                               libraries=["m"])
         else:
             # all C++: the extern "C" layer over the typed API, and cffi's wrapper
             own = [s.format(name=name) for s in EIGEN_SOURCES]
@@ -323,7 +338,10 @@ def build(rendered: Rendered, verbose=False, timings=None):
         except OSError as e:
             raise _cache_error(e, root, "compile") from None
         try:
-            so_path = ffi.compile(tmpdir=str(bdir), verbose=verbose)
+            if backend == "c" and wrap is not None:
+                so_path = _link_module(modname, objects, bdir)
+            else:
+                so_path = ffi.compile(tmpdir=str(bdir), verbose=verbose)
         except Exception as e:
             if isinstance(e, OSError) and e.errno in _CACHE_ERRNOS:
                 raise _cache_error(e, root, "compile") from None
@@ -358,8 +376,8 @@ def build(rendered: Rendered, verbose=False, timings=None):
     return Built(so, modname, iface)
 
 
-def _cc_object(cc, src: Path, obj: Path, include: Path):
-    cmd = [cc, *C_FLAGS, "-fPIC", "-I", str(include), "-c", str(src), "-o", str(obj)]
+def _cc_object(cc, src: Path, obj: Path, include: Path, extra=()):
+    cmd = [cc, *C_FLAGS, "-fPIC", "-I", str(include), *extra, "-c", str(src), "-o", str(obj)]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
         raise BuildError(f"compiling {src.name} failed",
@@ -388,21 +406,51 @@ def _runtime_objects(src: Path, cc: str):
     return None, folder
 
 
-def _c_objects(name, src: Path, tmp: Path):
-    """Compile the model's C file and (unless cached) the runtime, two at a
-    time; return the object files to link."""
+def _can_link_directly():
+    """Link the extension with the C compiler here (Linux, macOS): the
+    wrapper then compiles in parallel with the model."""
+    import sysconfig
+    return ((sys.platform.startswith("linux") or sys.platform == "darwin")
+            and bool(sysconfig.get_config_var("EXT_SUFFIX")))
+
+
+def _link_module(modname, objects, bdir: Path):
+    """cc -shared: the extension module from its objects."""
+    import sysconfig
+    cc = _compiler()
+    out = bdir / (modname + sysconfig.get_config_var("EXT_SUFFIX"))
+    cmd = [cc, "-shared", *[str(o) for o in objects], "-lm", "-o", str(out)]
+    if sys.platform == "darwin":
+        cmd[2:2] = ["-undefined", "dynamic_lookup"]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise BuildError(f"linking {out.name} failed",
+                         "$ " + " ".join(cmd) + "\n" + proc.stdout + proc.stderr)
+    return str(out)
+
+
+def _c_objects(name, src: Path, tmp: Path, wrap: Path | None = None):
+    """Compile the model's C file, cffi's wrapper (when given) and (unless
+    cached) the runtime, two at a time; return the object files to link."""
     from concurrent.futures import ThreadPoolExecutor
     cc = _compiler()
     objdir = tmp / "obj"
     objdir.mkdir()
     runtime, rt_folder = _runtime_objects(src, cc)
-    jobs = [(src / f"{name}.c", objdir / f"{name}.o")]
+    jobs = [(src / f"{name}.c", objdir / f"{name}.o", ())]
+    if wrap is not None:
+        import sysconfig
+        paths = sysconfig.get_paths()
+        py = sorted({paths["include"], paths["platinclude"]})
+        jobs.append((wrap, objdir / (wrap.stem + ".o"),
+                     tuple(a for d in py for a in ("-I", d))))
+    own = len(jobs)
     if runtime is None:
         rt_tmp = tmp / "runtime"
         rt_tmp.mkdir()
-        jobs += [(src / s, rt_tmp / (Path(s).stem + ".o")) for s in RUNTIME_SOURCES]
+        jobs += [(src / s, rt_tmp / (Path(s).stem + ".o"), ()) for s in RUNTIME_SOURCES]
     with ThreadPoolExecutor(max_workers=max(1, min(len(jobs), os.cpu_count() or 1))) as ex:
-        futures = [ex.submit(_cc_object, cc, s, o, src) for s, o in jobs]
+        futures = [ex.submit(_cc_object, cc, s, o, src, e) for s, o, e in jobs]
         try:
             results = [f.result() for f in futures]
         except BuildError:
@@ -414,12 +462,12 @@ def _c_objects(name, src: Path, tmp: Path):
         rt_folder.parent.mkdir(parents=True, exist_ok=True)
         try:
             os.rename(rt_tmp, rt_folder)
-            runtime = [rt_folder / Path(o).name for o in results[1:]]
+            runtime = [rt_folder / Path(o).name for o in results[own:]]
         except OSError:
-            runtime = results[1:]
+            runtime = results[own:]
             if all((rt_folder / Path(o).name).is_file() for o in runtime):
                 runtime = [rt_folder / Path(o).name for o in runtime]
-    return [results[0], *runtime]
+    return [*results[:own], *runtime]
 
 
 def _find_module(folder: Path, modname: str):

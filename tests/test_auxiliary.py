@@ -136,7 +136,7 @@ def random_states(n, nx, seed):
 
 
 # ------------------------------------------------------------------- tests
-@pytest.mark.parametrize("normal", [False, True])
+@pytest.mark.parametrize("normal", [False, pytest.param(True, marks=pytest.mark.slow)])
 def test_rolling_disc_matches_sympy_auxiliary_eqs(normal):
     km, consts, reactions = rolling_disc(normal)
     model = gen.Model.from_kanes(km, constants=consts, name="disc_aux")
@@ -442,6 +442,7 @@ def constrained_rolling_disc():
     return km, {m: 1.2, r: 0.3, g: 9.81}, [fN], T
 
 
+@pytest.mark.slow
 def test_constrained_model_matches_sympy_auxiliary_eqs():
     km, consts, reactions, T = constrained_rolling_disc()
     model = gen.Model.from_kanes(km, constants=consts, inputs=[T], name="cdisc")
@@ -478,6 +479,7 @@ def test_standalone_csv_has_one_column_per_reaction(tmp_path):
     assert np.max(np.abs(data[:, 4])) < 1e-12 * np.max(np.abs(radial))
 
 
+@pytest.mark.slow
 def test_verify_checks_the_auxiliary_forces():
     km, consts, _ = rolling_disc(normal=True)
     report = gen.verify(gen.Model.from_kanes(km, constants=consts, name="disc_aux"), samples=5,

@@ -485,7 +485,11 @@ MODELS = {
 }
 SLOW = {"jm_chaos_pendulum", "doc_multidof_joints", "jm_four_bar_open", "jm_two_dof",
         "sys_point_mass_kane_subclass", "sys_point_mass_lagrange_subclass",
-        "system_point_mass_kane_explicit", "jm_four_bar_manual_constraints"}
+        "system_point_mass_kane_explicit", "jm_four_bar_manual_constraints",
+        # the fast tier keeps one model of each kind (System with Kane and with
+        # Lagrange, constrained, JointsMethod, PyDy, auxiliary speeds, docs)
+        "system_point_mass_lagrange", "sys_cart_pend_lagrange", "jm_rigid_body_particle",
+        "jm_simple_pendulum_lagrange", "doc_multidof_system", "sys_cart_pend_kanes"}
 
 
 # ------------------------------------------------------------ reference

@@ -102,6 +102,7 @@ def test_linearization_at_hover_matches(sims):
         assert np.max(np.abs(B - B0)) <= 1e-12 * np.max(np.abs(B0)), k
 
 
+@pytest.mark.slow
 def test_flight_keeps_the_constraint_and_agrees(sims):
     x0 = sims["euler"].consistent_state(np.array([0.3, -0.2, 0.1, 0, 0, 1, 0.5, -0.3, 0.2,
                                                   0.0, 0.2, 0.0]))
@@ -114,6 +115,7 @@ def test_flight_keeps_the_constraint_and_agrees(sims):
         assert np.max(np.abs(fv)) < 1e-10
 
 
+@pytest.mark.slow
 def test_verify_against_sympy_and_the_symbolic_linearization(sims):
     report = gen.verify(skate("sympy", False, name="skate_implicit"), samples=5,
                         linearize_samples=2, sim=sims["sympy_implicit"])
