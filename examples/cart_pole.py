@@ -4,7 +4,12 @@ and half-length l hinged at the cart, theta measured from the upward
 vertical. Upright (x = 0, theta = 0) is an unstable equilibrium.
 
     python examples/cart_pole.py            # LQR at upright, closed loops in C
-    python examples/cart_pole.py --plot docs/cart_pole.png
+    python examples/cart_pole.py --plot docs/cart_pole.png --gain-csv K.csv
+
+The same loop in the standalone binary, without Python:
+
+    eomgen build examples/cart_pole.py -o out/cart_pole     # prints the binary's path
+    <binary> --t-end 5 --dt 1e-3 --x0 theta=0.3 --gain K.csv --period 1e-3
 
 The script linearizes the model at upright, designs an LQR with
 scipy.linalg.solve_continuous_are from eomgen's A, B, and closes the loop
@@ -77,6 +82,7 @@ R_LQR = np.array([[1.0]])
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--plot", help="write a figure of the closed loops (needs matplotlib)")
+    ap.add_argument("--gain-csv", help="write K for the binary's --gain")
     a = ap.parse_args(argv)
     sim = gen.compile(model())
     A, B = sim.linearize(np.zeros(4))
@@ -84,6 +90,11 @@ def main(argv=None):
     print("states", sim.state_names, "input", sim.input_names)
     print("A =\n", A, "\nB =\n", B)
     print("LQR gain K =", K)
+    if a.gain_csv:
+        with open(a.gain_csv, "w") as fh:
+            fh.write("# LQR gain: F by [x, theta, v, omega]\n")
+            fh.write(",".join(f"{v:.17g}" for v in K[0]) + "\n")
+        print("wrote", a.gain_csv)
     x0 = np.array([0.0, 0.3, 0.0, 0.0])
     runs = {
         "LinearFeedback, continuous": dict(controller=gen.LinearFeedback(K)),
