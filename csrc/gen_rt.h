@@ -293,7 +293,12 @@ typedef struct {
     long max_steps;
     gen_rt_real proj_tol;
     int proj_max_iter;
+    /* bounded output of simulate: keep every every-th output row (and the
+     * last), or only the last row (final_only); every <= 1 keeps them all */
+    int every, final_only;
 } gen_rt_sim_options;
+/* the rows simulate keeps of the rows of simulate_rows (a negative status as is) */
+int gen_rt_simulate_rows_kept(int rows, int every, int final_only);
 
 typedef struct {
     long n_accepted, n_rejected, n_rhs;

@@ -606,6 +606,14 @@ int gen_rt_simulate_rows(gen_rt_real t0, gen_rt_real t_end, gen_rt_real dt)
     return (int)(n + 1);
 }
 
+int gen_rt_simulate_rows_kept(int rows, int every, int final_only)
+{
+    if (rows <= 0) return rows;
+    if (final_only) return 1;
+    if (every <= 1) return rows;
+    return (rows - 1) / every + 1 + ((rows - 1) % every != 0);
+}
+
 /* simulate and simulate_input: in == NULL for a constant r */
 static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,
                      gen_rt_real t_end, gen_rt_real dt, const gen_rt_real *r,
@@ -621,13 +629,16 @@ static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t
     gen_rt_real *rb = w + GEN_RT_MODEL_ADVANCE_WORK(m->nq, m->nu, m->mc, mv, nr,
                                                     m->explicit_kinematics, m->accel);
     model_ctx c;
+    gen_rt_real t_prev = t0;
     s->n_accepted = 0; s->n_rejected = 0; s->n_rhs = 0;
     s->n_out = 0; s->t_last = t0; s->h_next = 0;
     copy_n(nx, x0, x);
     copy_n(nx, x0, s->x_last);
     rows = gen_rt_simulate_rows(t0, t_end, dt);
     if (rows < 0) return rows;
-    if (capacity < rows) return GEN_RT_ERR_OUTPUT_FULL;
+    if (o->every < 0 || o->final_only < 0) return GEN_RT_ERR_BAD_ARG;
+    if (capacity < gen_rt_simulate_rows_kept(rows, o->every, o->final_only))
+        return GEN_RT_ERR_OUTPUT_FULL;
     c.m = m; c.p = p;
     c.proj_tol = o->proj_tol; c.proj_max_iter = o->proj_max_iter;
     c.work = w + nint; c.iwork = iwork;
@@ -643,7 +654,7 @@ static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t
         gen_rt_real tk = (k == rows - 1) ? t_end : t0 + (gen_rt_real)k * dt;
         const gen_rt_real *rk = r;
         if (k > 0) {
-            st = advance_input_(&c, t_out[k - 1], tk, o, w, s, x);
+            st = advance_input_(&c, t_prev, tk, o, w, s, x);
             if (st) return st;
         }
         if (in) {
@@ -671,13 +682,18 @@ static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t
             copy_n(nx, x, s->x_last);
             return st;
         }
-        t_out[k] = tk;
-        copy_n(nx, x, x_out + (long)k * nx);
-        if (lam_out)
-            for (i = 0; i < mv; ++i) lam_out[(long)k * ldl + i] = lam[i];
-        if (r_out)
-            for (i = 0; i < nr; ++i) r_out[(long)k * nr + i] = rk ? rk[i] : 0;
-        s->n_out = k + 1;
+        if (o->final_only ? k == rows - 1
+                          : (o->every <= 1 || k % o->every == 0 || k == rows - 1)) {
+            long j = s->n_out;
+            t_out[j] = tk;
+            copy_n(nx, x, x_out + j * nx);
+            if (lam_out)
+                for (i = 0; i < mv; ++i) lam_out[j * ldl + i] = lam[i];
+            if (r_out)
+                for (i = 0; i < nr; ++i) r_out[j * nr + i] = rk ? rk[i] : 0;
+            s->n_out = (int)j + 1;
+        }
+        t_prev = tk;
     }
     return GEN_RT_OK;
 }

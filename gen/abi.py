@@ -108,6 +108,8 @@ STRUCTS = (
         Field("max_steps", "long", "dopri5 step budget per output interval", 100000),
         Field("proj_tol", "real", "projection: relative tolerance on the correction", "eps16"),
         Field("proj_max_iter", "int", "projection: Newton iterations", 10),
+        Field("every", "int", "simulate: keep every k-th output row and the last (<= 1: all)", 1),
+        Field("final_only", "int", "simulate: 1 keeps only the row at t_end", 0),
     )),
     Struct("input", "Input", "Inputs during a simulation (simulate_input): a constant or a "
            "table, a linear feedback on the independent state, a controller callback; "

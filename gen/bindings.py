@@ -321,7 +321,8 @@ class Simulator:
     def simulate(self, x0, t_end, dt, method="rk4", rtol=1e-8, atol=1e-10, r=None, p=None,
                  project=True, t0=0.0, max_steps=100000, return_multipliers=False,
                  return_stats=False, controller=None, input_period=None, input_hold="zoh",
-                 return_inputs=False, return_outputs=False):
+                 return_inputs=False, return_outputs=False, every=1, final_only=False,
+                 max_rows=None):
         """Simulate from x0 to t_end. dt is the RK4 step, or the output
         interval of the adaptive DOPRI5. Returns (t, X) with one row per
         output time, then, when asked, the multipliers, the inputs in effect
@@ -332,7 +333,12 @@ class Simulator:
         interpolated inside C (input_hold "zoh" or "linear"); or a callable
         r(t, x) sampled every input_period (default dt; 0: every stage).
         controller: a gen.LinearFeedback, computed inside C (README,
-        "Closed loops")."""
+        "Closed loops").
+
+        Bounded output (the integration is the same; only rows are dropped,
+        in C): every=k keeps every k-th output row and the last one,
+        final_only=True only the row at t_end; max_rows refuses (ValueError)
+        a run that would return more rows."""
         from .control import plan_inputs
         if method not in METHODS:
             raise ValueError(f"method must be one of {sorted(METHODS)}, got {method!r}")
@@ -347,6 +353,15 @@ class Simulator:
         rows = self._fn("simulate_rows")(t0, t_end, dt)
         if rows < 0:
             self._check(rows, "simulate_rows")
+        every = int(every)
+        if every < 1:
+            raise ValueError(f"every must be an integer >= 1, got {every!r}")
+        full = rows
+        rows = 1 if final_only else (rows - 1) // every + 1 + ((rows - 1) % every != 0)
+        if max_rows is not None and rows > max_rows:
+            raise ValueError(f"this run would return {rows} rows ({full} output times, every="
+                             f"{every}), more than max_rows={max_rows}: use a larger dt or "
+                             "every=, or final_only=True")
         opts = self._ffi.new(f"{self._p}_sim_options *")
         self._fn("sim_options_default")(opts)
         opts.method = METHODS[method]
@@ -354,6 +369,8 @@ class Simulator:
         opts.rtol = rtol
         opts.atol = atol
         opts.max_steps = int(max_steps)
+        opts.every = every
+        opts.final_only = 1 if final_only else 0
         stats = self._ffi.new(f"{self._p}_sim_stats *")
         t = np.empty(rows, dtype=self.dtype)
         X = np.empty((rows, self.nx), dtype=self.dtype)

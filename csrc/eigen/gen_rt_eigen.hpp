@@ -909,6 +909,20 @@ struct Runtime {
         return OK;
     }
 
+    /* the rows simulate keeps of `rows` (gen_rt_simulate_rows_kept) */
+    static int rows_kept(int rows, int every, int final_only) noexcept
+    {
+        if (rows <= 0) return rows;
+        if (final_only) return 1;
+        if (every <= 1) return rows;
+        return (rows - 1) / every + 1 + ((rows - 1) % every != 0);
+    }
+
+    static bool keep_row(int k, int rows, int every, int final_only) noexcept
+    {
+        return final_only ? k == rows - 1 : (every <= 1 || k % every == 0 || k == rows - 1);
+    }
+
     static int simulate_rows(S t0, S t_end, S dt) noexcept
     {
         if (!(dt > 0) || !(t_end >= t0) || !finite(t0) || !finite(t_end)) return ERR_BAD_ARG;
@@ -934,15 +948,17 @@ struct Runtime {
         stats.x_last = x0;
         const int rows = simulate_rows(t0, t_end, dt);
         if (rows < 0) return rows;
-        if (capacity < rows) return ERR_OUTPUT_FULL;
+        if (opts.every < 0 || opts.final_only < 0) return ERR_BAD_ARG;
+        if (capacity < rows_kept(rows, opts.every, opts.final_only)) return ERR_OUTPUT_FULL;
         if (opts.project) {
             st = project_unchecked(t0, p, opts.proj_tol, opts.proj_max_iter, x);
             if (st) return st;
         }
+        S t_prev = t0;
         for (int k = 0; k < rows; ++k) {
             const S tk = (k == rows - 1) ? t_end : t0 + static_cast<S>(k) * dt;
             if (k > 0) {
-                st = advance(t_out[k - 1], tk, r, p, opts, stats, x);
+                st = advance(t_prev, tk, r, p, opts, stats, x);
                 if (st) return st;
             }
             st = rhs_unchecked(tk, x, r, p, dx, &lam);
@@ -951,11 +967,15 @@ struct Runtime {
                 stats.x_last = x;
                 return st;
             }
-            t_out[k] = tk;
-            for (int i = 0; i < NX; ++i) x_out[k * NX + i] = x[i];
-            if (lam_out)
-                for (int i = 0; i < MV; ++i) lam_out[k * LAM_STRIDE + i] = lam[i];
-            stats.n_out = k + 1;
+            if (keep_row(k, rows, opts.every, opts.final_only)) {
+                const long j = stats.n_out;
+                t_out[j] = tk;
+                for (int i = 0; i < NX; ++i) x_out[j * NX + i] = x[i];
+                if (lam_out)
+                    for (int i = 0; i < MV; ++i) lam_out[j * LAM_STRIDE + i] = lam[i];
+                stats.n_out = static_cast<int>(j) + 1;
+            }
+            t_prev = tk;
         }
         return OK;
     }
@@ -1291,15 +1311,17 @@ struct Runtime {
         Multipliers lam;
         const int rows = simulate_rows(t0, t_end, dt);
         if (rows < 0) return rows;
-        if (capacity < rows) return ERR_OUTPUT_FULL;
+        if (opts.every < 0 || opts.final_only < 0) return ERR_BAD_ARG;
+        if (capacity < rows_kept(rows, opts.every, opts.final_only)) return ERR_OUTPUT_FULL;
         if (opts.project) {
             st = project_unchecked(t0, p, opts.proj_tol, opts.proj_max_iter, x);
             if (st) return st;
         }
+        S t_prev = t0;
         for (int k = 0; k < rows; ++k) {
             const S tk = (k == rows - 1) ? t_end : t0 + static_cast<S>(k) * dt;
             if (k > 0) {
-                S t = t_out[k - 1];
+                S t = t_prev;
                 while (t < tk) {
                     const S tb = next_break(t, tk);
                     if (is_sample(t) && !(has_sample && t_sampled == t)) {
@@ -1337,13 +1359,17 @@ struct Runtime {
                 stats.x_last = x;
                 return st;
             }
-            t_out[k] = tk;
-            for (int i = 0; i < NX; ++i) x_out[k * NX + i] = x[i];
-            if (lam_out)
-                for (int i = 0; i < MV; ++i) lam_out[k * LAM_STRIDE + i] = lam[i];
-            if (r_out)
-                for (int i = 0; i < NR; ++i) r_out[k * NR + i] = (*rk)[i];
-            stats.n_out = k + 1;
+            if (keep_row(k, rows, opts.every, opts.final_only)) {
+                const long j = stats.n_out;
+                t_out[j] = tk;
+                for (int i = 0; i < NX; ++i) x_out[j * NX + i] = x[i];
+                if (lam_out)
+                    for (int i = 0; i < MV; ++i) lam_out[j * LAM_STRIDE + i] = lam[i];
+                if (r_out)
+                    for (int i = 0; i < NR; ++i) r_out[j * NR + i] = (*rk)[i];
+                stats.n_out = static_cast<int>(j) + 1;
+            }
+            t_prev = tk;
         }
         return OK;
     }

@@ -314,6 +314,7 @@ static void pendulum_tests(int accel)
         o.method = GEN_RT_METHOD_RK4; o.project = 1; o.rtol = GEN_RT_C(1e-8);
         o.atol = GEN_RT_C(1e-10); o.h_init = 0; o.h_min = 0; o.h_max = 0;
         o.max_steps = 100000L; o.proj_tol = 0; o.proj_max_iter = 10;
+        o.every = 1; o.final_only = 0;
         s.x_last = last;
         x[0] = (gen_rt_real)(PL * cos(1.0)); x[1] = (gen_rt_real)(PL * sin(1.0));
         x[2] = 0; x[3] = 0;
@@ -386,6 +387,7 @@ static void oscillator_tests(int accel)
         o.method = GEN_RT_METHOD_DOPRI5; o.project = 1; o.rtol = GEN_RT_C(1e-10);
         o.atol = GEN_RT_C(1e-12); o.h_init = 0; o.h_min = 0; o.h_max = 0;
         o.max_steps = 100000L; o.proj_tol = 0; o.proj_max_iter = 10;
+        o.every = 1; o.final_only = 0;
         s.n_accepted = 0; s.n_rejected = 0; s.n_rhs = 0; s.n_out = 0; s.t_last = 0;
         s.h_next = 0; s.x_last = last;
         x[0] = 1; x[1] = 0;
@@ -499,6 +501,7 @@ static void controller_tests(int accel)
     x0[0] = 1; x0[1] = 0;
     o.method = GEN_RT_METHOD_RK4; o.project = 0; o.rtol = GEN_RT_C(1e-8); o.atol = GEN_RT_C(1e-10);
     o.h_init = 0; o.h_min = 0; o.h_max = 0; o.max_steps = 1000; o.proj_tol = 0; o.proj_max_iter = 0;
+    o.every = 1; o.final_only = 0;
     s.x_last = x;
     memset(&in, 0, sizeof in);
     d.c = (gen_rt_real)c; d.calls = 0;

@@ -41,6 +41,7 @@ struct Options {
     long max_steps = 100000;
     S proj_tol = 16 * gen_rt::Tolerances<S>::eps;
     int proj_max_iter = 10;
+    int every = 1, final_only = 0;
 };
 
 template <class S, int NX>

@@ -43,6 +43,8 @@ static void usage(FILE *out)
         "                     of NS comma-separated numbers (on the independent state)\n"
         "  --x-op NAME=V      operating state of the gain (repeatable), or V1,V2,...\n"
         "  --period TS        sample the feedback every TS and hold it (default: continuous)\n"
+        "  --every K          write every K-th output row and the last\n"
+        "  --final-only       write only the row at --t-end\n"
         "  --no-consistent    do not solve the dependent states from the independent ones\n"
         "  --no-project       do not project onto the constraints after each step\n"
         "  --output FILE      write the CSV to FILE\n"
@@ -164,7 +166,8 @@ int main(int argc, char **argv)
                     strcmp(a, "--param") == 0 || strcmp(a, "--input") == 0 ||
                     strcmp(a, "--output") == 0 || strcmp(a, "--input-csv") == 0 ||
                     strcmp(a, "--hold") == 0 || strcmp(a, "--gain") == 0 ||
-                    strcmp(a, "--x-op") == 0 || strcmp(a, "--period") == 0;
+                    strcmp(a, "--x-op") == 0 || strcmp(a, "--period") == 0 ||
+                    strcmp(a, "--every") == 0;
         if (needs && !v) return fail_usage("missing value after", a);
         if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) { usage(stdout); return 0; }
         else if (strcmp(a, "--t-end") == 0) { if (parse_real(v, &t_end)) return fail_usage("--t-end needs a number", v); ++i; }
@@ -216,7 +219,15 @@ int main(int argc, char **argv)
                 return st;
             }
             ++i;
-        } else if (strcmp(a, "--output") == 0) { output = v; ++i; }
+        } else if (strcmp(a, "--every") == 0) {
+            char *end = NULL;
+            long kk = strtol(v, &end, 10);
+            if (end == v || *end != '\0' || kk < 1 || kk > 1000000000L)
+                return fail_usage("--every needs a positive integer", v);
+            opts.every = (int)kk;
+            ++i;
+        } else if (strcmp(a, "--final-only") == 0) { opts.final_only = 1; }
+        else if (strcmp(a, "--output") == 0) { output = v; ++i; }
         else if (strcmp(a, "--no-consistent") == 0) consistent = 0;
         else if (strcmp(a, "--no-project") == 0) opts.project = 0;
         else if (strcmp(a, "--linearize") == 0) linearize = 1;
@@ -296,7 +307,7 @@ int main(int argc, char **argv)
                 failed = 1;
             }
         }
-        written = failed ? stats.n_out : rows;
+        written = stats.n_out;
         for (k = 0; k < written; ++k) {
             pendulum_kane_real t = t_out[k], *xk = x_out + (long)k * NX, *rk = r_out + (long)k * 1;
             pendulum_kane_real fc[1];

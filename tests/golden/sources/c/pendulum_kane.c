@@ -525,6 +525,8 @@ void pendulum_kane_sim_options_default(pendulum_kane_sim_options *opts)
     opts->max_steps = 100000L;
     opts->proj_tol = 16 * GEN_RT_EPS;
     opts->proj_max_iter = 10;
+    opts->every = 1;
+    opts->final_only = 0;
 }
 
 int pendulum_kane_step_rk4(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, int project, pendulum_kane_real *x)
@@ -568,6 +570,8 @@ int pendulum_kane_advance(pendulum_kane_real t0, pendulum_kane_real t1, const pe
     opts_rt.max_steps = opts->max_steps;
     opts_rt.proj_tol = opts->proj_tol;
     opts_rt.proj_max_iter = opts->proj_max_iter;
+    opts_rt.every = opts->every;
+    opts_rt.final_only = opts->final_only;
     stats_rt.n_accepted = stats->n_accepted;
     stats_rt.n_rejected = stats->n_rejected;
     stats_rt.n_rhs = stats->n_rhs;
@@ -618,6 +622,8 @@ int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, 
     opts_rt.max_steps = opts->max_steps;
     opts_rt.proj_tol = opts->proj_tol;
     opts_rt.proj_max_iter = opts->proj_max_iter;
+    opts_rt.every = opts->every;
+    opts_rt.final_only = opts->final_only;
     stats_rt.n_accepted = stats->n_accepted;
     stats_rt.n_rejected = stats->n_rejected;
     stats_rt.n_rhs = stats->n_rhs;
@@ -673,6 +679,8 @@ int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_rea
     opts_rt.max_steps = opts->max_steps;
     opts_rt.proj_tol = opts->proj_tol;
     opts_rt.proj_max_iter = opts->proj_max_iter;
+    opts_rt.every = opts->every;
+    opts_rt.final_only = opts->final_only;
     stats_rt.n_accepted = stats->n_accepted;
     stats_rt.n_rejected = stats->n_rejected;
     stats_rt.n_rhs = stats->n_rhs;

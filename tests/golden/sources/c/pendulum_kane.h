@@ -93,6 +93,8 @@ typedef struct {
     long max_steps; /* dopri5 step budget per output interval */
     pendulum_kane_real proj_tol; /* projection: relative tolerance on the correction */
     int proj_max_iter; /* projection: Newton iterations */
+    int every; /* simulate: keep every k-th output row and the last (<= 1: all) */
+    int final_only; /* simulate: 1 keeps only the row at t_end */
 } pendulum_kane_sim_options;
 
 /* Inputs during a simulation (simulate_input): a constant or a table, a linear feedback on the independent state, a controller callback; continuous or sampled. Zero-fill it (memset) and set what you use. */

@@ -52,6 +52,8 @@ mdl::SimOptions<S> options_from(const pendulum_kane_sim_options *o) noexcept
     t.max_steps = o->max_steps;
     t.proj_tol = o->proj_tol;
     t.proj_max_iter = o->proj_max_iter;
+    t.every = o->every;
+    t.final_only = o->final_only;
     return t;
 }
 
@@ -380,6 +382,8 @@ void pendulum_kane_sim_options_default(pendulum_kane_sim_options *opts)
     opts->max_steps = d.max_steps;
     opts->proj_tol = d.proj_tol;
     opts->proj_max_iter = d.proj_max_iter;
+    opts->every = d.every;
+    opts->final_only = d.final_only;
 }
 
 int pendulum_kane_step_rk4(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, int project, pendulum_kane_real *x)

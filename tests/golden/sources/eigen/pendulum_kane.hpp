@@ -131,6 +131,8 @@ struct SimOptions {
     long max_steps = 100000; // dopri5 step budget per output interval
     S proj_tol = 16 * Tolerances<S>::eps; // projection: relative tolerance on the correction
     int proj_max_iter = 10; // projection: Newton iterations
+    int every = 1; // simulate: keep every k-th output row and the last (<= 1: all)
+    int final_only = 0; // simulate: 1 keeps only the row at t_end
 };
 
 /* Input: the C API's pendulum_kane_input, typed (gen/abi.py). */

@@ -11,6 +11,8 @@ typedef struct {
     long max_steps;
     pendulum_kane_real proj_tol;
     int proj_max_iter;
+    int every;
+    int final_only;
 } pendulum_kane_sim_options;
 typedef struct {
     const pendulum_kane_real *r;
