@@ -481,18 +481,20 @@ class Simulator:
                                                 self._ptr(self._params(p)), t, dt,
                                                 self._ptr(A), self._ptr(B))
             self._check(st, "linearize_discrete", t, x)
-        else:
+        elif not outputs:
             st = self._fn("linearize")(self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
                                        t, self._ptr(A), self._ptr(B))
             self._check(st, "linearize", t, x)
         if outputs:
-            A2 = np.empty(self.ns * self.ns, dtype=self.dtype)
-            B2 = np.zeros(max(1, self.ns * self.nr), dtype=self.dtype)
+            # one C call gives A, B, C, D; with dt its continuous A, B are
+            # dropped (Ad, Bd came from linearize_discrete)
+            Ac = A if dt is None else np.empty_like(A)
+            Bc = B if dt is None else np.zeros_like(B)
             C = np.zeros(max(1, self.ny * self.ns), dtype=self.dtype)
             D = np.zeros(max(1, self.ny * self.nr), dtype=self.dtype)
             st = self._fn("linearize_outputs")(self._ptr(x), self._ptr(r),
-                                               self._ptr(self._params(p)), t, self._ptr(A2),
-                                               self._ptr(B2), self._ptr(C), self._ptr(D))
+                                               self._ptr(self._params(p)), t, self._ptr(Ac),
+                                               self._ptr(Bc), self._ptr(C), self._ptr(D))
             self._check(st, "linearize_outputs", t, x)
             return (A.reshape(self.ns, self.ns),
                     B[:self.ns * self.nr].reshape(self.ns, self.nr).copy(),

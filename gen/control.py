@@ -95,13 +95,13 @@ class InputPlan:
         self.struct = sim._ffi.new(f"{sim._p}_input *")
 
     def array(self, a):
-        a = np.ascontiguousarray(a, dtype=sim_dtype(self.sim))
+        a = np.ascontiguousarray(a, dtype=self.sim.dtype)
         self.keep.append(a)
         return self.sim._ffi.from_buffer(self.sim._arr_t, a)
 
     def callback(self, fn):
         sim, ffi = self.sim, self.sim._ffi
-        nx, nr, dtype = sim.nx, sim.nr, sim_dtype(sim)
+        nx, nr, dtype = sim.nx, sim.nr, sim.dtype
         size = np.dtype(dtype).itemsize
 
         def cb(ctx, t, x, r):
@@ -125,10 +125,6 @@ class InputPlan:
         handle = ffi.callback(f"{sim._p}_controller", cb)
         self.keep.append(handle)
         return handle
-
-
-def sim_dtype(sim):
-    return sim.dtype
 
 
 def plan_inputs(sim, r, controller, dt, method, input_period, input_hold):
