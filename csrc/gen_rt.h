@@ -154,6 +154,38 @@ int gen_rt_dopri5_integrate(gen_rt_rhs_fn f, gen_rt_post_fn post, void *ctx,
                             gen_rt_dopri5_stats *stats, gen_rt_real *t_reached,
                             gen_rt_real *x);
 
+/* The pieces of the adaptive simulation engine (gen_rt_simulate.c):
+ * gen_rt_err_norm is the scaled RMS norm of an error estimate d,
+ * sqrt(mean((d_i / (atol + rtol max(|x_i|, |xnew_i|)))^2)). */
+gen_rt_real gen_rt_err_norm(int nx, const gen_rt_real *x, const gen_rt_real *xnew,
+                            const gen_rt_real *d, gen_rt_real rtol, gen_rt_real atol);
+/* One DOPRI5 trial step of size h from (t, x): k (7 nx) holds f(t, x) in
+ * its first nx entries on entry and the seven stages on return (k7 =
+ * f(t + h, ynew)); y (nx) is scratch; *err the error norm. */
+int gen_rt_dopri5_trial(gen_rt_rhs_fn f, void *ctx, int nx, gen_rt_real t, gen_rt_real h,
+                        const gen_rt_real *x, gen_rt_real rtol, gen_rt_real atol,
+                        gen_rt_real *k, gen_rt_real *y, gen_rt_real *ynew, gen_rt_real *err);
+/* The continuous extension of order 4 of that step at t + theta h,
+ * theta in [0, 1] (exact at both ends). */
+void gen_rt_dopri5_dense(int nx, gen_rt_real h, gen_rt_real theta, const gen_rt_real *x,
+                         const gen_rt_real *ynew, const gen_rt_real *k, gen_rt_real *out);
+/* The cubic Hermite interpolant of a step (x0, f0 at t; x1, f1 at t + h)
+ * at t + theta h: the dense output of RK4 and RODAS4 steps. */
+void gen_rt_hermite(int nx, gen_rt_real h, gen_rt_real theta, const gen_rt_real *x0,
+                    const gen_rt_real *f0, const gen_rt_real *x1, const gen_rt_real *f1,
+                    gen_rt_real *out);
+/* One RODAS4 trial step (gen_rt_rodas4.h) from (t, x) with f0 = f(t, x),
+ * the Jacobian J = df/dx (nx x nx, row-major) and df/dt (NULL: the
+ * right-hand side does not depend on t): ynew and the error norm *err.
+ * GEN_RT_ERR_SINGULAR with *err = -1 when I/(h gamma) - J is (a smaller
+ * step may cure it; the model's own failures leave *err >= 0). work:
+ * GEN_RT_RODAS4_WORK(nx) reals; iwork: nx ints. Five evaluations of f. */
+#define GEN_RT_RODAS4_WORK(nx) ((nx) * (nx) + 7 * (nx))
+int gen_rt_rodas4_trial(gen_rt_rhs_fn f, void *ctx, int nx, gen_rt_real t, gen_rt_real h,
+                        const gen_rt_real *x, const gen_rt_real *f0, const gen_rt_real *J,
+                        const gen_rt_real *dfdt, gen_rt_real rtol, gen_rt_real atol,
+                        gen_rt_real *work, int *iwork, gen_rt_real *ynew, gen_rt_real *err);
+
 /* ---- constrained linearization (gen_rt_linearize.c) -------------------
  * Linearizes  Kqd q' + k(q,u) = 0,  M u' - f - A^T lam = 0 (R),
  * A u' + a = 0 (S),  f_c(q) = 0,  A u + b = 0  about an operating point,
@@ -284,6 +316,7 @@ typedef struct gen_rt_model {
 /* integration methods (gen_rt_sim_options.method) */
 #define GEN_RT_METHOD_RK4 0
 #define GEN_RT_METHOD_DOPRI5 1
+#define GEN_RT_METHOD_RODAS4 2
 
 /* the options and statistics of advance/simulate; the generated
  * <p>_sim_options and <p>_sim_stats carry the same fields (gen/abi.py) */
@@ -302,7 +335,10 @@ int gen_rt_simulate_rows_kept(int rows, int every, int final_only);
 
 typedef struct {
     long n_accepted, n_rejected, n_rhs;
+    long n_jac;                     /* Jacobian evaluations (RODAS4) */
     int n_out;
+    int n_events;                   /* events found (logged: the first capacity) */
+    int terminal;                   /* the terminal event that ended the run, -1: none */
     gen_rt_real t_last, h_next;
     gen_rt_real *x_last;            /* nx reals: the last good state */
 } gen_rt_sim_stats;
@@ -336,26 +372,44 @@ typedef struct {
 #define GEN_RT_MODEL_CB_WORK_(nq, nu, mc, mv, nr, ek, acc)                      \
     GEN_RT_MAX_(GEN_RT_MODEL_RHS_WORK(nq, nu, mc, mv, nr, ek, acc),             \
                 GEN_RT_MODEL_PROJECT_WORK(nq, nu, mc, mv, nr, ek, acc))
+/* the simulation engine's method scratch (gen_rt_simulate.c): RK4 and the
+ * end derivative, DOPRI5's stages, or RODAS4's f0, f1, df/dt, ynew, J, Jr,
+ * stages and the Jacobian's work */
+#define GEN_RT_ENGINE_WORK_(nq, nu, mc, mv, nr, ek, acc)                        \
+    GEN_RT_MAX_(GEN_RT_MAX_(GEN_RT_RK4_WORK(GEN_RT_NX_(nq, nu)) + GEN_RT_NX_(nq, nu), \
+                            GEN_RT_DOPRI5_WORK(GEN_RT_NX_(nq, nu))),            \
+                4 * GEN_RT_NX_(nq, nu) + GEN_RT_NX_(nq, nu) * ((nr) + GEN_RT_NX_(nq, nu)) + 1 + \
+                    GEN_RT_RODAS4_WORK(GEN_RT_NX_(nq, nu)) +                    \
+                    GEN_RT_MAX_(GEN_RT_MODEL_JACOBIAN_WORK(nq, nu, mc, mv, nr, ek, acc), \
+                                GEN_RT_NX_(nq, nu)))
+/* advance, and the core of simulate: four states, the method, callbacks */
+#define GEN_RT_MODEL_SIM_CORE_WORK_(nq, nu, mc, mv, nr, ek, acc)                \
+    (4 * GEN_RT_NX_(nq, nu) + GEN_RT_ENGINE_WORK_(nq, nu, mc, mv, nr, ek, acc) + \
+     GEN_RT_MODEL_CB_WORK_(nq, nu, mc, mv, nr, ek, acc))
 #define GEN_RT_MODEL_STEP_WORK(nq, nu, mc, mv, nr, ek, acc)                     \
     (GEN_RT_RK4_WORK(GEN_RT_NX_(nq, nu)) + GEN_RT_NX_(nq, nu) +                 \
      GEN_RT_MODEL_CB_WORK_(nq, nu, mc, mv, nr, ek, acc))
 #define GEN_RT_MODEL_STEP_IWORK(nq, nu, mc, mv, nr, ek, acc)                    \
     GEN_RT_MODEL_RHS_IWORK(nq, nu, mc, mv, nr, ek, acc)
 #define GEN_RT_MODEL_ADVANCE_WORK(nq, nu, mc, mv, nr, ek, acc)                  \
-    (GEN_RT_MAX_(GEN_RT_RK4_WORK(GEN_RT_NX_(nq, nu)) + GEN_RT_NX_(nq, nu),       \
-                 GEN_RT_DOPRI5_WORK(GEN_RT_NX_(nq, nu))) +                      \
-     GEN_RT_MODEL_CB_WORK_(nq, nu, mc, mv, nr, ek, acc))
+    GEN_RT_MODEL_SIM_CORE_WORK_(nq, nu, mc, mv, nr, ek, acc)
+/* the right-hand side's, and RODAS4's pivots */
 #define GEN_RT_MODEL_ADVANCE_IWORK(nq, nu, mc, mv, nr, ek, acc)                 \
-    GEN_RT_MODEL_RHS_IWORK(nq, nu, mc, mv, nr, ek, acc)
+    (GEN_RT_MODEL_RHS_IWORK(nq, nu, mc, mv, nr, ek, acc) + GEN_RT_NX_(nq, nu) + 1)
 #define GEN_RT_MODEL_SIMULATE_WORK(nq, nu, mc, mv, nr, ek, acc)                 \
     (2 * GEN_RT_NX_(nq, nu) + (mv) + 1 +                                        \
-     GEN_RT_MODEL_ADVANCE_WORK(nq, nu, mc, mv, nr, ek, acc))
+     GEN_RT_MODEL_SIM_CORE_WORK_(nq, nu, mc, mv, nr, ek, acc))
 #define GEN_RT_MODEL_SIMULATE_IWORK(nq, nu, mc, mv, nr, ek, acc)                \
-    GEN_RT_MODEL_RHS_IWORK(nq, nu, mc, mv, nr, ek, acc)
+    GEN_RT_MODEL_ADVANCE_IWORK(nq, nu, mc, mv, nr, ek, acc)
 /* simulate_input: simulate's, plus the inputs held and evaluated */
 #define GEN_RT_MODEL_SIMULATE_INPUT_WORK(nq, nu, mc, mv, nr, ek, acc)           \
     (GEN_RT_MODEL_SIMULATE_WORK(nq, nu, mc, mv, nr, ek, acc) + 2 * (nr) + 2)
 #define GEN_RT_MODEL_SIMULATE_INPUT_IWORK(nq, nu, mc, mv, nr, ek, acc)          \
+    GEN_RT_MODEL_SIMULATE_IWORK(nq, nu, mc, mv, nr, ek, acc)
+/* simulate_events: simulate_input's, plus outputs at three points */
+#define GEN_RT_MODEL_SIMULATE_EVENTS_WORK(nq, nu, mc, mv, nr, ek, acc, ny)      \
+    (GEN_RT_MODEL_SIMULATE_INPUT_WORK(nq, nu, mc, mv, nr, ek, acc) + 3 * (ny) + 3)
+#define GEN_RT_MODEL_SIMULATE_EVENTS_IWORK(nq, nu, mc, mv, nr, ek, acc, ny)     \
     GEN_RT_MODEL_SIMULATE_IWORK(nq, nu, mc, mv, nr, ek, acc)
 #define GEN_RT_MODEL_LINEARIZE_WORK(nq, nu, mc, mv, nr, ek, acc)                \
     ((nq) + (nu) + (mv) + 1 + (nu) * (nu) + (nu) + (mv) * (nu) + (mv) +          \
@@ -484,6 +538,36 @@ int gen_rt_model_simulate_input(const gen_rt_model *m, const gen_rt_real *x0, ge
                                 int capacity, gen_rt_real *work, int *iwork,
                                 gen_rt_real *t_out, gen_rt_real *x_out, gen_rt_real *lam_out,
                                 gen_rt_real *r_out, gen_rt_sim_stats *s);
+
+/* ---- events during a simulation (simulate_events) ----------------------
+ * Event i is a crossing of level[i] (NULL: zero) by the state x[which[i]]
+ * (0 <= which[i] < nx) or by the output y[which[i] - nx] (nx <= which[i] <
+ * nx + ny): direction[i] = +1 counts crossings from below (g < 0 before,
+ * g >= 0 after, g = value - level), -1 from above, 0 both. Crossings are
+ * found between the ends of every step and located on the step's dense
+ * output (DOPRI5's continuous extension; a cubic Hermite interpolant for
+ * RK4 and RODAS4) to a few units of rounding in t; the state logged is the
+ * dense output there, projected onto the constraints. Two crossings of the
+ * same event inside one step are not seen (as with any step-end test).
+ * The log holds the first capacity events in time order: log_which[k]
+ * (the event's index i), log_t[k] and log_x[k nx .. k nx + nx - 1];
+ * stats->n_events counts them all. With terminal != NULL and terminal[i]
+ * nonzero, the first crossing of event i ends the run there: its state is
+ * the last output row and stats->terminal = i. */
+typedef struct {
+    int n;
+    const int *which, *direction, *terminal;
+    const gen_rt_real *level;
+    int capacity;
+    int *log_which;
+    gen_rt_real *log_t, *log_x;
+} gen_rt_events;
+int gen_rt_model_simulate_events(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,
+                                 gen_rt_real t_end, gen_rt_real dt, const gen_rt_input *in,
+                                 const gen_rt_events *ev, const gen_rt_real *p,
+                                 const gen_rt_sim_options *o, int capacity, gen_rt_real *work,
+                                 int *iwork, gen_rt_real *t_out, gen_rt_real *x_out,
+                                 gen_rt_real *lam_out, gen_rt_real *r_out, gen_rt_sim_stats *s);
 
 int gen_rt_model_linearize(const gen_rt_model *m, const gen_rt_real *x_op,
                            const gen_rt_real *r_op, const gen_rt_real *p, gen_rt_real t,

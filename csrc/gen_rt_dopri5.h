@@ -2,7 +2,9 @@
  * gen_rt_dopri5.h - the Dormand-Prince 5(4) tableau, once for both runtimes:
  * X(NAME, numerator, denominator). The C runtime (gen_rt_integrate.c) and
  * the C++ runtime (eigen/gen_rt_eigen.hpp) expand it with their own scalar type,
- * so the coefficients are written in one place.
+ * so the coefficients are written in one place. D1..D7 are the
+ * coefficients of the continuous extension of order 4 (Hairer, Norsett and
+ * Wanner, Solving ODEs I, 2nd ed., section II.6; Hairer's dopri5).
  */
 #ifndef GEN_RT_DOPRI5_H
 #define GEN_RT_DOPRI5_H
@@ -19,6 +21,9 @@
     X(B1, 35.0, 384.0) X(B3, 500.0, 1113.0) X(B4, 125.0, 192.0)                \
     X(B5, -2187.0, 6784.0) X(B6, 11.0, 84.0)                                   \
     X(E1, 71.0, 57600.0) X(E3, -71.0, 16695.0) X(E4, 71.0, 1920.0)             \
-    X(E5, -17253.0, 339200.0) X(E6, 22.0, 525.0) X(E7, -1.0, 40.0)
+    X(E5, -17253.0, 339200.0) X(E6, 22.0, 525.0) X(E7, -1.0, 40.0)           \
+    X(D1, -12715105075.0, 11282082432.0) X(D3, 87487479700.0, 32700410799.0)   \
+    X(D4, -10690763975.0, 1880347072.0) X(D5, 701980252875.0, 199316789632.0)  \
+    X(D6, -1453857185.0, 822651844.0) X(D7, 69997945.0, 29380423.0)
 
 #endif /* GEN_RT_DOPRI5_H */

@@ -74,7 +74,7 @@ def status_message(code):
 
 
 # integration methods: name -> value of <P>_METHOD_<NAME> / sim_options.method
-METHODS = {"rk4": 0, "dopri5": 1}
+METHODS = {"rk4": 0, "dopri5": 1, "rodas4": 2}
 
 
 # ------------------------------------------------------------------- structs
@@ -82,7 +82,8 @@ METHODS = {"rk4": 0, "dopri5": 1}
 class Field:
     name: str
     ctype: str              # "int", "long", "real", "creal*" (const real array),
-                            # "controller" (the controller callback) or "void*"
+                            # "cint*" (const int array), "int*", "real*" (arrays
+                            # written), "controller" (the callback) or "void*"
     doc: str
     default: object = 0     # a number, or "eps16" (16 machine epsilons of the scalar type)
     count: str | None = None    # an array of this many (a size such as "NX")
@@ -98,14 +99,15 @@ class Struct:
 
 STRUCTS = (
     Struct("sim_options", "SimOptions", "Integration options (fill with <p>_sim_options_default).", (
-        Field("method", "int", "<P>_METHOD_RK4 or <P>_METHOD_DOPRI5", 0),
+        Field("method", "int", "<P>_METHOD_RK4 (on the output grid), <P>_METHOD_DOPRI5 or "
+              "<P>_METHOD_RODAS4 (adaptive, dense output)", 0),
         Field("project", "int", "1: project onto the constraints after each step", 1),
-        Field("rtol", "real", "dopri5 relative tolerance", 1e-8),
-        Field("atol", "real", "dopri5 absolute tolerance", 1e-10),
-        Field("h_init", "real", "dopri5 first step, <= 0: automatic", 0.0),
-        Field("h_min", "real", "dopri5 minimum step, <= 0: automatic", 0.0),
-        Field("h_max", "real", "dopri5 maximum step, <= 0: unbounded", 0.0),
-        Field("max_steps", "long", "dopri5 step budget per output interval", 100000),
+        Field("rtol", "real", "adaptive: relative tolerance", 1e-8),
+        Field("atol", "real", "adaptive: absolute tolerance", 1e-10),
+        Field("h_init", "real", "adaptive: first step, <= 0: automatic", 0.0),
+        Field("h_min", "real", "adaptive: minimum step, <= 0: automatic", 0.0),
+        Field("h_max", "real", "adaptive: maximum step, <= 0: unbounded", 0.0),
+        Field("max_steps", "long", "adaptive: step budget between two output rows", 100000),
         Field("proj_tol", "real", "projection: relative tolerance on the correction", "eps16"),
         Field("proj_max_iter", "int", "projection: Newton iterations", 10),
         Field("every", "int", "simulate: keep every k-th output row and the last (<= 1: all)", 1),
@@ -128,13 +130,31 @@ STRUCTS = (
         Field("period", "real", "0: r evaluated at every stage; > 0: sampled at t0 + k period "
               "and held", 0.0),
     )),
+    Struct("events", "Events", "Events of simulate_events: crossings of a level by a state or "
+           "an output, located on the dense output; the log of those found. Zero-fill it and "
+           "set what you use.", (
+        Field("n", "int", "number of event functions", 0),
+        Field("which", "cint*", "n: 0..NX-1 the state x[which], NX..NX+NY-1 the output "
+              "y[which - NX]", 0),
+        Field("direction", "cint*", "n: +1 crossing upwards, -1 downwards, 0 both", 0),
+        Field("terminal", "cint*", "n (NULL: none): nonzero ends the run at the event", 0),
+        Field("level", "creal*", "n (NULL: zero): the level crossed", 0),
+        Field("capacity", "int", "events the log holds", 0),
+        Field("log_which", "int*", "capacity: the event's index i", 0),
+        Field("log_t", "real*", "capacity: its time", 0),
+        Field("log_x", "real*", "capacity x NX: its state (the dense output, projected)", 0),
+    )),
     Struct("sim_stats", "SimStats", "Integration statistics (advance accumulates them).", (
         Field("n_accepted", "long", "accepted steps"),
         Field("n_rejected", "long", "rejected steps (dopri5)"),
         Field("n_rhs", "long", "right-hand-side evaluations"),
+        Field("n_jac", "long", "Jacobian evaluations (rodas4)"),
         Field("n_out", "int", "output rows written"),
+        Field("n_events", "int", "events found (simulate_events; the log holds the first "
+              "capacity)"),
+        Field("terminal", "int", "the terminal event that ended the run, -1: none", -1),
         Field("t_last", "real", "time of the last good state", 0.0),
-        Field("h_next", "real", "dopri5: step size to continue with", 0.0),
+        Field("h_next", "real", "adaptive: step size to continue with", 0.0),
         Field("x_last", "real", "last good state (on failure: where it failed)", 0.0, "NX"),
     )),
 )
@@ -238,8 +258,8 @@ FUNCTIONS = (
              work="STEP", iwork=True),
     Function("advance", _params("t0:scalar, t1:scalar, r:in?:NR=r, p:in?:NP=p, "
                                 "opts:struct::sim_options, stats:struct_out::sim_stats, x:inout:NX"),
-             "Integrate x from t0 to t1 (one RK4 step, or adaptive DOPRI5 steps); stats "
-             "accumulate.", work="ADVANCE", iwork=True),
+             "Integrate x from t0 to t1 (one RK4 step, or adaptive DOPRI5 or RODAS4 steps); "
+             "stats accumulate.", work="ADVANCE", iwork=True),
     Function("simulate_rows", _params("t0:value, t_end:value, dt:value"),
              "Number of output rows simulate() writes for these times (or a negative status)."),
     Function("simulate", _params("x0:in:NX, t0:value, t_end:value, dt:value, r:in?:NR=r, p:in?:NP=p, "
@@ -257,6 +277,14 @@ FUNCTIONS = (
              "callback; continuous or sampled): r_out (NR per row, may be NULL) gets the "
              "inputs in effect from each output time on.",
              work="SIMULATE_INPUT", iwork=True),
+    Function("simulate_events",
+             _params("x0:in:NX, t0:value, t_end:value, dt:value, in:struct::input, "
+                     "ev:struct::events, p:in?:NP=p, opts:struct?::sim_options, "
+                     "capacity:value::int, t_out:rows, x_out:rows, lam_out:out?, r_out:out?, "
+                     "stats:struct_out::sim_stats"),
+             "simulate_input() with events (ev): crossings logged in ev's log, a terminal "
+             "event ends the run with its state as the last row (stats->terminal).",
+             work="SIMULATE_EVENTS", iwork=True, work_args="NY"),
     Function("linearize", _params("x_op:in:NX, r_op:in?:NR=r, p:in?:NP=p, t:scalar, "
                                   "A:out:NS*NS, B:out:NS*NR"),
              "Linearize about any operating point: A (NS x NS) and B (NS x NR) for the independent "

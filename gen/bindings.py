@@ -322,12 +322,25 @@ class Simulator:
                  project=True, t0=0.0, max_steps=100000, return_multipliers=False,
                  return_stats=False, controller=None, input_period=None, input_hold="zoh",
                  return_inputs=False, return_outputs=False, every=1, final_only=False,
-                 max_rows=None):
+                 max_rows=None, events=None, terminal=False, return_events=False):
         """Simulate from x0 to t_end. dt is the RK4 step, or the output
-        interval of the adaptive DOPRI5. Returns (t, X) with one row per
-        output time, then, when asked, the multipliers, the inputs in effect
-        from each output time on (return_inputs), the outputs Y (ny per row,
-        return_outputs) and the stats.
+        interval of the adaptive methods (DOPRI5, RODAS4: they step by their
+        error control alone and write the output times from their dense
+        output). Returns (t, X) with one row per output time, then, when
+        asked, the multipliers, the inputs in effect from each output time
+        on (return_inputs), the outputs Y (ny per row, return_outputs), the
+        events (return_events) and the stats.
+
+        method: "rk4" (fixed step dt), "dopri5" (explicit, adaptive) or
+        "rodas4" (alias "rodas": linearly implicit, L-stable, for stiff
+        models; it uses the generated Jacobian).
+
+        events: {name: direction} or {name: (direction, level)}: crossings
+        of a state or an output (by name) through zero (or level), upwards
+        (+1), downwards (-1) or both (0), located on the dense output.
+        terminal: True, False or {name: bool}: the first crossing of a
+        terminal event ends the run there, and its state is the last row.
+        return_events adds the list of (name, t, x) of the crossings found.
 
         r: None or NR constant inputs; a table (t_grid, R) held or
         interpolated inside C (input_hold "zoh" or "linear"); or a callable
@@ -339,7 +352,9 @@ class Simulator:
         in C): every=k keeps every k-th output row and the last one,
         final_only=True only the row at t_end; max_rows refuses (ValueError)
         a run that would return more rows."""
-        from .control import plan_inputs
+        from .control import InputPlan, plan_inputs
+        from .events import plan_events
+        method = {"rodas": "rodas4"}.get(method, method)
         if method not in METHODS:
             raise ValueError(f"method must be one of {sorted(METHODS)}, got {method!r}")
         if not (np.isfinite(dt) and dt > 0):
@@ -376,7 +391,27 @@ class Simulator:
         X = np.empty((rows, self.nx), dtype=self.dtype)
         lam = np.empty((rows, max(1, self.mv)), dtype=self.dtype)
         R = np.empty((rows, max(1, self.nr)), dtype=self.dtype)
-        if plan is None:
+        evplan = None
+        if events is not None:
+            evplan = plan_events(self, events, terminal)
+            if plan is None:
+                plan = InputPlan(self)
+                if r is not None:
+                    plan.struct.r = plan.array(r)
+        elif terminal is not False or return_events:
+            raise ValueError("terminal= and return_events= need events={name: direction}")
+        if evplan is not None:
+            for _ in range(2):
+                st = self._fn("simulate_events")(
+                    self._ptr(x0), t0, t_end, dt, plan.struct, evplan.struct,
+                    self._ptr(self._params(p)), opts, rows, self._ptr(t), self._ptr(X),
+                    self._ptr(lam), self._ptr(R), stats)
+                if plan.error is not None:
+                    raise plan.error
+                if stats.n_events <= evplan.capacity:
+                    break
+                evplan.resize(stats.n_events)   # the same run again, with room for all
+        elif plan is None:
             st = self._fn("simulate")(self._ptr(x0), t0, t_end, dt, self._ptr(r),
                                       self._ptr(self._params(p)), opts, rows, self._ptr(t),
                                       self._ptr(X), self._ptr(lam), stats)
@@ -392,6 +427,9 @@ class Simulator:
         if st != 0:
             last = np.array([stats.x_last[i] for i in range(self.nx)])
             self._check(st, "simulate", stats.t_last, last)
+        if stats.n_out < rows:   # a terminal event ended the run
+            rows = stats.n_out
+            t, X, lam, R = t[:rows], X[:rows], lam[:rows], R[:rows]
         out = [t, X]
         if return_multipliers:
             out.append(lam[:, :self.mv].copy())
@@ -403,9 +441,16 @@ class Simulator:
             for k in range(rows):
                 Y[k] = self.outputs(t[k], X[k], r=R[k, :self.nr] if self.nr else None, p=pp)
             out.append(Y)
+        if return_events:
+            out.append(evplan.found(stats.n_events))
         if return_stats:
-            out.append({"n_accepted": stats.n_accepted, "n_rejected": stats.n_rejected,
-                        "n_rhs": stats.n_rhs, "n_out": stats.n_out})
+            info = {"n_accepted": stats.n_accepted, "n_rejected": stats.n_rejected,
+                    "n_rhs": stats.n_rhs, "n_jac": stats.n_jac, "n_out": stats.n_out}
+            if evplan is not None:
+                info["n_events"] = stats.n_events
+                info["terminal"] = (evplan.names[stats.terminal] if stats.terminal >= 0
+                                    else None)
+            out.append(info)
         return tuple(out)
 
     def step_rk4(self, t, x, h, r=None, p=None, project=True):

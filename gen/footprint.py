@@ -15,8 +15,8 @@ anything it calls, along the deepest path of the call graph. The generated
 code has no recursion and no dynamic stack: a cycle or a function with a
 ``dynamic`` (unbounded) frame is an error (FootprintError), never a number;
 ``dynamic,bounded`` (stack realignment on x86-64) counts with GCC's bound. The only
-indirect calls are the integrators calling the runtime's right-hand side and
-projection callbacks (``rhs_cb``, ``post_cb`` in gen_rt_model.c) and the
+indirect calls are the integrators calling the runtime's right-hand side
+callback (``rhs_cb`` in gen_rt_simulate.c), the user's controller, and the
 runtime calling the model's kernels through its ``gen_rt_model`` (the
 ``<name>_k_*`` kernels, their adapters and the unrolled mass solve, the
 only other functions whose address is taken); an indirect call counts as
@@ -231,17 +231,28 @@ _RUNTIME_INDIRECT = {
     "gen_rt_model_step_sensitivity": ["rhs_terms", "accel_terms", "mass_solve", "lin_terms"],
     "gen_rt_model_linearize_discrete": ["mass_matrix", "forcing", "rhs_terms", "accel_terms",
                                         "lin_terms", "mass_solve"],
+    "linearize_": ["mass_matrix", "forcing", "rhs_terms", "accel_terms", "lin_terms",
+                   "mass_solve", "output_jacobian"],
+    "gen_rt_model_linearize_outputs": ["mass_matrix", "forcing", "rhs_terms", "accel_terms",
+                                       "lin_terms", "mass_solve", "output_jacobian"],
+    "gen_rt_model_eval_outputs": ["outputs"],
+    # the simulation engine (gen_rt_simulate.c): output events
+    "outputs_": ["outputs"],
 }
-_CALLBACKS = ["rhs_cb", "post_cb"]
+# what the integrators call back (gen_rt_simulate.c)
+_CALLBACKS = ["rhs_cb"]
 
 
 def _indirect_targets(p):
     """{caller: [functions its indirect calls may reach]} for model prefix p."""
     member = {"kinematics": f"{p}_kinematics", "rhs_terms": f"{p}_rhs_terms",
-              "lin_terms": f"{p}_lin_terms", "mass_solve": f"{p}_mass_solve"}
+              "lin_terms": f"{p}_lin_terms", "mass_solve": f"{p}_mass_solve",
+              "output_jacobian": f"{p}_output_jacobian"}
     out = {caller: [member.get(k, f"{p}_k_{k}") for k in ks]
            for caller, ks in _RUNTIME_INDIRECT.items()}
-    out["gen_rt_rk4_step"] = out["gen_rt_dopri5_integrate"] = list(_CALLBACKS)
+    for integrator in ("gen_rt_rk4_step", "gen_rt_dopri5_integrate", "gen_rt_dopri5_trial",
+                       "gen_rt_rodas4_trial"):
+        out[integrator] = list(_CALLBACKS)
     # any other caller is runtime code the compiler inlined somewhere else (at
     # -O3 gen_rt_model_rhs into rhs_cb, say): it may reach any kernel. The
     # kernels call nothing indirectly, so this bound is safe (and may be loose)

@@ -35,11 +35,11 @@ __all__ = ["Rendered", "render", "render_files", "generate", "write_atomic", "te
 # the C runtime every C-backend model links (csrc/)
 RUNTIME_SOURCES = ["gen_rt_status.c", "gen_rt_linalg.c", "gen_rt_dynamics.c",
                    "gen_rt_project.c", "gen_rt_integrate.c", "gen_rt_linearize.c",
-                   "gen_rt_model.c", "gen_rt_expm.c", "gen_rt_sens.c"]
-RUNTIME_HEADERS = ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h", "gen_rt_expm.h",
+                   "gen_rt_model.c", "gen_rt_simulate.c", "gen_rt_expm.c", "gen_rt_sens.c"]
+RUNTIME_HEADERS = ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h", "gen_rt_rodas4.h", "gen_rt_expm.h",
                    "gen_rt_sens.h"]
 # the C++ runtime of the Eigen backend and the tables it shares with the C one
-EIGEN_RUNTIME_HEADERS = ["eigen/gen_rt_eigen.hpp", "eigen/gen_rt_expm.hpp", "gen_rt_status.h",
+EIGEN_RUNTIME_HEADERS = ["eigen/gen_rt_eigen.hpp", "eigen/gen_rt_expm.hpp", "gen_rt_status.h", "gen_rt_rodas4.h",
                          "gen_rt_dopri5.h"]
 
 # (file name, template) for the C backend: the list is data.
