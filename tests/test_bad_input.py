@@ -231,7 +231,7 @@ BINARY_CASES = [
     (["--param", "mass=1"], 2, "unknown constant name"),
     (["--dt", "-1"], 2, "--dt needs a positive number"),
     (["--t-end", "soon"], 2, "--t-end needs a number"),
-    (["--method", "euler"], 2, "--method must be rk4 or dopri5"),
+    (["--method", "euler"], 2, "--method must be rk4, dopri5 or rodas4"),
     (["--frobnicate"], 2, "frobnicate"),
 ]
 

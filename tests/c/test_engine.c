@@ -92,6 +92,8 @@ static void rodas4_errs(double h, double *e_sol, double *e_est)
     *e_est = (double)err * (double)tol;
 }
 
+/* the observed orders: in float the step must stay large for the truncation
+ * error to dominate rounding, short of the asymptotic range (wider bounds) */
 static void test_orders(void)
 {
     const double h = TOL(0.04, 0.2), th = 0.37;
@@ -101,13 +103,13 @@ static void test_orders(void)
     e2 = dopri5_dense_err(h / 2, th);
     o = log(e1 / e2) / log(2.0);
     printf("dopri5 dense: errors %.3e %.3e, local order %.2f\n", e1, e2, o);
-    CHECK(o > 4.5 && o < 5.6);
+    CHECK(o > 4.5 && o < TOL(5.6, 6.3));
     /* the cubic Hermite interpolant: O(h^4) */
     e1 = hermite_err(h, th);
     e2 = hermite_err(h / 2, th);
     o = log(e1 / e2) / log(2.0);
     printf("hermite: errors %.3e %.3e, order %.2f\n", e1, e2, o);
-    CHECK(o > 3.6 && o < 4.4);
+    CHECK(o > 3.6 && o < TOL(4.4, 4.8));
     /* RODAS4: y1 of order 4 (local O(h^5)), the estimate of order 3 (O(h^4)) */
     {
         double s1, s2, k1, k2;
@@ -115,10 +117,10 @@ static void test_orders(void)
         rodas4_errs(h / 2, &s2, &k2);
         o = log(s1 / s2) / log(2.0);
         printf("rodas4: errors %.3e %.3e, local order %.2f\n", s1, s2, o);
-        CHECK(o > 4.5 && o < 5.6);
+        CHECK(o > 4.5 && o < TOL(5.6, 6.3));
         o = log(k1 / k2) / log(2.0);
         printf("rodas4 estimate: %.3e %.3e, order %.2f\n", k1, k2, o);
-        CHECK(o > 3.5 && o < 4.6);
+        CHECK(o > 3.5 && o < TOL(4.6, 4.9));
         /* the estimate bounds the error of the order-4 solution */
         CHECK(s1 < k1);
     }
