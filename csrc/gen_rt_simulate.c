@@ -644,8 +644,11 @@ static int events_(engine *e, int *stop, gen_rt_real *te)
             s->terminal = best;
             return GEN_RT_OK;
         }
+        /* search on from the dense output at the event (not the projected
+         * state logged: projection may move the value back across the
+         * level, and the same crossing would be found again) */
         a = th_best;
-        copy_n(e->nx, e->xe, e->xa);
+        dense_at(e, a, e->xa);
         if (a < 1 && (st = outputs_(e, t_ev, e->xa, e->ya))) return st;
     }
     return GEN_RT_OK;

@@ -19,13 +19,14 @@ from pathlib import Path
 
 from . import __version__
 from .cli_output import (MissingDependency, Progress, plot_simulation, print_csv,
-                         print_linearization, write_csv)
+                         print_events, print_linearization, write_csv, write_events_csv)
 from .errors import EomgenError
 
 EXAMPLES = """examples:
   eomgen generate examples/seed_pendulum.py -o out/pend
   eomgen build examples/seed_pendulum.py:lagrange_model -o out/pend_lagrange
   eomgen simulate examples/seed_pendulum.py --t-end 5 --x0 q2=0.5 --csv run.csv --plot run.png
+  eomgen simulate examples/seed_pendulum.py --t-end 5 --x0 q2=0.5 --method dopri5 --event q2:-1:terminal
   eomgen linearize examples/seed_pendulum.py --at q1=1 --at q2=0
   eomgen verify examples/seed_pendulum.py --samples 20
   eomgen generate examples/seed_pendulum.py -o out/pend_f --real float
@@ -139,6 +140,46 @@ def _state(sim, a, items):
     if sim.mc or sim.mv:
         x = sim.consistent_state(x, p=p)
     return x, p, r
+
+
+_DIRECTIONS = {"+1": 1, "1": 1, "up": 1, "-1": -1, "down": -1, "0": 0, "both": 0}
+
+
+def _events(sim, items):
+    """--event NAME[=LEVEL]:DIR[:terminal] strings -> (events, terminal) for
+    sim.simulate: {C name: (direction, level)} and {C name: bool}, the names
+    of the states or outputs (their sympy spelling accepted too), as the
+    standalone binary reads them."""
+    events, terminal = {}, {}
+    known = (f"states: {', '.join(sim.state_names)}"
+             + (f"; outputs: {', '.join(sim.output_names)}" if sim.ny
+                else " (the model has no outputs)"))
+    for it in items or []:
+        head, sep, rest = it.partition(":")
+        if not sep:
+            raise UsageError(f"--event must be NAME[=LEVEL]:DIR[:terminal], got {it!r}")
+        d, _, flag = rest.partition(":")
+        name, eq, level = head.partition("=")
+        name = name.strip()
+        level = _number(level, f"--event {it!r}: the level") if eq else 0.0
+        for names, labels in ((sim.state_names, sim.state_labels),
+                              (sim.output_names, sim.output_labels)):
+            if name in names or name in labels:
+                name = names[list(names).index(name)] if name in names \
+                    else names[list(labels).index(name)]
+                break
+        else:
+            raise UsageError(f"--event: unknown state or output {name!r} in {it!r}; {known}")
+        if d not in _DIRECTIONS:
+            raise UsageError(f"--event {it!r}: the direction must be +1 (1, up), -1 (down) "
+                             "or 0 (both)")
+        if flag not in ("", "terminal") or (not flag and it.count(":") > 1):
+            raise UsageError(f"--event {it!r}: expected ':terminal' after the direction")
+        if name in events:
+            raise UsageError(f"--event {it!r}: {name} has an event already")
+        events[name] = (_DIRECTIONS[d], level)
+        terminal[name] = flag == "terminal"
+    return events, terminal
 
 
 # ------------------------------------------------------------- subcommands
@@ -256,6 +297,9 @@ def cmd_simulate(a, progress):
     import numpy as np
     m = load_model(a.file, progress)
     sim = _compile(m, a, progress)
+    events, terminal = _events(sim, getattr(a, "event", None))
+    if getattr(a, "events_csv", None) and not events:
+        raise UsageError("--events-csv needs at least one --event")
     x, p, r = _state(sim, a, a.x0)
     if not a.t_end > 0:
         raise UsageError(f"--t-end must be positive, got {a.t_end}")
@@ -267,11 +311,21 @@ def cmd_simulate(a, progress):
             raise UsageError("give the inputs either with --input or with --input-csv")
         r = _read_input_table(sim, a.input_csv)
         varying = True
-    with progress.stage(f"simulate {a.t_end:g} s ({a.method})"):
-        t, X, lam, R, Y = sim.simulate(x, a.t_end, a.dt, method=a.method, r=r, p=p,
-                                       rtol=a.rtol, atol=a.atol, return_multipliers=True,
-                                       return_inputs=True, return_outputs=True,
-                                       input_hold=getattr(a, "hold", "zoh"))
+    method = {"rodas": "rodas4"}.get(a.method, a.method)
+    kw = dict(events=events, terminal=terminal, return_events=True) if events else {}
+    with progress.stage(f"simulate {a.t_end:g} s ({method})"):
+        res = sim.simulate(x, a.t_end, a.dt, method=method, r=r, p=p, rtol=a.rtol,
+                           atol=a.atol, return_multipliers=True, return_inputs=True,
+                           return_outputs=True, input_hold=getattr(a, "hold", "zoh"), **kw)
+    t, X, lam, R, Y = res[:5]
+    if events:   # as the binary: a CSV file, or one line per event on stderr
+        found = res[5]
+        if a.events_csv:
+            Path(a.events_csv).resolve().parent.mkdir(parents=True, exist_ok=True)
+            with progress.stage(f"write {a.events_csv}"):
+                write_events_csv(a.events_csv, sim.state_names, found)
+        else:
+            print_events(sim.state_names, found)
     cols = ["t"] + sim.state_names
     data = [t[:, None], X]
     res_names, res = [], []
@@ -310,6 +364,8 @@ def cmd_simulate(a, progress):
             except MissingDependency as e:
                 raise UsageError(str(e)) from None
         print(f"wrote {a.plot}")
+    if a.events_csv and (a.csv or a.plot):   # (else stdout holds the trajectory)
+        print(f"wrote {len(found)} events to {a.events_csv}")
     if not a.csv and not a.plot:
         extra = (list(sim.auxiliary_names) + list(sim.output_names)
                  + (list(sim.input_names) if varying else []))
@@ -464,10 +520,14 @@ def build_parser():
     s.add_argument("file", help="model file (FILE.py or FILE.py:function)")
     s.add_argument("--t-end", type=float, required=True, help="end time [s]")
     s.add_argument("--dt", type=float, default=0.01,
-                   help="RK4 step, or DOPRI5 output interval (default 0.01)")
-    s.add_argument("--method", default="rk4", choices=["rk4", "dopri5"])
-    s.add_argument("--rtol", type=float, default=1e-8, help="DOPRI5 relative tolerance")
-    s.add_argument("--atol", type=float, default=1e-10, help="DOPRI5 absolute tolerance")
+                   help="RK4 step, or the output interval of dopri5 and rodas4 (default 0.01)")
+    s.add_argument("--method", default="rk4", choices=["rk4", "dopri5", "rodas4", "rodas"],
+                   help="rk4 (default), dopri5 or rodas4 (alias rodas: implicit, for stiff "
+                        "models)")
+    s.add_argument("--rtol", type=float, default=1e-8,
+                   help="dopri5/rodas4 relative tolerance (default 1e-8)")
+    s.add_argument("--atol", type=float, default=1e-10,
+                   help="dopri5/rodas4 absolute tolerance (default 1e-10)")
     s.add_argument("--x0", action="append", metavar="NAME=VALUE",
                    help="initial state entry (repeat); dependent entries are solved")
     s.add_argument("--param", action="append", metavar="NAME=VALUE", help="constant value")
@@ -478,6 +538,13 @@ def build_parser():
                         "(--hold zoh, default) or interpolated (--hold linear) inside C")
     s.add_argument("--hold", default="zoh", choices=["zoh", "linear"],
                    help="the input table between rows")
+    s.add_argument("--event", action="append", metavar="NAME[=LEVEL]:DIR[:terminal]",
+                   help="log the crossings of LEVEL (default 0) by a state or an output NAME; "
+                        "DIR +1 (or 1, up), -1 (down) or 0 (both); terminal: the first "
+                        "crossing ends the run, its state the last row (repeat)")
+    s.add_argument("--events-csv", metavar="FILE",
+                   help="write the events as CSV 'event,t,<states>' (default: one line "
+                        "'event NAME t=T <state>' per event on stderr)")
     s.add_argument("--csv", help="write the trajectory (t, states, lam, residuals, energy, "
                         "reaction forces, inputs when they vary)")
     s.add_argument("--plot", help="write a PNG plot")

@@ -9,7 +9,7 @@ import sys
 import time
 
 __all__ = ["Progress", "MissingDependency", "format_matrix", "print_linearization",
-           "write_csv", "print_csv", "plot_simulation"]
+           "write_csv", "print_csv", "write_events_csv", "print_events", "plot_simulation"]
 
 
 class MissingDependency(Exception):
@@ -127,6 +127,24 @@ def print_csv(cols, table):
     print(",".join(cols))
     for row in table:
         print(",".join(f"{v:.17g}" for v in row))
+
+
+def write_events_csv(path, state_names, events):
+    """Events [(name, t, x)] as CSV 'event,t,<state names>', one row each
+    (the standalone binary's --events-csv)."""
+    with open(path, "w") as fh:
+        fh.write(",".join(["event", "t"] + list(state_names)) + "\n")
+        for name, t, x in events:
+            fh.write(",".join([name, f"{t:.17g}"] + [f"{v:.17g}" for v in x]) + "\n")
+
+
+def print_events(state_names, events, stream=None):
+    """Events [(name, t, x)] one line each, 'event NAME t=T q1=... ...', on
+    stderr (the standalone binary's default)."""
+    stream = stream or sys.stderr
+    for name, t, x in events:
+        print(f"event {name} t={t:.17g} "
+              + " ".join(f"{n}={v:.17g}" for n, v in zip(state_names, x)), file=stream)
 
 
 # ------------------------------------------------------------------- plot

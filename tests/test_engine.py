@@ -108,6 +108,25 @@ def test_level_crossing_against_the_elliptic_integral(seed, method):
     assert abs(ev[0][2][sim.state_names.index(name)] - 0.5 * L) < 1e-9
 
 
+@pytest.mark.parametrize("method", ["dopri5", "rodas4", "rk4"])
+def test_each_crossing_is_logged_once(seed, method):
+    """Crossings of levels off zero, where projecting the event state can
+    move the value back across the level: y = L sin(theta) = L/2 (theta =
+    30 degrees) twice in 2 s, and x = L cos(theta) = 0.9 L four times, at
+    the times of the elliptic integral."""
+    sim, x0 = seed
+    iq = sim.independent_state_names[0]                        # y
+    dq = next(n for n in sim.state_names[:2] if n != iq)       # x
+    ev = _run(sim, x0, method, events={iq: (0, 0.5 * L), dq: (0, 0.9 * L)},
+              return_events=True)[2]
+    T = 4 * quarter_period()
+    ta, tb = time_to(np.pi / 6), time_to(np.arccos(0.9))
+    want = sorted([(ta, iq), (T - ta, iq), (tb, dq), (T / 2 - tb, dq), (T / 2 + tb, dq),
+                   (T - tb, dq)])
+    assert [e[0] for e in ev] == [n for _, n in want]
+    np.testing.assert_allclose([e[1] for e in ev], [t for t, _ in want], rtol=1e-9)
+
+
 def test_output_event_agrees_with_the_state_event():
     """An output (the cart-pole's tip height, 2 l cos(theta)) crossing zero
     is the pole passing horizontal: the same time as theta crossing pi/2,
