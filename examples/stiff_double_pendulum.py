@@ -46,9 +46,9 @@ def derive():
 
 def constants(ratio=1e4, m=1.0, l=1.0, g=9.81):
     """The constants for an elbow ringing `ratio` times faster than the pair
-    swings as one rod (omega_p = sqrt(3 g / (4 l))... for a rod of length
-    2 l: sqrt(3 g / (2 (2 l)))), critically damped about the elbow's own
-    inertia (the outer rod about the elbow: m l^2 / 3)."""
+    swings as one rigid rod of length 2 l (omega_slow = sqrt(3 g / (2 (2 l)))),
+    critically damped about the outer rod's inertia about the elbow
+    (J = m l^2 / 3): k = J omega_fast^2, c = 2 J omega_fast."""
     w_slow = np.sqrt(3 * g / (2 * 2 * l))
     w_fast = ratio * w_slow
     J = m * l ** 2 / 3
