@@ -481,11 +481,9 @@ static int step_(engine *e, gen_rt_real t, gen_rt_real t_stop)
                 }
             }
         }
-        /* df/dt by a forward difference (the inputs' time dependence too) */
-        dt = GEN_RT_C(1.4901161193847656e-08) * rt_max2(GEN_RT_C(1e-6), rt_abs(t));
-#ifdef GEN_RT_REAL_FLOAT
-        dt = GEN_RT_C(3.4526698e-4) * rt_max2(GEN_RT_C(1e-3), rt_abs(t));
-#endif
+        /* df/dt by a forward difference (the inputs' time dependence too),
+         * with Hairer's increment sqrt(eps max(1e-5, |t|)) */
+        dt = RT_SQRT(GEN_RT_EPS * rt_max2(GEN_RT_C(1e-5), rt_abs(t)));
         if ((st = rhs_cb(c, t + dt, e->x, ft))) return st;
         e->s->n_rhs += 1;
         for (i = 0; i < nx; ++i) dfdt[i] = (ft[i] - f0[i]) / dt;

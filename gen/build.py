@@ -298,7 +298,7 @@ def build(rendered: Rendered, verbose=False, timings=None):
         except Exception as e:  # cffi's CDefError and parse errors
             raise BuildError(f"internal error: the cffi declarations do not parse: {e}", cdef) from e
         if backend == "c":
-            own = [f"{name}.c"] + RUNTIME_SOURCES
+            own = [f"{name}.c", f"{name}_lin.c"] + RUNTIME_SOURCES
             # the model and the runtime as objects, compiled in parallel (the
             # runtime's objects are shared by every model with the same runtime
             # sources, scalar type and flags); cffi then compiles its wrapper
@@ -437,7 +437,9 @@ def _c_objects(name, src: Path, tmp: Path, wrap: Path | None = None):
     objdir = tmp / "obj"
     objdir.mkdir()
     runtime, rt_folder = _runtime_objects(src, cc)
-    jobs = [(src / f"{name}.c", objdir / f"{name}.o", ())]
+    # the derivative kernels first: the largest file starts first
+    jobs = [(src / f"{name}_lin.c", objdir / f"{name}_lin.o", ()),
+            (src / f"{name}.c", objdir / f"{name}.o", ())]
     if wrap is not None:
         import sysconfig
         paths = sysconfig.get_paths()
@@ -454,7 +456,7 @@ def _c_objects(name, src: Path, tmp: Path, wrap: Path | None = None):
         try:
             results = [f.result() for f in futures]
         except BuildError:
-            ok, log = _compile_log(src, [f"{name}.c"] + RUNTIME_SOURCES)
+            ok, log = _compile_log(src, [f"{name}.c", f"{name}_lin.c"] + RUNTIME_SOURCES)
             raise BuildError(f"compiling the model '{name}' failed", log) from None
     if runtime is None:
         # publish the runtime objects for the next model (atomic rename; a

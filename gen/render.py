@@ -46,6 +46,8 @@ EIGEN_RUNTIME_HEADERS = ["eigen/gen_rt_eigen.hpp", "eigen/gen_rt_expm.hpp", "gen
 C_TEMPLATES = [
     ("{name}.h", "c/model.h.j2"),
     ("{name}.c", "c/model.c.j2"),
+    ("{name}_lin.c", "c/model_lin.c.j2"),          # the derivative kernels, compiled apart
+    ("{name}_kernels.h", "c/model_kernels.h.j2"),  # their prototypes, shared by both
     ("main.c", "c/main.c.j2"),
     ("CMakeLists.txt", "c/CMakeLists.txt.j2"),
     ("arm-none-eabi.cmake", "c/arm-none-eabi.cmake.j2"),   # Cortex-M4F toolchain file
@@ -67,6 +69,8 @@ EIGEN_TEMPLATES = [
 EIGEN_SOURCES = ["{name}.cpp"]
 
 BACKENDS = {"c": C_TEMPLATES, "eigen": EIGEN_TEMPLATES}
+# the kernels of <name>_lin.c (C backend)
+LIN_KERNELS = ("lin_terms", "output_jacobian")
 # the cffi module: its declarations and its source (header + batch loops)
 CFFI_TEMPLATES = {"cdef": "cffi/cdef.h.j2", "module_source": "cffi/module.c.j2"}
 
@@ -235,6 +239,10 @@ def build_context(plan, iface, timings=None, backend="c"):
                        for i, (n, v) in enumerate(zip(m.constant_names, m.p_values))],
         "ind_doc": list(enumerate(m.independent_state_names)),
         "kernels": kctx,
+        # the derivative kernels (the largest, used only by linearize, jacobian,
+        # step_sensitivity and RODAS4) live in <name>_lin.c, a translation
+        # unit of their own compiled in parallel with <name>.c
+        "lin_kernels": [k for k in LIN_KERNELS if k in kernels],
         "has_accel_terms": "accel_terms" in kernels,
         "lin_outputs": [o.name for o in kernels["lin_terms"].outputs],
         "p_default": [_fmt_real(v, real) for v in m.p_values],

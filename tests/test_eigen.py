@@ -86,7 +86,7 @@ def _cmake_project(work):
     gen.generate(model_e, work / "pend_e", backend="eigen")
     gen.generate(model_c, work / "pend_c")
     bld = work / "build"
-    c_sources = ";".join(["pend_c.c"] + RUNTIME_SOURCES)
+    c_sources = ";".join(["pend_c.c", "pend_c_lin.c"] + RUNTIME_SOURCES)
     log = []
     for cmd in (["cmake", "-S", str(ROOT / "tests" / "cpp"), "-B", str(bld),
                  "-DCMAKE_BUILD_TYPE=Release", f"-DEIGEN_PROJECT={work / 'pend_e'}",

@@ -57,7 +57,15 @@
  *
  * The integration options and statistics are the generated header's structs
  * (rendered from gen/abi.py), template parameters of Runtime::advance and
- * Runtime::simulate (the fields used are listed at Runtime).
+ * Runtime::simulate, simulate_input and simulate_events, as are the input
+ * and event descriptions (the fields used are listed at Runtime).
+ *
+ * The simulation engine (RK4 on the output grid; DOPRI5 and RODAS4 by
+ * their error control with dense output; events) is the C runtime's
+ * (gen_rt_simulate.c, gen_rt_integrate.c) with the same arithmetic in the
+ * same order, and the tableaus are the C runtime's headers
+ * (gen_rt_dopri5.h, gen_rt_rodas4.h) expanded over S: both backends take the
+ * same steps.
  *
  * Error policy: every function is noexcept and returns an int status, 0
  * (OK) or a negative code of gen_rt_status.h (the C runtime's codes and
@@ -86,6 +94,7 @@
 #include <Eigen/LU>
 
 #include "gen_rt_dopri5.h"
+#include "gen_rt_rodas4.h"
 #include "gen_rt_expm.hpp"
 #include "gen_rt_status.h"
 
@@ -112,7 +121,7 @@ inline const char *status_message(int status) noexcept
     }
 }
 
-enum Method : int { METHOD_RK4 = 0, METHOD_DOPRI5 = 1 };
+enum Method : int { METHOD_RK4 = 0, METHOD_DOPRI5 = 1, METHOD_RODAS4 = 2 };
 
 /* How the accelerations are solved (Model::ACCEL). */
 enum Accel : int { ACCEL_SPD = 0, ACCEL_PARTITIONED = 1, ACCEL_KKT = 2 };
@@ -249,13 +258,33 @@ inline int min_norm_correct(const Mat<S, M, N> &J, const Mat<S, M, 1> &res,
 }
 
 // ------------------------------------------------------------ integrators
+// The pieces of the simulation engine, each the C runtime's function of the
+// same name (gen_rt_integrate.c) with the same arithmetic in the same
+// order, so that both backends take the same steps.
+
+/* the C runtime's max, min and abs (a NaN argument: the other one) */
+template <typename S>
+inline S rt_max(S a, S b) noexcept
+{
+    return a > b ? a : b;
+}
+template <typename S>
+inline S rt_min(S a, S b) noexcept
+{
+    return a < b ? a : b;
+}
+template <typename S>
+inline S rt_abs(S a) noexcept
+{
+    return a < 0 ? -a : a;
+}
 
 /* Classic fourth-order Runge-Kutta step (gen_rt_rk4_step); f(t, x, dx)
- * returns a status; x unchanged on failure. */
+ * returns a status; x unchanged on failure; k1 = f(t, x) on return. */
 template <typename S, int N, typename F>
-inline int rk4_step(F &&f, S t, S h, Mat<S, N, 1> &x) noexcept
+inline int rk4_step(F &&f, S t, S h, Mat<S, N, 1> &x, Mat<S, N, 1> &k1) noexcept
 {
-    Mat<S, N, 1> k1, k2, k3, k4, y;
+    Mat<S, N, 1> k2, k3, k4, y;
     const S h2 = S(0.5) * h;
     int st;
     if ((st = f(t, x, k1))) return st;
@@ -271,6 +300,13 @@ inline int rk4_step(F &&f, S t, S h, Mat<S, N, 1> &x) noexcept
     return OK;
 }
 
+template <typename S, int N, typename F>
+inline int rk4_step(F &&f, S t, S h, Mat<S, N, 1> &x) noexcept
+{
+    Mat<S, N, 1> k1;
+    return rk4_step<S, N>(f, t, h, x, k1);
+}
+
 /* The Dormand-Prince 5(4) tableau of gen_rt_dopri5.h in the scalar type. */
 template <typename S>
 struct Dopri5Tableau {
@@ -279,131 +315,245 @@ struct Dopri5Tableau {
 #undef GEN_RT_EIGEN_COEF
 };
 
+/* The RODAS4 tableau of gen_rt_rodas4.h in the scalar type. */
 template <typename S>
-struct Dopri5Stats {
-    long n_accepted = 0, n_rejected = 0, n_rhs = 0;
-    S h_last = S(0);
+struct Rodas4Tableau {
+#define GEN_RT_EIGEN_COEF(name, value) static constexpr S name = S(value);
+    GEN_RT_RODAS4_TABLEAU(GEN_RT_EIGEN_COEF)
+#undef GEN_RT_EIGEN_COEF
 };
 
-/* Dormand-Prince 5(4) with the C runtime's step-size control
- * (gen_rt_dopri5_integrate): integrates x from t0 to t1 exactly; f(t, x, dx)
- * and post(t, x) (applied after each accepted step when use_post) return a
- * status; o: the options (rtol, atol, h_init, h_min, h_max, max_steps, see
- * Runtime); on error x holds the last accepted state and t_reached its time. */
-template <typename S, int N, typename F, typename P, typename Opts>
-inline int dopri5_integrate(F &&f, P &&post, bool use_post, S t0, S t1, const Opts &o,
-                            Dopri5Stats<S> &stats, S &t_reached, Mat<S, N, 1> &x) noexcept
+/* The scaled RMS norm of an error estimate d (gen_rt_err_norm):
+ * sqrt(mean((d_i / (atol + rtol max(|x_i|, |xnew_i|)))^2)); NaN propagates. */
+template <typename S, int N>
+inline S err_norm(const Mat<S, N, 1> &x, const Mat<S, N, 1> &xnew, const Mat<S, N, 1> &d, S rtol,
+                  S atol) noexcept
+{
+    S s = 0;
+    for (int i = 0; i < N; ++i) {
+        const S sc = atol + rtol * rt_max(std::abs(x[i]), std::abs(xnew[i]));
+        const S r = d[i] / sc;
+        s += r * r;
+    }
+    return std::sqrt(s / static_cast<S>(N));
+}
+
+/* One DOPRI5 trial step of size h from (t, x) (gen_rt_dopri5_trial): k[0]
+ * holds f(t, x) on entry, k[1..6] the other stages on return (k[6] =
+ * f(t + h, ynew)); y is scratch; err the error norm. */
+template <typename S, int N, typename F>
+inline int dopri5_trial(F &&f, S t, S h, const Mat<S, N, 1> &x, S rtol, S atol,
+                        Mat<S, N, 1> (&k)[7], Mat<S, N, 1> &y, Mat<S, N, 1> &ynew,
+                        S &err) noexcept
 {
     using T = Dopri5Tableau<S>;
-    Mat<S, N, 1> k1, k2, k3, k4, k5, k6, k7, y, ynew;
-    S t = t0, h;
-    const S span = t1 - t0;
-    long attempts = 0;
-    bool rejected_last = false;
+    const Mat<S, N, 1> &k1 = k[0];
+    Mat<S, N, 1> &k2 = k[1], &k3 = k[2], &k4 = k[3], &k5 = k[4], &k6 = k[5], &k7 = k[6];
     int st;
-    t_reached = t0;
-    if (!(o.rtol >= 0) || !(o.atol >= 0) || !(o.rtol > 0 || o.atol > 0) || !(span >= 0))
-        return ERR_BAD_ARG;
-    if (span == 0) return OK;
-    const long max_steps = o.max_steps > 0 ? o.max_steps : 100000L;
-    const S hmin = o.h_min > 0 ? o.h_min
-                               : S(64.0) * Tolerances<S>::eps * std::max(S(1.0), std::abs(t1));
-    if ((st = f(t, x, k1))) return st;
-    stats.n_rhs += 1;
-    if (o.h_init > 0) h = o.h_init;
-    else if (stats.h_last > 0) h = stats.h_last;
-    else {
-        // Hairer's starting-step heuristic, max norms
-        S d0 = 0, d1 = 0;
-        for (int i = 0; i < N; ++i) {
-            const S sc = o.atol + o.rtol * std::abs(x[i]);
-            d0 = std::max(d0, std::abs(x[i]) / sc);
-            d1 = std::max(d1, std::abs(k1[i]) / sc);
-        }
-        h = (d0 < S(1e-5) || d1 < S(1e-5)) ? S(1e-6) : S(0.01) * d0 / d1;
-        h = std::min(h, span);
-    }
-    if (o.h_max > 0) h = std::min(h, o.h_max);
-    while (t < t1) {
-        S err = 0, hs;
-        const S h_nat = h;
-        bool last = false;
-        if (attempts >= max_steps) { t_reached = t; return ERR_MAX_STEPS; }
-        ++attempts;
-        if (t + h >= t1 || t + S(1.0001) * h >= t1) { h = t1 - t; last = true; }
-        // one trial step
-        st = OK;
-        y = x + h * T::A21 * k1;
-        if (!st) st = f(t + T::C2 * h, y, k2);
-        if (!st) {
-            y = x + h * (T::A31 * k1 + T::A32 * k2);
-            st = f(t + T::C3 * h, y, k3);
-        }
-        if (!st) {
-            y = x + h * (T::A41 * k1 + T::A42 * k2 + T::A43 * k3);
-            st = f(t + T::C4 * h, y, k4);
-        }
-        if (!st) {
-            y = x + h * (T::A51 * k1 + T::A52 * k2 + T::A53 * k3 + T::A54 * k4);
-            st = f(t + T::C5 * h, y, k5);
-        }
-        if (!st) {
-            y = x + h * (T::A61 * k1 + T::A62 * k2 + T::A63 * k3 + T::A64 * k4 + T::A65 * k5);
-            st = f(t + h, y, k6);
-        }
-        if (!st) {
-            ynew = x + h * (T::B1 * k1 + T::B3 * k3 + T::B4 * k4 + T::B5 * k5 + T::B6 * k6);
-            st = f(t + h, ynew, k7);
-        }
-        if (!st) {
-            for (int i = 0; i < N; ++i) {
-                const S d = h * (T::E1 * k1[i] + T::E3 * k3[i] + T::E4 * k4[i] + T::E5 * k5[i] +
-                                 T::E6 * k6[i] + T::E7 * k7[i]);
-                const S sc = o.atol + o.rtol * std::max(std::abs(x[i]), std::abs(ynew[i]));
-                const S rr = std::abs(d) / sc;
-                if (!(rr <= err)) err = rr; // NaN propagates into err
-            }
-        }
-        stats.n_rhs += 6;
-        if (st || !(err <= S(1.0))) {
-            // rejected: a failed evaluation counts as an infinite error
-            stats.n_rejected += 1;
-            if (st == 0 && err == err)
-                hs = h * std::max(S(0.2), S(0.9) * std::pow(err, -S(0.2)));
-            else
-                hs = h * S(0.25);
-            if (hs < hmin) {
-                t_reached = t;
-                return st ? st : ERR_STEP_UNDERFLOW;
-            }
-            h = hs;
-            rejected_last = true;
-            continue;
-        }
-        // accepted
-        t = last ? t1 : t + h;
-        x = ynew;
-        stats.n_accepted += 1;
-        if (use_post) {
-            if ((st = post(t, x))) { t_reached = t; return st; }
-        }
-        {
-            S fac = err > 0 ? S(0.9) * std::pow(err, -S(0.2)) : S(5.0);
-            fac = std::min(rejected_last ? S(1.0) : S(5.0), std::max(S(0.2), fac));
-            h = h * fac;
-            // a clipped final step says little about the natural step
-            stats.h_last = (last && fac >= S(1.0)) ? std::max(h, h_nat) : h;
-        }
-        if (o.h_max > 0) h = std::min(h, o.h_max);
-        rejected_last = false;
-        if (t < t1) {
-            if ((st = f(t, x, k1))) { t_reached = t; return st; }
-            stats.n_rhs += 1;
-        }
-    }
-    t_reached = t1;
+    for (int i = 0; i < N; ++i) y[i] = x[i] + h * T::A21 * k1[i];
+    if ((st = f(t + T::C2 * h, y, k2))) return st;
+    for (int i = 0; i < N; ++i) y[i] = x[i] + h * (T::A31 * k1[i] + T::A32 * k2[i]);
+    if ((st = f(t + T::C3 * h, y, k3))) return st;
+    for (int i = 0; i < N; ++i)
+        y[i] = x[i] + h * (T::A41 * k1[i] + T::A42 * k2[i] + T::A43 * k3[i]);
+    if ((st = f(t + T::C4 * h, y, k4))) return st;
+    for (int i = 0; i < N; ++i)
+        y[i] = x[i] + h * (T::A51 * k1[i] + T::A52 * k2[i] + T::A53 * k3[i] + T::A54 * k4[i]);
+    if ((st = f(t + T::C5 * h, y, k5))) return st;
+    for (int i = 0; i < N; ++i)
+        y[i] = x[i] + h * (T::A61 * k1[i] + T::A62 * k2[i] + T::A63 * k3[i] + T::A64 * k4[i] +
+                           T::A65 * k5[i]);
+    if ((st = f(t + h, y, k6))) return st;
+    for (int i = 0; i < N; ++i)
+        ynew[i] = x[i] + h * (T::B1 * k1[i] + T::B3 * k3[i] + T::B4 * k4[i] + T::B5 * k5[i] +
+                              T::B6 * k6[i]);
+    if ((st = f(t + h, ynew, k7))) return st;
+    for (int i = 0; i < N; ++i)
+        y[i] = h * (T::E1 * k1[i] + T::E3 * k3[i] + T::E4 * k4[i] + T::E5 * k5[i] +
+                    T::E6 * k6[i] + T::E7 * k7[i]);
+    err = err_norm<S, N>(x, ynew, y, rtol, atol);
     return OK;
 }
+
+/* The continuous extension of order 4 of that step at t + theta h
+ * (gen_rt_dopri5_dense; exact at theta = 0 and 1). */
+template <typename S, int N>
+inline void dopri5_dense(S h, S theta, const Mat<S, N, 1> &x, const Mat<S, N, 1> &ynew,
+                         const Mat<S, N, 1> (&k)[7], Mat<S, N, 1> &out) noexcept
+{
+    using T = Dopri5Tableau<S>;
+    const Mat<S, N, 1> &k1 = k[0], &k3 = k[2], &k4 = k[3], &k5 = k[4], &k6 = k[5], &k7 = k[6];
+    const S th1 = S(1.0) - theta;
+    for (int i = 0; i < N; ++i) {
+        const S ydiff = ynew[i] - x[i], bspl = h * k1[i] - ydiff;
+        const S c4 = ydiff - h * k7[i] - bspl;
+        const S c5 = h * (T::D1 * k1[i] + T::D3 * k3[i] + T::D4 * k4[i] + T::D5 * k5[i] +
+                          T::D6 * k6[i] + T::D7 * k7[i]);
+        out[i] = x[i] + theta * (ydiff + th1 * (bspl + theta * (c4 + th1 * c5)));
+    }
+}
+
+/* The cubic Hermite interpolant of a step (x0, f0 at t; x1, f1 at t + h) at
+ * t + theta h (gen_rt_hermite): the dense output of RK4 and RODAS4. */
+template <typename S, int N>
+inline void hermite(S h, S theta, const Mat<S, N, 1> &x0, const Mat<S, N, 1> &f0,
+                    const Mat<S, N, 1> &x1, const Mat<S, N, 1> &f1, Mat<S, N, 1> &out) noexcept
+{
+    const S th1 = S(1.0) - theta;
+    for (int i = 0; i < N; ++i) {
+        const S ydiff = x1[i] - x0[i], bspl = h * f0[i] - ydiff;
+        const S c4 = ydiff - h * f1[i] - bspl;
+        out[i] = x0[i] + theta * (ydiff + th1 * (bspl + theta * c4));
+    }
+}
+
+/* LU with partial pivoting in place, and its solve: the C runtime's
+ * gen_rt_lu_factor (scale = max |a_ij|) and gen_rt_lu_solve (one right-hand
+ * side), the same arithmetic (RODAS4's iteration matrix, so that both
+ * backends' steps agree). */
+template <typename S, int N>
+inline int lu_factor_inplace(Mat<S, N, N> &a, int (&piv)[N]) noexcept
+{
+    S scale = 0;
+    for (int i = 0; i < N; ++i)
+        for (int j = 0; j < N; ++j) {
+            const S v = rt_abs(a(i, j));
+            if (v > scale) scale = v;
+        }
+    if (!(scale > 0)) return ERR_SINGULAR;
+    const S tol = Tolerances<S>::pivot_rtol * scale;
+    for (int k = 0; k < N; ++k) {
+        int p = k;
+        S best = rt_abs(a(k, k));
+        for (int i = k + 1; i < N; ++i) {
+            const S v = rt_abs(a(i, k));
+            if (v > best) {
+                best = v;
+                p = i;
+            }
+        }
+        piv[k] = p;
+        if (!(best > tol)) return ERR_SINGULAR; // also catches NaN
+        if (p != k)
+            for (int j = 0; j < N; ++j) std::swap(a(k, j), a(p, j));
+        for (int i = k + 1; i < N; ++i) {
+            const S l = a(i, k) / a(k, k);
+            a(i, k) = l;
+            if (l != 0)
+                for (int j = k + 1; j < N; ++j) a(i, j) -= l * a(k, j);
+        }
+    }
+    return OK;
+}
+
+template <typename S, int N>
+inline void lu_solve_inplace(const Mat<S, N, N> &lu, const int (&piv)[N], Mat<S, N, 1> &b) noexcept
+{
+    for (int k = 0; k < N; ++k)
+        if (piv[k] != k) std::swap(b[k], b[piv[k]]);
+    for (int i = 0; i < N; ++i) // forward: unit lower
+        for (int k = 0; k < i; ++k) {
+            const S l = lu(i, k);
+            if (l != 0) b[i] -= l * b[k];
+        }
+    for (int i = N - 1; i >= 0; --i) { // backward: upper
+        for (int k = i + 1; k < N; ++k) {
+            const S uik = lu(i, k);
+            if (uik != 0) b[i] -= uik * b[k];
+        }
+        b[i] /= lu(i, i);
+    }
+}
+
+/* The scratch of one RODAS4 trial step. */
+template <typename S, int N>
+struct Rodas4Work {
+    Mat<S, N, 1> K[6], y;
+    Mat<S, N, N> G;
+    int piv[N];
+};
+
+/* One RODAS4 trial step (gen_rt_rodas4.h) from (t, x) with f0 = f(t, x),
+ * the Jacobian J = df/dx and df/dt (gen_rt_rodas4_trial): ynew and the
+ * error norm err; ERR_SINGULAR with err < 0 when I/(h gamma) - J is
+ * singular. Five evaluations of f. */
+template <typename S, int N, typename F>
+inline int rodas4_trial(F &&f, S t, S h, const Mat<S, N, 1> &x, const Mat<S, N, 1> &f0,
+                        const Mat<S, N, N> &J, const Mat<S, N, 1> &dfdt, S rtol, S atol,
+                        Rodas4Work<S, N> &w, Mat<S, N, 1> &ynew, S &err) noexcept
+{
+    using T = Rodas4Tableau<S>;
+    Mat<S, N, 1> &K1 = w.K[0], &K2 = w.K[1], &K3 = w.K[2], &K4 = w.K[3], &K5 = w.K[4],
+                 &K6 = w.K[5], &y = w.y;
+    const S hg = S(1.0) / (h * T::GAMMA), ih = S(1.0) / h;
+    int st;
+    // G = I / (h gamma) - J, factored once for the six stages
+    for (int i = 0; i < N; ++i)
+        for (int j = 0; j < N; ++j) w.G(i, j) = (i == j ? hg : S(0)) - J(i, j);
+    err = -1; // marks a failure of G's factorization
+    if ((st = lu_factor_inplace<S, N>(w.G, w.piv))) return st;
+    err = 0;
+    for (int i = 0; i < N; ++i) K1[i] = f0[i] + h * T::GAMMA * dfdt[i];
+    lu_solve_inplace<S, N>(w.G, w.piv, K1);
+    for (int i = 0; i < N; ++i) y[i] = x[i] + T::A21 * K1[i];
+    if ((st = f(t + T::ALPHA2 * h, y, K2))) return st;
+    for (int i = 0; i < N; ++i) K2[i] += ih * (T::C21 * K1[i]) + h * T::GAMMA2 * dfdt[i];
+    lu_solve_inplace<S, N>(w.G, w.piv, K2);
+    for (int i = 0; i < N; ++i) y[i] = x[i] + T::A31 * K1[i] + T::A32 * K2[i];
+    if ((st = f(t + T::ALPHA3 * h, y, K3))) return st;
+    for (int i = 0; i < N; ++i)
+        K3[i] += ih * (T::C31 * K1[i] + T::C32 * K2[i]) + h * T::GAMMA3 * dfdt[i];
+    lu_solve_inplace<S, N>(w.G, w.piv, K3);
+    for (int i = 0; i < N; ++i) y[i] = x[i] + T::A41 * K1[i] + T::A42 * K2[i] + T::A43 * K3[i];
+    if ((st = f(t + T::ALPHA4 * h, y, K4))) return st;
+    for (int i = 0; i < N; ++i)
+        K4[i] += ih * (T::C41 * K1[i] + T::C42 * K2[i] + T::C43 * K3[i]) +
+                 h * T::GAMMA4 * dfdt[i];
+    lu_solve_inplace<S, N>(w.G, w.piv, K4);
+    for (int i = 0; i < N; ++i)
+        y[i] = x[i] + T::A51 * K1[i] + T::A52 * K2[i] + T::A53 * K3[i] + T::A54 * K4[i];
+    if ((st = f(t + h, y, K5))) return st;
+    for (int i = 0; i < N; ++i)
+        K5[i] += ih * (T::C51 * K1[i] + T::C52 * K2[i] + T::C53 * K3[i] + T::C54 * K4[i]);
+    lu_solve_inplace<S, N>(w.G, w.piv, K5);
+    for (int i = 0; i < N; ++i) y[i] += K5[i]; // Y_6 = Y_5 + K_5
+    if ((st = f(t + h, y, K6))) return st;
+    for (int i = 0; i < N; ++i)
+        K6[i] += ih * (T::C61 * K1[i] + T::C62 * K2[i] + T::C63 * K3[i] + T::C64 * K4[i] +
+                       T::C65 * K5[i]);
+    lu_solve_inplace<S, N>(w.G, w.piv, K6);
+    for (int i = 0; i < N; ++i) ynew[i] = y[i] + K6[i];
+    if (!finite(ynew)) return ERR_DIVERGED;
+    err = err_norm<S, N>(x, ynew, K6, rtol, atol);
+    return OK;
+}
+
+/* An input description with the fields the runtime reads (gen_rt.h,
+ * gen_rt_input; the generated Input<S> is another): simulate and advance
+ * run without one (a constant r). */
+template <typename S>
+struct BasicInput {
+    const S *r = nullptr;
+    int n_table = 0;
+    const S *t_table = nullptr, *r_table = nullptr;
+    int hold = HOLD_ZOH;
+    const S *K = nullptr, *x_op = nullptr;
+    ControllerFn<S> controller = nullptr;
+    void *ctx = nullptr;
+    S period = S(0);
+};
+
+/* An event description with the fields the runtime reads (gen_rt.h,
+ * gen_rt_events; the generated Events<S> is another). */
+template <typename S>
+struct BasicEvents {
+    int n = 0;
+    const int *which = nullptr, *direction = nullptr, *terminal = nullptr;
+    const S *level = nullptr;
+    int capacity = 0;
+    int *log_which = nullptr;
+    S *log_t = nullptr, *log_x = nullptr;
+};
 
 // ------------------------------------------------------------- the runtime
 
@@ -411,14 +561,26 @@ inline int dopri5_integrate(F &&f, P &&post, bool use_post, S t0, S t1, const Op
  * this file), for the scalar type S. The generated header's typed API
  * forwards here; the names and semantics are that API's.
  *
- * advance and simulate take the integration options and statistics as
- * template parameters (the generated header renders its SimOptions and
- * SimStats from gen/abi.py); the fields used:
- *   Opts:  int method (METHOD_RK4, METHOD_DOPRI5), project (nonzero: project
- *          onto the constraints after each step), S rtol, atol, h_init, h_min,
- *          h_max, long max_steps, S proj_tol, int proj_max_iter;
- *   Stats: long n_accepted, n_rejected, n_rhs, int n_out, S t_last, h_next,
- *          State x_last; a value-initialized Stats is all zeros. */
+ * advance and the simulate functions take the integration options and
+ * statistics as template parameters (the generated header renders its
+ * SimOptions and SimStats from gen/abi.py); the fields used:
+ *   Opts:  int method (METHOD_RK4, METHOD_DOPRI5, METHOD_RODAS4), project
+ *          (nonzero: project onto the constraints after each step), S rtol,
+ *          atol, h_init, h_min, h_max, long max_steps, S proj_tol, int
+ *          proj_max_iter, every, final_only;
+ *   Stats: long n_accepted, n_rejected, n_rhs, n_jac, int n_out, n_events,
+ *          terminal, S t_last, h_next, State x_last; a value-initialized
+ *          Stats is all zeros but terminal (-1: no terminal event).
+ * The inputs of simulate_input and simulate_events are any struct with the
+ * fields of BasicInput, their events any with those of BasicEvents.
+ *
+ * The simulation engine is gen_rt_simulate.c's (the C runtime), ported step
+ * for step with the same arithmetic in the same order: RK4 on the output
+ * grid; DOPRI5 (FSAL, continuous extension) and RODAS4 (the model's
+ * Jacobian) stepping by their error control alone (scaled RMS norm) and
+ * writing the rows from their dense output; events located on it. Only the
+ * model evaluations (right-hand side, Jacobian, projection: Eigen's
+ * factorizations) round differently from the C backend's. */
 template <class Model, class S>
 struct Runtime {
     static constexpr int NQ = Model::NQ, NU = Model::NU, NX = Model::NX, NR = Model::NR,
@@ -852,60 +1014,48 @@ struct Runtime {
         return OK;
     }
 
+    /* the options a run accepts (gen_rt_simulate.c: method_ok) */
+    template <class Opts>
+    static bool method_ok(const Opts &o) noexcept
+    {
+        if (o.method != METHOD_RK4 && o.method != METHOD_DOPRI5 && o.method != METHOD_RODAS4)
+            return false;
+        if (o.method != METHOD_RK4 &&
+            (!(o.rtol >= 0) || !(o.atol >= 0) || !(o.rtol > 0 || o.atol > 0)))
+            return false;
+        return true;
+    }
+
+    /* Integrate x from t0 to t1 (gen_rt_model_advance): one RK4 step, or
+     * DOPRI5 / RODAS4 steps by their error control (stats.h_next seeds the
+     * first); stats accumulate; on failure x is the last good state. */
     template <class Opts, class Stats>
     static int advance(S t0, S t1, const Inputs &r, const Params &p, const Opts &opts,
                        Stats &stats, State &x) noexcept
     {
         if (!finite(t0) || !finite(t1) || !finite(r) || !finite(p) || !finite(x))
             return ERR_NONFINITE_INPUT;
-        if (!(t1 >= t0)) return ERR_BAD_ARG;
-        auto f = [&](S tt, const State &xx, State &dx) noexcept {
-            return rhs_unchecked(tt, xx, r, p, dx, nullptr);
-        };
-        return integrate_f(f, p, t0, t1, opts, stats, x);
-    }
-
-    /* one integration t0 -> t1 over the right-hand side f (one RK4 step or
-     * DOPRI5 steps), projection after each step when asked */
-    template <class F, class Opts, class Stats>
-    static int integrate_f(F &f, const Params &p, S t0, S t1, const Opts &opts, Stats &stats,
-                           State &x) noexcept
-    {
-        auto post = [&](S tt, State &xx) noexcept {
-            return project_unchecked(tt, p, opts.proj_tol, opts.proj_max_iter, xx);
-        };
-        int st;
-        if (opts.method == METHOD_RK4) {
-            State xn = x;
-            st = rk4_step<S>(f, t0, t1 - t0, xn);
-            stats.n_rhs += 4;
-            if (!st && opts.project) st = post(t1, xn);
+        if (!(t1 >= t0) || !method_ok(opts)) return ERR_BAD_ARG;
+        Engine<BasicInput<S>, BasicEvents<S>, Opts, Stats> e(p, opts, stats, &r, nullptr,
+                                                                nullptr, t0, x);
+        e.t_span = t1 - t0;
+        S t = t0;
+        while (t < t1) {
+            const int st = e.step(t, t1);
             if (st) {
-                stats.t_last = t0;
-                stats.x_last = x;
+                stats.t_last = t;
+                stats.x_last = e.x;
+                stats.h_next = e.h_next;
+                x = e.x;
                 return st;
             }
-            x = xn;
-            stats.n_accepted += 1;
-        } else if (opts.method == METHOD_DOPRI5) {
-            Dopri5Stats<S> s;
-            S t_reached = t0;
-            s.h_last = stats.h_next;
-            st = dopri5_integrate<S>(f, post, opts.project, t0, t1, opts, s, t_reached, x);
-            stats.n_accepted += s.n_accepted;
-            stats.n_rejected += s.n_rejected;
-            stats.n_rhs += s.n_rhs;
-            stats.h_next = s.h_last;
-            if (st) {
-                stats.t_last = t_reached;
-                stats.x_last = x;
-                return st;
-            }
-        } else {
-            return ERR_BAD_ARG;
+            e.x = e.xn;
+            t = e.t1;
         }
         stats.t_last = t1;
-        stats.x_last = x;
+        stats.h_next = e.h_next;
+        stats.x_last = e.x;
+        x = e.x;
         return OK;
     }
 
@@ -918,11 +1068,6 @@ struct Runtime {
         return (rows - 1) / every + 1 + ((rows - 1) % every != 0);
     }
 
-    static bool keep_row(int k, int rows, int every, int final_only) noexcept
-    {
-        return final_only ? k == rows - 1 : (every <= 1 || k % every == 0 || k == rows - 1);
-    }
-
     static int simulate_rows(S t0, S t_end, S dt) noexcept
     {
         if (!(dt > 0) || !(t_end >= t0) || !finite(t0) || !finite(t_end)) return ERR_BAD_ARG;
@@ -932,53 +1077,64 @@ struct Runtime {
         return static_cast<int>(n + 1);
     }
 
+    /* Simulate from x0 with output rows every dt up to t_end (the last
+     * interval clipped): RK4 on the output grid, DOPRI5 and RODAS4 by their
+     * error control with the rows from their dense output (gen_rt.h,
+     * gen_rt_model_simulate). */
     template <class Opts, class Stats>
     static int simulate(const State &x0, S t0, S t_end, S dt, const Inputs &r, const Params &p,
                         const Opts &opts, int capacity, S *t_out, S *x_out, S *lam_out,
                         Stats &stats) noexcept
     {
-        constexpr int LAM_STRIDE = MV > 0 ? MV : 1;
-        if (!t_out || !x_out) return ERR_NULL;
-        if (!finite(x0) || !finite(r) || !finite(p)) return ERR_NONFINITE_INPUT;
-        State x = x0, dx;
-        Multipliers lam;
-        int st;
         stats = Stats();
         stats.t_last = t0;
         stats.x_last = x0;
-        const int rows = simulate_rows(t0, t_end, dt);
-        if (rows < 0) return rows;
-        if (opts.every < 0 || opts.final_only < 0) return ERR_BAD_ARG;
-        if (capacity < rows_kept(rows, opts.every, opts.final_only)) return ERR_OUTPUT_FULL;
-        if (opts.project) {
-            st = project_unchecked(t0, p, opts.proj_tol, opts.proj_max_iter, x);
-            if (st) return st;
-        }
-        S t_prev = t0;
-        for (int k = 0; k < rows; ++k) {
-            const S tk = (k == rows - 1) ? t_end : t0 + static_cast<S>(k) * dt;
-            if (k > 0) {
-                st = advance(t_prev, tk, r, p, opts, stats, x);
-                if (st) return st;
-            }
-            st = rhs_unchecked(tk, x, r, p, dx, &lam);
-            if (st) {
-                stats.t_last = tk;
-                stats.x_last = x;
-                return st;
-            }
-            if (keep_row(k, rows, opts.every, opts.final_only)) {
-                const long j = stats.n_out;
-                t_out[j] = tk;
-                for (int i = 0; i < NX; ++i) x_out[j * NX + i] = x[i];
-                if (lam_out)
-                    for (int i = 0; i < MV; ++i) lam_out[j * LAM_STRIDE + i] = lam[i];
-                stats.n_out = static_cast<int>(j) + 1;
-            }
-            t_prev = tk;
-        }
-        return OK;
+        if (!t_out || !x_out) return ERR_NULL;
+        if (!finite(x0) || !finite(r) || !finite(p)) return ERR_NONFINITE_INPUT;
+        return simulate_impl<BasicInput<S>, BasicEvents<S>>(
+            x0, t0, t_end, dt, &r, nullptr, nullptr, p, opts, capacity, t_out, x_out, lam_out,
+            nullptr, stats);
     }
+
+    /* simulate() with the inputs from in (a table, a linear feedback, a
+     * controller; continuous or sampled): see gen_rt.h, gen_rt_input; r_out
+     * (NR per row, may be null) the inputs in effect from each row on */
+    template <class In, class Opts, class Stats>
+    static int simulate_input(const State &x0, S t0, S t_end, S dt, const In &in, const Params &p,
+                              const Opts &opts, int capacity, S *t_out, S *x_out, S *lam_out,
+                              S *r_out, Stats &stats) noexcept
+    {
+        stats = Stats();
+        stats.t_last = t0;
+        stats.x_last = x0;
+        if (!t_out || !x_out) return ERR_NULL;
+        if (!finite(x0) || !finite(p)) return ERR_NONFINITE_INPUT;
+        const int st = input_check(in);
+        if (st) return st;
+        return simulate_impl<In, BasicEvents<S>>(x0, t0, t_end, dt, nullptr, &in, nullptr, p,
+                                                 opts, capacity, t_out, x_out, lam_out, r_out,
+                                                 stats);
+    }
+
+    /* simulate_input() with the events of ev (gen_rt.h, gen_rt_events):
+     * crossings located on the dense output and logged; a terminal one ends
+     * the run with its state as the last row (stats.terminal). */
+    template <class In, class Ev, class Opts, class Stats>
+    static int simulate_events(const State &x0, S t0, S t_end, S dt, const In &in, const Ev &ev,
+                               const Params &p, const Opts &opts, int capacity, S *t_out,
+                               S *x_out, S *lam_out, S *r_out, Stats &stats) noexcept
+    {
+        stats = Stats();
+        stats.t_last = t0;
+        stats.x_last = x0;
+        if (!t_out || !x_out) return ERR_NULL;
+        if (!finite(x0) || !finite(p)) return ERR_NONFINITE_INPUT;
+        const int st = input_check(in);
+        if (st) return st;
+        return simulate_impl<In, Ev>(x0, t0, t_end, dt, nullptr, &in, &ev, p, opts, capacity,
+                                     t_out, x_out, lam_out, r_out, stats);
+    }
+
 
     // ------------------------------------------------ Jacobian and step sensitivity
 
@@ -1060,6 +1216,13 @@ struct Runtime {
                         JacobianR &Jr) noexcept
     {
         if (!finite(t) || !finite(x) || !finite(r) || !finite(p)) return ERR_NONFINITE_INPUT;
+        return jacobian_unchecked(t, x, r, p, Jx, Jr);
+    }
+
+    /* the same, inputs assumed finite (gen_rt_model_jacobian: RODAS4's) */
+    static int jacobian_unchecked(S t, const State &x, const Inputs &r, const Params &p,
+                                  JacobianX &Jx, JacobianR &Jr) noexcept
+    {
         State dx;
         Multipliers lam = Multipliers::Zero();
         const int st = rhs_unchecked(t, x, r, p, dx, &lam);
@@ -1249,129 +1412,6 @@ struct Runtime {
     {
         const S a = t < 0 ? -t : t;
         return 64 * Tol::eps * (a > 1 ? a : S(1));
-    }
-
-    /* simulate() with the inputs from in (a table, a linear feedback, a
-     * controller; continuous or sampled): see gen_rt.h, gen_rt_input */
-    template <class In, class Opts, class Stats>
-    static int simulate_input(const State &x0, S t0, S t_end, S dt, const In &in, const Params &p,
-                              const Opts &opts, int capacity, S *t_out, S *x_out, S *lam_out,
-                              S *r_out, Stats &stats) noexcept
-    {
-        constexpr int LAM_STRIDE = MV > 0 ? MV : 1;
-        stats = Stats();
-        stats.t_last = t0;
-        stats.x_last = x0;
-        if (!t_out || !x_out) return ERR_NULL;
-        if (!finite(x0) || !finite(p)) return ERR_NONFINITE_INPUT;
-        int st = input_check(in);
-        if (st) return st;
-        const bool sampled = in.period > 0;
-        Inputs r_buf = Inputs::Zero(), r_held = Inputs::Zero();
-        S t_seg = t0, t_sampled = t0;
-        bool has_sample = false;
-        auto is_sample = [&](S t) noexcept {
-            if (!sampled) return false;
-            const S k = static_cast<S>(static_cast<long>((t - t0) / in.period + S(0.5)));
-            return (t - (t0 + k * in.period)) <= time_tol(t) &&
-                   (t0 + k * in.period - t) <= time_tol(t);
-        };
-        auto next_break = [&](S t, S t1) noexcept {
-            S tb = t1;
-            const S tol = time_tol(t);
-            if (sampled) {
-                const long k = static_cast<long>((t - t0) / in.period) + 1;
-                S ts = t0 + static_cast<S>(k) * in.period;
-                if (ts <= t + tol) ts = t0 + static_cast<S>(k + 1) * in.period;
-                if (ts < tb - time_tol(tb)) tb = ts;
-            }
-            if (in.n_table > 0) {
-                int k = table_row(in.n_table, in.t_table, t + tol);
-                if (in.t_table[k] <= t + tol) ++k;
-                if (k < in.n_table) {
-                    const S tk = in.t_table[k];
-                    if (tk > t + tol && tk < tb - time_tol(tb)) tb = tk;
-                }
-            }
-            return tb;
-        };
-        int cb_status = OK;
-        auto f = [&](S tt, const State &xx, State &dx) noexcept {
-            if (sampled) return rhs_unchecked(tt, xx, r_held, p, dx, nullptr);
-            Inputs rr;
-            const int s2 = input_at(in, tt, t_seg, xx, rr);
-            if (s2) {
-                cb_status = s2;
-                return s2;
-            }
-            return rhs_unchecked(tt, xx, rr, p, dx, nullptr);
-        };
-        (void)cb_status;
-        State x = x0, dx;
-        Multipliers lam;
-        const int rows = simulate_rows(t0, t_end, dt);
-        if (rows < 0) return rows;
-        if (opts.every < 0 || opts.final_only < 0) return ERR_BAD_ARG;
-        if (capacity < rows_kept(rows, opts.every, opts.final_only)) return ERR_OUTPUT_FULL;
-        if (opts.project) {
-            st = project_unchecked(t0, p, opts.proj_tol, opts.proj_max_iter, x);
-            if (st) return st;
-        }
-        S t_prev = t0;
-        for (int k = 0; k < rows; ++k) {
-            const S tk = (k == rows - 1) ? t_end : t0 + static_cast<S>(k) * dt;
-            if (k > 0) {
-                S t = t_prev;
-                while (t < tk) {
-                    const S tb = next_break(t, tk);
-                    if (is_sample(t) && !(has_sample && t_sampled == t)) {
-                        has_sample = true;
-                        t_sampled = t;
-                        st = input_at(in, t, t, x, r_held);
-                        if (st) {
-                            stats.t_last = t;
-                            stats.x_last = x;
-                            return st;
-                        }
-                    }
-                    t_seg = t;
-                    st = integrate_f(f, p, t, tb, opts, stats, x);
-                    if (st) return st;
-                    t = tb;
-                }
-            }
-            Inputs *rk = &r_buf;
-            if (sampled) {
-                rk = &r_held;
-                if (k == 0 || is_sample(tk)) {
-                    has_sample = true;
-                    t_sampled = tk;
-                    st = input_at(in, tk, tk, x, r_held);
-                } else {
-                    st = OK;
-                }
-            } else {
-                st = input_at(in, tk, tk, x, r_buf);
-            }
-            if (!st) st = rhs_unchecked(tk, x, *rk, p, dx, &lam);
-            if (st) {
-                stats.t_last = tk;
-                stats.x_last = x;
-                return st;
-            }
-            if (keep_row(k, rows, opts.every, opts.final_only)) {
-                const long j = stats.n_out;
-                t_out[j] = tk;
-                for (int i = 0; i < NX; ++i) x_out[j * NX + i] = x[i];
-                if (lam_out)
-                    for (int i = 0; i < MV; ++i) lam_out[j * LAM_STRIDE + i] = lam[i];
-                if (r_out)
-                    for (int i = 0; i < NR; ++i) r_out[j * NR + i] = (*rk)[i];
-                stats.n_out = static_cast<int>(j) + 1;
-            }
-            t_prev = tk;
-        }
-        return OK;
     }
 
     // -------------------------------------------------------- linearization
@@ -1583,6 +1623,642 @@ struct Runtime {
             (void)C_lin;
             (void)D_lin;
         }
+        return OK;
+    }
+
+    // ------------------------------------------------------------ the engine
+    // gen_rt_simulate.c in C++: the same steps, the same arithmetic.
+
+    /* how a step is evaluated inside: the DOPRI5 continuous extension, a
+     * cubic Hermite interpolant (RK4, RODAS4), or not at all */
+    enum Dense : int { DENSE_NONE, DENSE_DOPRI5, DENSE_HERMITE };
+
+    /* the state of a run: the inputs (in == nullptr: the constant *r), the
+     * events (ev == nullptr: none), the step just taken from (t, x) to
+     * (t1, xn), the method's scratch and the adaptive state */
+    template <class In, class Ev, class Opts, class Stats>
+    struct Engine {
+        const Params &p;
+        const Opts &o;
+        Stats &s;
+        const Inputs *r;
+        const In *in;
+        const Ev *ev;
+        Inputs r_held = Inputs::Zero(); // held since the last sample (period > 0)
+        S t_seg, t0, t_sampled;         // start of the sub-interval and of the run; the sample
+        bool sampled = false;
+        bool need_y = false;
+        int dense = DENSE_NONE;
+        S t_span = 0;                   // t_end - t0: the scale of the first step
+        State x, xn, xa, xi, xe;        // now, after the step, inside the step
+        Outputs ya, yb, yi;             // outputs for output events
+        State k[7], y, ynew;            // DOPRI5's stages (RK4: k[0] = f at the start)
+        State f0, f1, dfdt;             // RODAS4 (f1: also RK4's f at the end)
+        JacobianX J;
+        JacobianR Jr;
+        Rodas4Work<S, NX> rw;
+        S t = 0, t1 = 0, h = 0;
+        const State *d_f0 = nullptr, *d_f1 = nullptr; // the Hermite interpolant's slopes
+        S h_next;
+        bool rejected_last = false, f0_valid = false;
+        S err_old = S(1e-4);            // DOPRI5's PI control: the last accepted error
+        long attempts = 0;              // since the last output row
+
+        Engine(const Params &p_, const Opts &o_, Stats &s_, const Inputs *r_, const In *in_,
+               const Ev *ev_, S t0_, const State &x0) noexcept
+            : p(p_), o(o_), s(s_), r(r_), in(in_), ev(ev_), t_seg(t0_), t0(t0_), t_sampled(t0_),
+              x(x0), h_next(s_.h_next)
+        {
+            if constexpr (NY > 0) {
+                if (ev && ev->n > 0)
+                    for (int i = 0; i < ev->n; ++i) need_y = need_y || ev->which[i] >= NX;
+            }
+        }
+
+        /* the right-hand side with the inputs of the run (rhs_cb) */
+        int rhs(S tt, const State &xx, State &dx) const noexcept
+        {
+            if (in && !(in->period > 0)) {
+                Inputs rr;
+                const int st = input_at(*in, tt, t_seg, xx, rr);
+                if (st) return st;
+                return rhs_unchecked(tt, xx, rr, p, dx, nullptr);
+            }
+            return rhs_unchecked(tt, xx, in ? r_held : *r, p, dx, nullptr);
+        }
+
+        /* the input in effect at (tt, xx) during the current step */
+        int inputs_now(S tt, const State &xx, Inputs &rr) const noexcept
+        {
+            if (!in) {
+                rr = *r;
+                return OK;
+            }
+            if (in->period > 0) {
+                rr = r_held;
+                return OK;
+            }
+            return input_at(*in, tt, t_seg, xx, rr);
+        }
+
+        /* is tt a sample time t0 + k period? */
+        bool is_sample(S tt) const noexcept
+        {
+            const S per = in->period;
+            if (!(per > 0)) return false;
+            const S kk = static_cast<S>(static_cast<long>((tt - t0) / per + S(0.5)));
+            return (tt - (t0 + kk * per)) <= time_tol(tt) && (t0 + kk * per - tt) <= time_tol(tt);
+        }
+
+        /* the end of the sub-interval from tt towards tb1: the next sample or knot */
+        S next_break(S tt, S tb1) const noexcept
+        {
+            S tb = tb1;
+            const S tol = time_tol(tt);
+            if (in->period > 0) {
+                const long kk = static_cast<long>((tt - t0) / in->period) + 1;
+                S ts = t0 + static_cast<S>(kk) * in->period;
+                if (ts <= tt + tol) ts = t0 + static_cast<S>(kk + 1) * in->period;
+                if (ts < tb - time_tol(tb)) tb = ts;
+            }
+            if (in->n_table > 0) {
+                int kk = table_row(in->n_table, in->t_table, tt + tol);
+                if (in->t_table[kk] <= tt + tol) ++kk;
+                if (kk < in->n_table) {
+                    const S tk = in->t_table[kk];
+                    if (tk > tt + tol && tk < tb - time_tol(tb)) tb = tk;
+                }
+            }
+            return tb;
+        }
+
+        /* a sample of the inputs at tt from xx (each sample time once) */
+        int sample(S tt, const State &xx) noexcept
+        {
+            if (!in || !(in->period > 0) || !is_sample(tt) || (sampled && t_sampled == tt))
+                return OK;
+            sampled = true;
+            t_sampled = tt;
+            f0_valid = false;
+            return input_at(*in, tt, tt, xx, r_held);
+        }
+
+        int project(S tt, State &xx) const noexcept
+        {
+            if (!o.project) return OK;
+            return project_unchecked(tt, p, o.proj_tol, o.proj_max_iter, xx);
+        }
+
+        /* the state at t + theta h inside the step just taken (not projected) */
+        void dense_at(S theta, State &out) const noexcept
+        {
+            if (theta >= 1) {
+                out = xn;
+                return;
+            }
+            if (dense == DENSE_DOPRI5)
+                dopri5_dense<S, NX>(h, theta, x, ynew, k, out);
+            else
+                hermite<S, NX>(h, theta, x, *d_f0, xn, *d_f1, out);
+        }
+
+        /* the RMS norm of v scaled by atol + rtol |xx| */
+        S scaled_rms(const State &xx, const State &v) const noexcept
+        {
+            S sum = 0;
+            for (int i = 0; i < NX; ++i) {
+                const S rr = v[i] / (o.atol + o.rtol * rt_abs(xx[i]));
+                sum += rr * rr;
+            }
+            return std::sqrt(sum / static_cast<S>(NX));
+        }
+
+        /* The starting step of Hairer's hinit (and SciPy's
+         * select_initial_step): h0 from |x| / |f|, one Euler step to estimate
+         * the second derivative, then h = min(100 h0, (0.01 / max(|f|,
+         * |f'|))^(1/q)), bounded by the span; into h_next. One evaluation of
+         * f (y1, f1: scratch). */
+        int first_step(S tt, const State &xx, const State &fx, int q, State &y1,
+                       State &fy) noexcept
+        {
+            if (o.h_init > 0) {
+                h_next = o.h_init;
+                return OK;
+            }
+            const S d0 = scaled_rms(xx, xx), d1 = scaled_rms(xx, fx);
+            S h0 = (d0 < S(1e-5) || d1 < S(1e-5)) ? S(1e-6) : S(0.01) * d0 / d1;
+            if (t_span > 0) h0 = rt_min(h0, t_span);
+            for (int i = 0; i < NX; ++i) y1[i] = xx[i] + h0 * fx[i];
+            const int st = rhs(tt + h0, y1, fy);
+            if (st) return st;
+            s.n_rhs += 1;
+            for (int i = 0; i < NX; ++i) fy[i] -= fx[i];
+            const S d2 = scaled_rms(xx, fy) / h0;
+            S h1;
+            if (d1 <= S(1e-15) && d2 <= S(1e-15))
+                h1 = rt_max(S(1e-6), h0 * S(1e-3));
+            else
+                h1 = std::pow(S(0.01) / rt_max(d1, d2), S(1.0) / static_cast<S>(q));
+            S hh = rt_min(100 * h0, h1);
+            if (t_span > 0) hh = rt_min(hh, t_span);
+            h_next = hh;
+            return OK;
+        }
+
+        /* err^(-1/q): the step-size factor's power, q = 5 (DOPRI5) or 4 (RODAS4) */
+        static S inv_root(S err, int q) noexcept
+        {
+            return std::pow(err, S(-1.0) / static_cast<S>(q));
+        }
+
+        /* after a trial: the next step size; true when the step is accepted.
+         * q = 5, DOPRI5: Hairer's PI controller (beta = 0.04), factor in
+         * [0.2, 10]; q = 4, RODAS4: err^(-1/4), factor in [0.2, 6]; safety
+         * 0.9; no increase right after a rejection; a failed evaluation
+         * shrinks the step by 4 (gen_rt_simulate.c: control_) */
+        bool control(int st, S err, S hh, bool last, int q) noexcept
+        {
+            const S h_nat = h_next;
+            const S fac_max = q == 5 ? S(10.0) : S(6.0);
+            S fac;
+            if (st || !(err <= S(1.0))) {
+                s.n_rejected += 1;
+                if (st == 0 && err == err)
+                    fac = rt_max(S(0.2), S(0.9) * inv_root(err, q));
+                else
+                    fac = S(0.25); // a failed evaluation: shrink towards it
+                h_next = hh * fac;
+                rejected_last = true;
+                return false;
+            }
+            if (q == 5) {
+                const S e0 = rt_max(err, S(1e-10));
+                fac = S(0.9) * std::pow(e0, -S(0.17)) * std::pow(err_old, S(0.04));
+                err_old = rt_max(err, S(1e-4));
+            } else {
+                fac = err > 0 ? S(0.9) * inv_root(err, q) : fac_max;
+            }
+            fac = rt_min(rejected_last ? S(1.0) : fac_max, rt_max(S(0.2), fac));
+            // a clipped step says little about the natural step
+            h_next = (last && fac >= S(1.0)) ? rt_max(hh * fac, h_nat) : hh * fac;
+            if (o.h_max > 0) h_next = rt_min(h_next, o.h_max);
+            rejected_last = false;
+            s.n_accepted += 1;
+            return true;
+        }
+
+        /* the trial step: hh, within the step budget and above hmin */
+        int trial_size(S &hh, S hmin) noexcept
+        {
+            const long max_steps = o.max_steps > 0 ? o.max_steps : 100000L;
+            if (attempts >= max_steps) return ERR_MAX_STEPS;
+            if (h_next < hmin) return ERR_STEP_UNDERFLOW;
+            attempts += 1;
+            hh = h_next;
+            return OK;
+        }
+
+        /* one accepted step from (t_, x) towards t_stop: t1, xn (projected)
+         * and what dense_at needs; a failure leaves x untouched */
+        int step(S t_, S t_stop) noexcept
+        {
+            auto f = [this](S tt, const State &xx, State &dx) noexcept { return rhs(tt, xx, dx); };
+            const S hmin = o.h_min > 0 ? o.h_min
+                                       : 64 * Tol::eps * rt_max(S(1.0), rt_abs(t_stop));
+            int st;
+            t = t_;
+            if (o.method == METHOD_RK4) {
+                const S hh = t_stop - t;
+                xn = x;
+                st = rk4_step<S, NX>(f, t, hh, xn, k[0]);
+                s.n_rhs += 4;
+                if (!st) st = project(t_stop, xn);
+                if (st) return st;
+                s.n_accepted += 1;
+                t1 = t_stop;
+                h = hh;
+                dense = DENSE_NONE;
+                if (ev && ev->n > 0) {
+                    // the Hermite interpolant for events: f at the end as well
+                    if ((st = rhs(t_stop, xn, f1))) return st;
+                    s.n_rhs += 1;
+                    dense = DENSE_HERMITE;
+                    d_f0 = &k[0];
+                    d_f1 = &f1;
+                }
+                return OK;
+            }
+            if (o.method == METHOD_DOPRI5) {
+                if (f0_valid) {
+                    k[0] = k[6]; // first same as last
+                } else {
+                    if ((st = rhs(t, x, k[0]))) return st;
+                    s.n_rhs += 1;
+                    f0_valid = true;
+                }
+                if (h_next <= 0 && (st = first_step(t, x, k[0], 5, y, ynew))) return st;
+                if (o.h_max > 0) h_next = rt_min(h_next, o.h_max);
+                for (;;) {
+                    S hh, err = 0;
+                    bool last = false;
+                    if ((st = trial_size(hh, hmin))) return st;
+                    if (t + hh >= t_stop || t + S(1.0001) * hh >= t_stop) {
+                        hh = t_stop - t;
+                        last = true;
+                    }
+                    st = dopri5_trial<S, NX>(f, t, hh, x, o.rtol, o.atol, k, y, ynew, err);
+                    s.n_rhs += 6;
+                    if (!control(st, err, hh, last, 5)) {
+                        if (h_next < hmin) return st ? st : ERR_STEP_UNDERFLOW;
+                        continue;
+                    }
+                    t1 = last ? t_stop : t + hh;
+                    h = hh;
+                    break;
+                }
+                xn = ynew;
+                if ((st = project(t1, xn))) return st;
+                // k7 = f(t1, ynew) starts the next step unless projection moved it
+                for (int i = 0; i < NX; ++i)
+                    if (xn[i] != ynew[i]) {
+                        f0_valid = false;
+                        break;
+                    }
+                dense = DENSE_DOPRI5;
+                return OK;
+            }
+            if (o.method == METHOD_RODAS4) {
+                Inputs rr;
+                if (f0_valid) {
+                    f0 = f1;
+                } else {
+                    if ((st = rhs(t, x, f0))) return st;
+                    s.n_rhs += 1;
+                }
+                // J = df/dx of the closed loop: the model's, and a continuous
+                // linear feedback's through df/dr (a controller's is not known)
+                if ((st = inputs_now(t, x, rr))) return st;
+                if ((st = jacobian_unchecked(t, x, rr, p, J, Jr))) return st;
+                s.n_jac += 1;
+                if constexpr (NR > 0) {
+                    if (in && !(in->period > 0) && in->K) {
+                        for (int j = 0; j < NS; ++j) {
+                            const int col = j < NQI ? Model::q_ind[j] : NQ + Model::u_ind[j - NQI];
+                            for (int a = 0; a < NX; ++a) {
+                                S sum = 0;
+                                for (int b = 0; b < NR; ++b)
+                                    sum += Jr(a, b) * in->K[static_cast<long>(b) * NS + j];
+                                J(a, col) -= sum;
+                            }
+                        }
+                    }
+                }
+                // df/dt by a forward difference (the inputs' time dependence too),
+                // with Hairer's increment sqrt(eps max(1e-5, |t|))
+                const S dt = std::sqrt(Tol::eps * rt_max(S(1e-5), rt_abs(t)));
+                if ((st = rhs(t + dt, x, y))) return st;
+                s.n_rhs += 1;
+                for (int i = 0; i < NX; ++i) dfdt[i] = (y[i] - f0[i]) / dt;
+                if (h_next <= 0 && (st = first_step(t, x, f0, 4, ynew, y))) return st;
+                if (o.h_max > 0) h_next = rt_min(h_next, o.h_max);
+                for (;;) {
+                    S hh, err = 0;
+                    bool last = false;
+                    if ((st = trial_size(hh, hmin))) return st;
+                    if (t + hh >= t_stop || t + S(1.0001) * hh >= t_stop) {
+                        hh = t_stop - t;
+                        last = true;
+                    }
+                    st = rodas4_trial<S, NX>(f, t, hh, x, f0, J, dfdt, o.rtol, o.atol, rw, ynew,
+                                             err);
+                    s.n_rhs += 5;
+                    if (st == ERR_SINGULAR && err < 0) {
+                        // I/(h gamma) - J singular: a property of this step
+                        // size, not of the model; rejected like a large error
+                        st = OK;
+                        err = S(1e30);
+                    }
+                    if (!st && err <= S(1.0)) {
+                        // f at the new state: the interpolant's end and the next
+                        // f0 (a failure there rejects the step)
+                        const S tn = last ? t_stop : t + hh;
+                        xn = ynew;
+                        st = project(tn, xn);
+                        if (!st) {
+                            st = rhs(tn, xn, f1);
+                            s.n_rhs += 1;
+                        }
+                    }
+                    if (!control(st, err, hh, last, 4)) {
+                        if (h_next < hmin) return st ? st : ERR_STEP_UNDERFLOW;
+                        continue;
+                    }
+                    t1 = last ? t_stop : t + hh;
+                    h = hh;
+                    break;
+                }
+                f0_valid = true;
+                dense = DENSE_HERMITE;
+                d_f0 = &f0;
+                d_f1 = &f1;
+                return OK;
+            }
+            return ERR_BAD_ARG;
+        }
+
+        // ---- events
+
+        /* the outputs at (tt, xx) with the inputs of the current step */
+        int outputs(S tt, const State &xx, Outputs &yy) const noexcept
+        {
+            if constexpr (NY > 0) {
+                if (!need_y) return OK;
+                Inputs rr;
+                const int st = inputs_now(tt, xx, rr);
+                if (st) return st;
+                Model::outputs(xx.data(), xx.data() + NQ, rr.data(), p.data(), tt, yy.data());
+                return finite(yy) ? OK : ERR_NONFINITE_MODEL;
+            } else {
+                (void)tt, (void)xx, (void)yy;
+                return OK;
+            }
+        }
+
+        S event_g(int i, const State &xx, const Outputs &yy) const noexcept
+        {
+            const int w = ev->which[i];
+            S v;
+            if constexpr (NY > 0)
+                v = w < NX ? xx[w] : yy[w - NX];
+            else
+                (void)yy, v = xx[w];
+            return v - (ev->level ? ev->level[i] : S(0));
+        }
+
+        static bool crosses(int dir, S ga, S gb) noexcept
+        {
+            return (dir >= 0 && ga < 0 && gb >= 0) || (dir <= 0 && ga > 0 && gb <= 0);
+        }
+
+        /* the crossing of event i in (lo, hi] on the dense output (Illinois,
+         * with a bisection every third iteration): the end of the final
+         * bracket on the side of ghi, to a few units of rounding in t */
+        int event_root(int i, S lo, S hi, S glo, S ghi, S &theta) noexcept
+        {
+            const S tol = 4 * Tol::eps * rt_max(S(1.0), rt_max(rt_abs(t), rt_abs(t1)));
+            int side = 0, st;
+            for (int it = 0; it < 300 && ghi != 0; ++it) {
+                if ((hi - lo) * rt_abs(h) <= tol) break;
+                S mid = hi - ghi * (hi - lo) / (ghi - glo);
+                if (it % 3 == 2 || !(mid > lo && mid < hi)) mid = S(0.5) * (lo + hi);
+                if (!(mid > lo && mid < hi)) break;
+                dense_at(mid, xi);
+                if ((st = outputs(t + mid * h, xi, yi))) return st;
+                const S gm = event_g(i, xi, yi);
+                if (gm == 0) {
+                    hi = mid;
+                    break;
+                }
+                if ((gm > 0) == (ghi > 0)) {
+                    hi = mid;
+                    ghi = gm;
+                    if (side == 1) glo *= S(0.5);
+                    side = 1;
+                } else {
+                    lo = mid;
+                    glo = gm;
+                    if (side == -1) ghi *= S(0.5);
+                    side = -1;
+                }
+            }
+            theta = hi;
+            return OK;
+        }
+
+        /* the events in the step just taken, in time order: logged, and stop
+         * set (with te, xe) at the first terminal one */
+        int events(bool &stop, S &te) noexcept
+        {
+            S a = 0;
+            int st;
+            stop = false;
+            if (!ev || ev->n <= 0) return OK;
+            if ((st = outputs(t, x, ya))) return st;
+            if ((st = outputs(t1, xn, yb))) return st;
+            xa = x;
+            while (a < 1) {
+                int best = -1;
+                S th_best = 2;
+                for (int i = 0; i < ev->n; ++i) {
+                    const S ga = event_g(i, xa, ya), gb = event_g(i, xn, yb);
+                    S th;
+                    if (!crosses(ev->direction[i], ga, gb)) continue;
+                    if ((st = event_root(i, a, 1, ga, gb, th))) return st;
+                    if (th < th_best) {
+                        th_best = th;
+                        best = i;
+                    }
+                }
+                if (best < 0) break;
+                const S t_ev = th_best >= 1 ? t1 : t + th_best * h;
+                dense_at(th_best, xe);
+                if (th_best < 1 && (st = project(t_ev, xe))) return st;
+                if (s.n_events < ev->capacity) {
+                    ev->log_which[s.n_events] = best;
+                    ev->log_t[s.n_events] = t_ev;
+                    for (int i = 0; i < NX; ++i)
+                        ev->log_x[static_cast<long>(s.n_events) * NX + i] = xe[i];
+                }
+                s.n_events += 1;
+                if (ev->terminal && ev->terminal[best]) {
+                    stop = true;
+                    te = t_ev;
+                    s.terminal = best;
+                    return OK;
+                }
+                a = th_best;
+                // search on from the dense output at the event (not the
+                // projected state logged: projection may move the value back
+                // across the level, and the same crossing would be found again)
+                dense_at(a, xa);
+                if (a < 1 && (st = outputs(t_ev, xa, ya))) return st;
+            }
+            return OK;
+        }
+    };
+
+    template <class Ev>
+    static int events_check(const Ev *ev) noexcept
+    {
+        if (!ev || ev->n == 0) return OK;
+        if (ev->n < 0 || ev->capacity < 0) return ERR_BAD_ARG;
+        if (!ev->which || !ev->direction) return ERR_NULL;
+        if (ev->capacity > 0 && (!ev->log_which || !ev->log_t || !ev->log_x)) return ERR_NULL;
+        if (ev->level)
+            for (int i = 0; i < ev->n; ++i)
+                if (!finite(ev->level[i])) return ERR_NONFINITE_INPUT;
+        for (int i = 0; i < ev->n; ++i) {
+            if (ev->which[i] < 0 || ev->which[i] >= NX + NY) return ERR_BAD_ARG;
+            if (ev->direction[i] < -1 || ev->direction[i] > 1) return ERR_BAD_ARG;
+        }
+        return OK;
+    }
+
+    /* what simulate writes: the rows and where they go */
+    struct RowSink {
+        int rows, capacity;
+        S t0, t_end, dt;
+        S *t_out, *x_out, *lam_out, *r_out;
+
+        S row_time(int k) const noexcept
+        {
+            return (k == rows - 1) ? t_end : t0 + static_cast<S>(k) * dt;
+        }
+    };
+
+    /* row k at tk with state xr: the inputs in effect from tk on, the
+     * multipliers, stored if kept */
+    template <class E>
+    static int emit_row(E &e, const RowSink &out, int k, bool last, S tk,
+                        const State &xr) noexcept
+    {
+        constexpr int LAM_STRIDE = MV > 0 ? MV : 1;
+        Inputs rk;
+        State dx;
+        Multipliers lam;
+        int st;
+        if (e.in) {
+            if (e.in->period > 0) {
+                rk = e.r_held;
+            } else {
+                if ((st = input_at(*e.in, tk, tk, xr, rk))) return st;
+            }
+        } else {
+            rk = *e.r;
+        }
+        if ((st = rhs_unchecked(tk, xr, rk, e.p, dx, &lam))) return st;
+        e.attempts = 0;
+        const auto &op = e.o;
+        if (op.final_only ? last : (op.every <= 1 || k % op.every == 0 || last)) {
+            const long j = e.s.n_out;
+            if (j >= out.capacity) return ERR_OUTPUT_FULL;
+            out.t_out[j] = tk;
+            for (int i = 0; i < NX; ++i) out.x_out[j * NX + i] = xr[i];
+            if (out.lam_out)
+                for (int i = 0; i < MV; ++i) out.lam_out[j * LAM_STRIDE + i] = lam[i];
+            if (out.r_out)
+                for (int i = 0; i < NR; ++i) out.r_out[j * NR + i] = rk[i];
+            e.s.n_out = static_cast<int>(j) + 1;
+        }
+        return OK;
+    }
+
+    /* simulate, simulate_input and simulate_events (gen_rt_simulate.c:
+     * simulate_): in == nullptr for the constant *r, ev == nullptr for no
+     * events; stats already reset */
+    template <class In, class Ev, class Opts, class Stats>
+    static int simulate_impl(const State &x0, S t0, S t_end, S dt, const Inputs *r, const In *in,
+                             const Ev *ev, const Params &p, const Opts &opts, int capacity,
+                             S *t_out, S *x_out, S *lam_out, S *r_out, Stats &stats) noexcept
+    {
+        int st;
+        const int rows = simulate_rows(t0, t_end, dt);
+        if (rows < 0) return rows;
+        if (opts.every < 0 || opts.final_only < 0 || !method_ok(opts)) return ERR_BAD_ARG;
+        if (capacity < rows_kept(rows, opts.every, opts.final_only)) return ERR_OUTPUT_FULL;
+        if ((st = events_check(ev))) return st;
+        Engine<In, Ev, Opts, Stats> e(p, opts, stats, r, in, ev, t0, x0);
+        e.t_span = t_end - t0;
+        const RowSink out{rows, capacity, t0, t_end, dt, t_out, x_out, lam_out, r_out};
+        S t = t0;
+        auto fail_at = [&stats](S tf, const State &xf) noexcept {
+            stats.t_last = tf;
+            stats.x_last = xf;
+        };
+        if ((st = e.project(t0, e.x))) return st;
+        if (in && in->period > 0 && (st = e.sample(t0, e.x))) return fail_at(t0, e.x), st;
+        if ((st = emit_row(e, out, 0, rows == 1, t0, e.x))) return fail_at(t0, e.x), st;
+        int k = 1;
+        while (k < rows) {
+            S t_stop = opts.method == METHOD_RK4 ? out.row_time(k) : t_end;
+            bool stop = false;
+            S te = 0;
+            if (in) t_stop = e.next_break(t, t_stop);
+            if ((st = e.sample(t, e.x))) return fail_at(t, e.x), st;
+            e.t_seg = t;
+            if ((st = e.step(t, t_stop))) return fail_at(t, e.x), st;
+            if ((st = e.events(stop, te))) return fail_at(t, e.x), st;
+            // a sample at t1 comes first: the rows at t1 show the new input
+            if (!stop && (st = e.sample(e.t1, e.xn))) return fail_at(t, e.x), st;
+            while (k < rows) {
+                const S tk = out.row_time(k), tol1 = time_tol(e.t1);
+                const State *xr = &e.xn;
+                if (stop ? !(tk < te - time_tol(te)) : !(tk <= e.t1 + tol1)) break;
+                if (tk < e.t1 - tol1) {
+                    // inside the step: the dense output, projected
+                    e.dense_at((tk - t) / e.h, e.xi);
+                    if ((st = e.project(tk, e.xi))) return fail_at(t, e.x), st;
+                    xr = &e.xi;
+                }
+                if ((st = emit_row(e, out, k, k == rows - 1, tk, *xr))) return fail_at(t, e.x), st;
+                ++k;
+            }
+            if (stop) {
+                // the run ends at the terminal event: its state is the last row
+                if ((st = emit_row(e, out, k, true, te, e.xe))) return fail_at(t, e.x), st;
+                stats.t_last = te;
+                stats.h_next = e.h_next;
+                stats.x_last = e.xe;
+                return OK;
+            }
+            // the inputs may change at a break: f at t1 is evaluated afresh
+            if (in && t_stop < t_end && e.t1 == t_stop) e.f0_valid = false;
+            e.x = e.xn;
+            t = e.t1;
+        }
+        stats.t_last = t_end;
+        stats.h_next = e.h_next;
+        stats.x_last = e.x;
         return OK;
     }
 };

@@ -5,7 +5,8 @@
 //   Pendulum: a planar pendulum in x, y with x^2 + y^2 = L^2 and
 //     x vx + y vy = 0 (Kane partition: x, vx independent; y, vy dependent),
 //     gravity along -y.
-// Checked against closed forms, for double and float in one program, with
+// The simulation engine (RODAS4, DOPRI5's dense output, events) on the
+// oscillator. Checked against closed forms, for double and float in one program, with
 // heap allocation forbidden around every runtime call. Prints "ok" and exits
 // 0, or names each failure and exits 1.
 #define EIGEN_RUNTIME_NO_MALLOC
@@ -46,8 +47,8 @@ struct Options {
 
 template <class S, int NX>
 struct Stats {
-    long n_accepted = 0, n_rejected = 0, n_rhs = 0;
-    int n_out = 0;
+    long n_accepted = 0, n_rejected = 0, n_rhs = 0, n_jac = 0;
+    int n_out = 0, n_events = 0, terminal = -1;
     S t_last = S(0), h_next = S(0);
     gen_rt::Mat<S, NX, 1> x_last = gen_rt::Mat<S, NX, 1>::Zero();
 };
@@ -555,6 +556,109 @@ void test_pendulum()
            "project: no convergence, x unchanged");
 }
 
+
+// the simulation engine: RODAS4 with the model Jacobian, the dense output
+// of DOPRI5, and a terminal event located on it (the oscillator's closed form)
+void test_engine()
+{
+    using RT = gen_rt::Runtime<Oscillator<false>, double>;
+    typename RT::Params p;
+    p << 1, 4, 0.4;
+    const typename RT::Inputs r = RT::Inputs::Zero();
+    double q, u;
+    exact(2.0, q, u);
+    // RODAS4 by advance: the closed form, one Jacobian per accepted step
+    typename RT::State x(1.0, 0.0);
+    Options<double> o;
+    o.method = gen_rt::METHOD_RODAS4;
+    o.rtol = 1e-9;
+    o.atol = 1e-11;
+    Stats<double, 2> stats;
+    int st;
+    {
+        NoHeap guard;
+        st = RT::advance(0.0, 2.0, r, p, o, stats, x);
+    }
+    double e = std::fmax(std::abs(x[0] - q), std::abs(x[1] - u));
+    expect(st == gen_rt::OK && e < 1e-7 && stats.n_jac == stats.n_accepted && stats.n_jac > 10,
+           "RODAS4: error vs closed form, one Jacobian per step", e);
+    // DOPRI5 rows every 0.25 from the continuous extension, steps by error alone
+    double t_out[9], x_out[18];
+    Stats<double, 2> ss;
+    o.method = gen_rt::METHOD_DOPRI5;
+    o.rtol = 1e-10;
+    o.atol = 1e-12;
+    {
+        NoHeap guard;
+        st = RT::simulate(typename RT::State(1.0, 0.0), 0.0, 2.0, 0.25, r, p, o, 9, t_out, x_out,
+                          nullptr, ss);
+    }
+    e = 0;
+    for (int k = 0; k < 9; ++k) {
+        exact(t_out[k], q, u);
+        e = std::fmax(e, std::fmax(std::abs(x_out[2 * k] - q), std::abs(x_out[2 * k + 1] - u)));
+    }
+    expect(st == gen_rt::OK && ss.n_out == 9 && t_out[8] == 2.0 && e < 1e-8 &&
+               ss.n_accepted > 9 && ss.n_jac == 0,
+           "DOPRI5 dense output rows vs closed form", e);
+    // the first downward zero of q, terminal: t = (pi - atan(wd / a)) / wd
+    const double a = 0.2, wd = std::sqrt(4.0 - a * a);
+    const double tz = (std::acos(-1.0) - std::atan(wd / a)) / wd;
+    const int which[1] = {0}, dir[1] = {-1}, term[1] = {1};
+    int log_which[2] = {-1, -1};
+    double log_t[2] = {0, 0}, log_x[4] = {0, 0, 0, 0};
+    gen_rt::BasicEvents<double> ev;
+    ev.n = 1;
+    ev.which = which;
+    ev.direction = dir;
+    ev.terminal = term;
+    ev.capacity = 2;
+    ev.log_which = log_which;
+    ev.log_t = log_t;
+    ev.log_x = log_x;
+    gen_rt::BasicInput<double> in;
+    for (int method : {gen_rt::METHOD_DOPRI5, gen_rt::METHOD_RODAS4, gen_rt::METHOD_RK4}) {
+        Stats<double, 2> se;
+        o.method = method;
+        {
+            NoHeap guard;
+            st = RT::simulate_events(typename RT::State(1.0, 0.0), 0.0, 2.0, 0.25, in, ev, p, o,
+                                     9, t_out, x_out, nullptr, nullptr, se);
+        }
+        const double tol = method == gen_rt::METHOD_RK4 ? 2e-3 : 1e-8; // RK4: h = 0.25
+        char what[120];
+        std::snprintf(what, sizeof what, "event (method %d): terminal at the zero of q, last row",
+                      method);
+        expect(st == gen_rt::OK && se.n_events == 1 && se.terminal == 0 && log_which[0] == 0 &&
+                   std::abs(log_t[0] - tz) < tol && std::abs(log_x[0]) < tol &&
+                   se.n_out == 5 && t_out[4] == log_t[0] && x_out[8] == log_x[0] &&
+                   se.t_last == log_t[0],
+               what, log_t[0] - tz);
+    }
+    // bad event descriptions
+    Stats<double, 2> sb;
+    const int bad_which[1] = {2};
+    ev.which = bad_which;
+    expect(RT::simulate_events(typename RT::State(1.0, 0.0), 0.0, 2.0, 0.25, in, ev, p, o, 9,
+                               t_out, x_out, nullptr, nullptr, sb) == gen_rt::ERR_BAD_ARG,
+           "event on a state that does not exist: ERR_BAD_ARG");
+    // float: the same engine in single precision
+    using RTf = gen_rt::Runtime<Oscillator<false>, float>;
+    typename RTf::State xf(1.0f, 0.0f);
+    Options<float> of;
+    of.method = gen_rt::METHOD_RODAS4;
+    of.rtol = 1e-5f;
+    of.atol = 1e-6f;
+    Stats<float, 2> sf;
+    {
+        NoHeap guard;
+        st = RTf::advance(0.0f, 2.0f, RTf::Inputs::Zero(), RTf::Params(1.0f, 4.0f, 0.4f), of, sf,
+                          xf);
+    }
+    exact(2.0, q, u);
+    e = std::fmax(std::abs(xf[0] - q), std::abs(xf[1] - u));
+    expect(st == gen_rt::OK && e < 1e-3, "float: RODAS4 error vs closed form", e);
+}
 } // namespace
 
 int main()
@@ -566,6 +670,7 @@ int main()
     test_float();
     test_pendulum();
     test_auxiliary();
+    test_engine();
     if (failures) {
         std::printf("%d failures\n", failures);
         return 1;

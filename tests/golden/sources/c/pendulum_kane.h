@@ -46,6 +46,7 @@ typedef double pendulum_kane_real;
 /* Integration methods for pendulum_kane_sim_options.method */
 #define PENDULUM_KANE_METHOD_RK4 0
 #define PENDULUM_KANE_METHOD_DOPRI5 1
+#define PENDULUM_KANE_METHOD_RODAS4 2
 
 /*
  * Model: Kane's method (dependent speeds eliminated numerically)
@@ -83,14 +84,14 @@ typedef int (*pendulum_kane_controller)(void *ctx, pendulum_kane_real t, const p
 
 /* Integration options (fill with pendulum_kane_sim_options_default). */
 typedef struct {
-    int method; /* PENDULUM_KANE_METHOD_RK4 or PENDULUM_KANE_METHOD_DOPRI5 */
+    int method; /* PENDULUM_KANE_METHOD_RK4 (on the output grid), PENDULUM_KANE_METHOD_DOPRI5 or PENDULUM_KANE_METHOD_RODAS4 (adaptive, dense output) */
     int project; /* 1: project onto the constraints after each step */
-    pendulum_kane_real rtol; /* dopri5 relative tolerance */
-    pendulum_kane_real atol; /* dopri5 absolute tolerance */
-    pendulum_kane_real h_init; /* dopri5 first step, <= 0: automatic */
-    pendulum_kane_real h_min; /* dopri5 minimum step, <= 0: automatic */
-    pendulum_kane_real h_max; /* dopri5 maximum step, <= 0: unbounded */
-    long max_steps; /* dopri5 step budget per output interval */
+    pendulum_kane_real rtol; /* adaptive: relative tolerance */
+    pendulum_kane_real atol; /* adaptive: absolute tolerance */
+    pendulum_kane_real h_init; /* adaptive: first step, <= 0: automatic */
+    pendulum_kane_real h_min; /* adaptive: minimum step, <= 0: automatic */
+    pendulum_kane_real h_max; /* adaptive: maximum step, <= 0: unbounded */
+    long max_steps; /* adaptive: step budget between two output rows */
     pendulum_kane_real proj_tol; /* projection: relative tolerance on the correction */
     int proj_max_iter; /* projection: Newton iterations */
     int every; /* simulate: keep every k-th output row and the last (<= 1: all) */
@@ -111,14 +112,30 @@ typedef struct {
     pendulum_kane_real period; /* 0: r evaluated at every stage; > 0: sampled at t0 + k period and held */
 } pendulum_kane_input;
 
+/* Events of simulate_events: crossings of a level by a state or an output, located on the dense output; the log of those found. Zero-fill it and set what you use. */
+typedef struct {
+    int n; /* number of event functions */
+    const int *which; /* n: 0..NX-1 the state x[which], NX..NX+NY-1 the output y[which - NX] */
+    const int *direction; /* n: +1 crossing upwards, -1 downwards, 0 both */
+    const int *terminal; /* n (NULL: none): nonzero ends the run at the event */
+    const pendulum_kane_real *level; /* n (NULL: zero): the level crossed */
+    int capacity; /* events the log holds */
+    int *log_which; /* capacity: the event's index i */
+    pendulum_kane_real *log_t; /* capacity: its time */
+    pendulum_kane_real *log_x; /* capacity x NX: its state (the dense output, projected) */
+} pendulum_kane_events;
+
 /* Integration statistics (advance accumulates them). */
 typedef struct {
     long n_accepted; /* accepted steps */
     long n_rejected; /* rejected steps (dopri5) */
     long n_rhs; /* right-hand-side evaluations */
+    long n_jac; /* Jacobian evaluations (rodas4) */
     int n_out; /* output rows written */
+    int n_events; /* events found (simulate_events; the log holds the first capacity) */
+    int terminal; /* the terminal event that ended the run, -1: none */
     pendulum_kane_real t_last; /* time of the last good state */
-    pendulum_kane_real h_next; /* dopri5: step size to continue with */
+    pendulum_kane_real h_next; /* adaptive: step size to continue with */
     pendulum_kane_real x_last[4]; /* last good state (on failure: where it failed) */
 } pendulum_kane_sim_stats;
 
@@ -167,7 +184,7 @@ void pendulum_kane_sim_options_default(pendulum_kane_sim_options *opts);
 /* One classic RK4 step of size h from t, x updated in place (unchanged on failure). */
 int pendulum_kane_step_rk4(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, int project, pendulum_kane_real *x);
 
-/* Integrate x from t0 to t1 (one RK4 step, or adaptive DOPRI5 steps); stats accumulate. */
+/* Integrate x from t0 to t1 (one RK4 step, or adaptive DOPRI5 or RODAS4 steps); stats accumulate. */
 int pendulum_kane_advance(pendulum_kane_real t0, pendulum_kane_real t1, const pendulum_kane_real *r, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, pendulum_kane_sim_stats *stats, pendulum_kane_real *x);
 
 /* Number of output rows simulate() writes for these times (or a negative status). */
@@ -178,6 +195,9 @@ int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, 
 
 /* simulate() with the inputs from in (a table, a linear feedback, a controller callback; continuous or sampled): r_out (NR per row, may be NULL) gets the inputs in effect from each output time on. */
 int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_input *in, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_real *r_out, pendulum_kane_sim_stats *stats);
+
+/* simulate_input() with events (ev): crossings logged in ev's log, a terminal event ends the run with its state as the last row (stats->terminal). */
+int pendulum_kane_simulate_events(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_input *in, const pendulum_kane_events *ev, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_real *r_out, pendulum_kane_sim_stats *stats);
 
 /* Linearize about any operating point: A (NS x NS) and B (NS x NR) for the independent state [q_ind, u_ind]. */
 int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B);

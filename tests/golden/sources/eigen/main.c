@@ -18,6 +18,9 @@
 #define MC PENDULUM_KANE_MC
 #define MV PENDULUM_KANE_MV
 #define NS PENDULUM_KANE_NS
+#define NY PENDULUM_KANE_NY
+#define MAX_EVENTS 256      /* --event options */
+#define EVENT_LOG 1024      /* events logged before a rerun with a larger log */
 
 static const char *state_names[NX] = { "q2", "q1", "u2", "u1" };
 static const char *param_names[NP] = { "L", "m", "g" };
@@ -31,8 +34,9 @@ static void usage(FILE *out)
         "constraint residuals) to stdout or --output.\n\n"
         "  --t-end T          end time (default 10)\n"
         "  --dt DT            output interval; also the RK4 step (default 0.01)\n"
-        "  --method M         rk4 (default) or dopri5\n"
-        "  --rtol R --atol A  dopri5 tolerances (default 1e-8, 1e-10)\n"
+        "  --method M         rk4 (default), dopri5 or rodas4 (alias rodas: implicit, for\n"
+        "                     stiff models)\n"
+        "  --rtol R --atol A  dopri5/rodas4 tolerances (default 1e-8, 1e-10)\n"
         "  --x0 NAME=V        initial value of a state (repeatable), or\n"
         "  --x0 V1,V2,...     all 4 states in order\n"
         "  --param NAME=V     constant value (repeatable)\n"
@@ -45,6 +49,12 @@ static void usage(FILE *out)
         "  --period TS        sample the feedback every TS and hold it (default: continuous)\n"
         "  --every K          write every K-th output row and the last\n"
         "  --final-only       write only the row at --t-end\n"
+        "  --event NAME[=LEVEL]:DIR[:terminal]\n"
+        "                     log the crossings of LEVEL (default 0) by a state or an output\n"
+        "                     NAME; DIR +1 (or 1, up), -1 (down) or 0 (both); terminal: the\n"
+        "                     first crossing ends the run, its state the last row (repeatable)\n"
+        "  --events-csv FILE  write the events to FILE as CSV 'event,t,<states>' (default:\n"
+        "                     one line 'event NAME t=T <state>' per event on stderr)\n"
         "  --no-consistent    do not solve the dependent states from the independent ones\n"
         "  --no-project       do not project onto the constraints after each step\n"
         "  --output FILE      write the CSV to FILE\n"
@@ -122,6 +132,63 @@ static int parse_list(const char *v, pendulum_kane_real *vals, int n, const char
     return 0;
 }
 
+/* the states and outputs an event may watch, for an error message */
+static void list_event_names(FILE *out)
+{
+    int i;
+    fprintf(out, "states:");
+    for (i = 0; i < NX; ++i) fprintf(out, " %s", state_names[i]);
+    fprintf(out, " (the model has no outputs)");
+    fprintf(out, "\n");
+}
+
+/* the NAME of a state, or of an output (NX + its index) */
+static const char *event_name(int which)
+{
+    return state_names[which];
+}
+
+/* --event NAME[=LEVEL]:DIR[:terminal] into which (0..NX-1 a state, NX.. an
+ * output), direction, terminal and level; 0 or a usage error code */
+static int parse_event(const char *arg, int *which, int *direction, int *terminal,
+                       pendulum_kane_real *level)
+{
+    char buf[512];
+    char *colon, *dir, *flag, *eq;
+    size_t len;
+    if (strlen(arg) >= sizeof buf) return fail_usage("--event too long", NULL);
+    strcpy(buf, arg);
+    colon = strchr(buf, ':');
+    if (!colon) return fail_usage("--event must be NAME[=LEVEL]:DIR[:terminal]", arg);
+    *colon = '\0';
+    dir = colon + 1;
+    flag = strchr(dir, ':');
+    if (flag) *flag++ = '\0';
+    *level = 0;
+    eq = strchr(buf, '=');
+    if (eq) {
+        *eq = '\0';
+        if (parse_real(eq + 1, level)) return fail_usage("--event: the level is not a finite number", arg);
+    }
+    len = strlen(buf);
+    *which = find_name(state_names, NX, buf, len);
+    if (*which < 0) {
+        fprintf(stderr, "pendulum_kane_sim: --event: unknown state or output '%s' in '%s'; ", buf, arg);
+        list_event_names(stderr);
+        return 2;
+    }
+    if (strcmp(dir, "+1") == 0 || strcmp(dir, "1") == 0 || strcmp(dir, "up") == 0) *direction = 1;
+    else if (strcmp(dir, "-1") == 0 || strcmp(dir, "down") == 0) *direction = -1;
+    else if (strcmp(dir, "0") == 0 || strcmp(dir, "both") == 0) *direction = 0;
+    else return fail_usage("--event: the direction must be +1 (1, up), -1 (down) or 0 (both)", arg);
+    *terminal = 0;
+    if (flag) {
+        if (strcmp(flag, "terminal") != 0) return fail_usage("--event: expected ':terminal' after the direction", arg);
+        *terminal = 1;
+    }
+    return 0;
+}
+
 static void print_matrix(FILE *out, const char *label, const pendulum_kane_real *a, int rows,
                          int cols)
 {
@@ -146,6 +213,11 @@ int main(int argc, char **argv)
     int hold = PENDULUM_KANE_HOLD_ZOH;
     pendulum_kane_input in;
     pendulum_kane_real *t_table = NULL, *r_table = NULL, *K = NULL;
+    /* --event: the events' spec; the log of those found (malloc'ed) */
+    int ev_which[MAX_EVENTS], ev_dir[MAX_EVENTS], ev_term[MAX_EVENTS], n_ev = 0;
+    pendulum_kane_real ev_level[MAX_EVENTS];
+    const char *events_csv = NULL;
+    FILE *ev_out = NULL;
     FILE *out = stdout;
     const pendulum_kane_real p_default[3] = { 1.0, 1.0, 9.81 };
 
@@ -167,7 +239,8 @@ int main(int argc, char **argv)
                     strcmp(a, "--output") == 0 || strcmp(a, "--input-csv") == 0 ||
                     strcmp(a, "--hold") == 0 || strcmp(a, "--gain") == 0 ||
                     strcmp(a, "--x-op") == 0 || strcmp(a, "--period") == 0 ||
-                    strcmp(a, "--every") == 0;
+                    strcmp(a, "--every") == 0 || strcmp(a, "--event") == 0 ||
+                    strcmp(a, "--events-csv") == 0;
         if (needs && !v) return fail_usage("missing value after", a);
         if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) { usage(stdout); return 0; }
         else if (strcmp(a, "--t-end") == 0) { if (parse_real(v, &t_end)) return fail_usage("--t-end needs a number", v); ++i; }
@@ -177,7 +250,8 @@ int main(int argc, char **argv)
         else if (strcmp(a, "--method") == 0) {
             if (strcmp(v, "rk4") == 0) opts.method = PENDULUM_KANE_METHOD_RK4;
             else if (strcmp(v, "dopri5") == 0) opts.method = PENDULUM_KANE_METHOD_DOPRI5;
-            else return fail_usage("--method must be rk4 or dopri5", v);
+            else if (strcmp(v, "rodas4") == 0 || strcmp(v, "rodas") == 0) opts.method = PENDULUM_KANE_METHOD_RODAS4;
+            else return fail_usage("--method must be rk4, dopri5 or rodas4", v);
             ++i;
         } else if (strcmp(a, "--x0") == 0) {
             if (strchr(v, '=')) {
@@ -226,6 +300,19 @@ int main(int argc, char **argv)
                 return fail_usage("--every needs a positive integer", v);
             opts.every = (int)kk;
             ++i;
+        } else if (strcmp(a, "--event") == 0) {
+            if (n_ev >= MAX_EVENTS) return fail_usage("too many --event options", v);
+            if ((st = parse_event(v, &ev_which[n_ev], &ev_dir[n_ev], &ev_term[n_ev],
+                                  &ev_level[n_ev])))
+                return st;
+            for (k = 0; k < n_ev; ++k)
+                if (ev_which[k] == ev_which[n_ev])
+                    return fail_usage("--event: that state or output has an event already", v);
+            ++n_ev;
+            ++i;
+        } else if (strcmp(a, "--events-csv") == 0) {
+            events_csv = v;
+            ++i;
         } else if (strcmp(a, "--final-only") == 0) { opts.final_only = 1; }
         else if (strcmp(a, "--output") == 0) { output = v; ++i; }
         else if (strcmp(a, "--no-consistent") == 0) consistent = 0;
@@ -234,6 +321,7 @@ int main(int argc, char **argv)
         else return fail_usage("unknown option", a);
     }
     if (!(t_end >= 0)) return fail_usage("--t-end must be >= 0", NULL);
+    if (events_csv && n_ev == 0) return fail_usage("--events-csv needs at least one --event", events_csv);
     in.r = r;
     in.hold = hold;
     in.period = period;
@@ -276,6 +364,14 @@ int main(int argc, char **argv)
             return 1;
         }
     }
+    if (events_csv) {
+        ev_out = fopen(events_csv, "w");
+        if (!ev_out) {
+            fprintf(stderr, "pendulum_kane_sim: cannot open %s: %s\n", events_csv, strerror(errno));
+            if (out != stdout) fclose(out);
+            return 1;
+        }
+    }
     fprintf(out, "t");
     for (i = 0; i < NX; ++i) fprintf(out, ",%s", state_names[i]);
     for (i = 0; i < MV; ++i) fprintf(out, ",lam%d", i);
@@ -295,17 +391,77 @@ int main(int argc, char **argv)
             failed = 1;
             rows = 0;
         }
+        st = 0;
+        if (!failed && n_ev > 0) {
+            /* with events: the log has room for EVENT_LOG of them; when more
+             * were found, the same run again with room for all */
+            pendulum_kane_events ev;
+            int cap = EVENT_LOG, pass, n_log;
+            int *log_which = NULL;
+            pendulum_kane_real *log_t = NULL, *log_x = NULL;
+            memset(&ev, 0, sizeof ev);
+            ev.n = n_ev;
+            ev.which = ev_which;
+            ev.direction = ev_dir;
+            ev.terminal = ev_term;
+            ev.level = ev_level;
+            st = 0;
+            for (pass = 0; pass < 2 && !failed; ++pass) {
+                free(log_which); free(log_t); free(log_x);
+                log_which = (int *)malloc((size_t)cap * sizeof *log_which);
+                log_t = (pendulum_kane_real *)malloc((size_t)cap * sizeof *log_t);
+                log_x = (pendulum_kane_real *)malloc((size_t)cap * NX * sizeof *log_x);
+                if (!log_which || !log_t || !log_x) {
+                    fprintf(stderr, "pendulum_kane_sim: out of memory for a log of %d events\n", cap);
+                    failed = 1;
+                    break;
+                }
+                ev.capacity = cap;
+                ev.log_which = log_which;
+                ev.log_t = log_t;
+                ev.log_x = log_x;
+                st = pendulum_kane_simulate_events(x, 0, t_end, dt, &in, &ev, p, &opts, rows, t_out, x_out,
+                                         l_out, r_out, &stats);
+                if (stats.n_events <= cap) break;
+                cap = stats.n_events;
+            }
+            n_log = failed ? 0 : (stats.n_events < cap ? stats.n_events : cap);
+            if (ev_out) {
+                fprintf(ev_out, "event,t");
+                for (i = 0; i < NX; ++i) fprintf(ev_out, ",%s", state_names[i]);
+                fprintf(ev_out, "\n");
+            }
+            for (k = 0; k < n_log; ++k) {
+                FILE *f = ev_out ? ev_out : stderr;
+                const char *sep = ev_out ? "," : " t=";
+                fprintf(f, "%s%s%s%.17g", ev_out ? "" : "event ", event_name(ev_which[log_which[k]]), sep,
+                        (double)log_t[k]);
+                for (i = 0; i < NX; ++i) {
+                    if (ev_out) fprintf(f, ",%.17g", (double)log_x[(long)k * NX + i]);
+                    else fprintf(f, " %s=%.17g", state_names[i], (double)log_x[(long)k * NX + i]);
+                }
+                fprintf(f, "\n");
+            }
+            free(log_which); free(log_t); free(log_x);
+            if (ev_out) {
+                if (fclose(ev_out) != 0) {
+                    fprintf(stderr, "pendulum_kane_sim: error writing %s\n", events_csv);
+                    failed = 1;
+                }
+                ev_out = NULL;
+            }
+        } else
         if (!failed) {
             st = pendulum_kane_simulate_input(x, 0, t_end, dt, &in, p, &opts, rows, t_out, x_out, l_out,
                                     r_out, &stats);
-            if (st) {
-                fprintf(stderr, "pendulum_kane_sim: step failed at t=%.17g: %s; CSV truncated after %d rows\n",
-                        (double)stats.t_last, pendulum_kane_status_message(st), stats.n_out);
-                fprintf(stderr, "pendulum_kane_sim: last good state:");
-                for (i = 0; i < NX; ++i) fprintf(stderr, " %s=%.17g", state_names[i], (double)stats.x_last[i]);
-                fprintf(stderr, "\n");
-                failed = 1;
-            }
+        }
+        if (st) {
+            fprintf(stderr, "pendulum_kane_sim: step failed at t=%.17g: %s; CSV truncated after %d rows\n",
+                    (double)stats.t_last, pendulum_kane_status_message(st), stats.n_out);
+            fprintf(stderr, "pendulum_kane_sim: last good state:");
+            for (i = 0; i < NX; ++i) fprintf(stderr, " %s=%.17g", state_names[i], (double)stats.x_last[i]);
+            fprintf(stderr, "\n");
+            failed = 1;
         }
         written = stats.n_out;
         for (k = 0; k < written; ++k) {
@@ -334,6 +490,7 @@ int main(int argc, char **argv)
         }
         free(t_out); free(x_out); free(l_out); free(r_out);
         free(t_table); free(r_table); free(K);
+        if (ev_out) fclose(ev_out);   /* not reached by a run with events */
         if (failed) {
             if (out != stdout) fclose(out);
             return 1;

@@ -63,7 +63,10 @@ mdl::SimStats<S> stats_from(const pendulum_kane_sim_stats *s) noexcept
     t.n_accepted = s->n_accepted;
     t.n_rejected = s->n_rejected;
     t.n_rhs = s->n_rhs;
+    t.n_jac = s->n_jac;
     t.n_out = s->n_out;
+    t.n_events = s->n_events;
+    t.terminal = s->terminal;
     t.t_last = s->t_last;
     t.h_next = s->h_next;
     t.x_last = In<4, 1>(s->x_last);
@@ -75,7 +78,10 @@ void stats_to(const mdl::SimStats<S> &t, pendulum_kane_sim_stats *s) noexcept
     s->n_accepted = t.n_accepted;
     s->n_rejected = t.n_rejected;
     s->n_rhs = t.n_rhs;
+    s->n_jac = t.n_jac;
     s->n_out = t.n_out;
+    s->n_events = t.n_events;
+    s->terminal = t.terminal;
     s->t_last = t.t_last;
     s->h_next = t.h_next;
     store(s->x_last, t.x_last);
@@ -472,6 +478,47 @@ int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_rea
     mdl::SimStats<S> s;
     const int st = mdl::simulate_input<S>(In<mdl::NX, 1>(x0), t0, t_end, dt, u, In<mdl::NP, 1>(p),
                                           o, capacity, t_out, x_out, lam_out, r_out, s);
+    stats_to(s, stats);
+    return st;
+}
+
+int pendulum_kane_simulate_events(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_input *in, const pendulum_kane_events *ev, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_real *r_out, pendulum_kane_sim_stats *stats)
+{
+    PENDULUM_KANE_CHECK_IN(x0, 4);
+    PENDULUM_KANE_CHECK_OUT(in);
+    PENDULUM_KANE_CHECK_OUT(ev);
+    if (!p) p = mdl::p_default<S>;
+    PENDULUM_KANE_CHECK_IN(p, 3);
+    PENDULUM_KANE_CHECK_OUT(t_out);
+    PENDULUM_KANE_CHECK_OUT(x_out);
+    PENDULUM_KANE_CHECK_OUT(stats);
+    mdl::SimOptions<S> o;
+    if (opts) o = options_from(opts);
+    mdl::Input<S> u;
+    u.r = in->r;
+    u.n_table = in->n_table;
+    u.t_table = in->t_table;
+    u.r_table = in->r_table;
+    u.hold = in->hold;
+    u.K = in->K;
+    u.x_op = in->x_op;
+    u.controller = in->controller;
+    u.ctx = in->ctx;
+    u.period = in->period;
+    mdl::Events<S> e;
+    e.n = ev->n;
+    e.which = ev->which;
+    e.direction = ev->direction;
+    e.terminal = ev->terminal;
+    e.level = ev->level;
+    e.capacity = ev->capacity;
+    e.log_which = ev->log_which;
+    e.log_t = ev->log_t;
+    e.log_x = ev->log_x;
+    mdl::SimStats<S> s;
+    const int st = mdl::simulate_events<S>(In<mdl::NX, 1>(x0), t0, t_end, dt, u, e,
+                                           In<mdl::NP, 1>(p), o, capacity, t_out, x_out, lam_out,
+                                           r_out, s);
     stats_to(s, stats);
     return st;
 }

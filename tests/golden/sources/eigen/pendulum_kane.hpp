@@ -76,6 +76,7 @@ using gen_rt::status_message;
 using Method = gen_rt::Method;
 using gen_rt::METHOD_RK4;
 using gen_rt::METHOD_DOPRI5;
+using gen_rt::METHOD_RODAS4;
 
 // ---------------------------------------------------------------- types
 // Row-major unless a column vector (Eigen requires that), so data() is row-major.
@@ -121,14 +122,14 @@ template <typename S> using Tolerances = gen_rt::Tolerances<S>;
 /* SimOptions: the C API's pendulum_kane_sim_options, typed (gen/abi.py). */
 template <typename S>
 struct SimOptions {
-    int method = 0; // METHOD_RK4 or METHOD_DOPRI5
+    int method = 0; // METHOD_RK4 (on the output grid), METHOD_DOPRI5 or METHOD_RODAS4 (adaptive, dense output)
     int project = 1; // 1: project onto the constraints after each step
-    S rtol = S(1e-08); // dopri5 relative tolerance
-    S atol = S(1e-10); // dopri5 absolute tolerance
-    S h_init = S(0.0); // dopri5 first step, <= 0: automatic
-    S h_min = S(0.0); // dopri5 minimum step, <= 0: automatic
-    S h_max = S(0.0); // dopri5 maximum step, <= 0: unbounded
-    long max_steps = 100000; // dopri5 step budget per output interval
+    S rtol = S(1e-08); // adaptive: relative tolerance
+    S atol = S(1e-10); // adaptive: absolute tolerance
+    S h_init = S(0.0); // adaptive: first step, <= 0: automatic
+    S h_min = S(0.0); // adaptive: minimum step, <= 0: automatic
+    S h_max = S(0.0); // adaptive: maximum step, <= 0: unbounded
+    long max_steps = 100000; // adaptive: step budget between two output rows
     S proj_tol = 16 * Tolerances<S>::eps; // projection: relative tolerance on the correction
     int proj_max_iter = 10; // projection: Newton iterations
     int every = 1; // simulate: keep every k-th output row and the last (<= 1: all)
@@ -150,15 +151,32 @@ struct Input {
     S period = S(0.0); // 0: r evaluated at every stage; > 0: sampled at t0 + k period and held
 };
 
+/* Events: the C API's pendulum_kane_events, typed (gen/abi.py). */
+template <typename S>
+struct Events {
+    int n = 0; // number of event functions
+    const int * which = nullptr; // n: 0..NX-1 the state x[which], NX..NX+NY-1 the output y[which - NX]
+    const int * direction = nullptr; // n: +1 crossing upwards, -1 downwards, 0 both
+    const int * terminal = nullptr; // n (NULL: none): nonzero ends the run at the event
+    const S * level = nullptr; // n (NULL: zero): the level crossed
+    int capacity = 0; // events the log holds
+    int * log_which = nullptr; // capacity: the event's index i
+    S * log_t = nullptr; // capacity: its time
+    S * log_x = nullptr; // capacity x NX: its state (the dense output, projected)
+};
+
 /* SimStats: the C API's pendulum_kane_sim_stats, typed (gen/abi.py). */
 template <typename S>
 struct SimStats {
     long n_accepted = 0; // accepted steps
     long n_rejected = 0; // rejected steps (dopri5)
     long n_rhs = 0; // right-hand-side evaluations
+    long n_jac = 0; // Jacobian evaluations (rodas4)
     int n_out = 0; // output rows written
+    int n_events = 0; // events found (simulate_events; the log holds the first capacity)
+    int terminal = -1; // the terminal event that ended the run, -1: none
     S t_last = S(0.0); // time of the last good state
-    S h_next = S(0.0); // dopri5: step size to continue with
+    S h_next = S(0.0); // adaptive: step size to continue with
     Mat<S, NX, 1> x_last = Mat<S, NX, 1>::Zero(); // last good state (on failure: where it failed)
 };
 
@@ -671,8 +689,8 @@ inline int step_rk4(S t, S h, const Inputs<S> &r, const Params<S> &p, bool proje
     return detail::RT<S>::step_rk4(t, h, r, p, project, x);
 }
 
-/* Integrate x from t0 to t1: one RK4 step, or adaptive DOPRI5 steps; stats
- * accumulate (stats.h_next seeds the next DOPRI5 call). */
+/* Integrate x from t0 to t1: one RK4 step, or adaptive DOPRI5 or RODAS4
+ * steps; stats accumulate (stats.h_next seeds the next adaptive call). */
 template <typename S>
 inline int advance(S t0, S t1, const Inputs<S> &r, const Params<S> &p, const SimOptions<S> &opts,
                    SimStats<S> &stats, State<S> &x) noexcept
@@ -688,7 +706,9 @@ inline int simulate_rows(S t0, S t_end, S dt) noexcept
 }
 
 /* Simulate from x0 with outputs every dt up to t_end (the last interval
- * clipped) into caller-owned row-major buffers of `capacity` rows: t_out,
+ * clipped; RK4 steps on that grid, DOPRI5 and RODAS4 by their error control
+ * with the rows from their dense output) into caller-owned row-major
+ * buffers of `capacity` rows: t_out,
  * x_out (NX per row), lam_out (max(MV, 1) per row, may be nullptr). On
  * failure the rows written are stats.n_out and stats.x_last holds the last
  * good state. */
@@ -712,6 +732,20 @@ inline int simulate_input(const State<S> &x0, S t0, S t_end, S dt, const Input<S
 {
     return detail::RT<S>::simulate_input(x0, t0, t_end, dt, in, p, opts, capacity, t_out, x_out,
                                          lam_out, r_out, stats);
+}
+
+/* simulate_input() with events (Events<S>, see the C header's pendulum_kane_events):
+ * crossings of a level by a state or an output, located on the dense output
+ * and logged in ev's log (stats.n_events counts them all); a terminal event
+ * ends the run with its state as the last row (stats.terminal). */
+template <typename S>
+inline int simulate_events(const State<S> &x0, S t0, S t_end, S dt, const Input<S> &in,
+                           const Events<S> &ev, const Params<S> &p, const SimOptions<S> &opts,
+                           int capacity, S *t_out, S *x_out, S *lam_out, S *r_out,
+                           SimStats<S> &stats) noexcept
+{
+    return detail::RT<S>::simulate_events(x0, t0, t_end, dt, in, ev, p, opts, capacity, t_out,
+                                          x_out, lam_out, r_out, stats);
 }
 
 // ---------------------------------------------------------- linearization

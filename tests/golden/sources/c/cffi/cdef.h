@@ -27,10 +27,24 @@ typedef struct {
     pendulum_kane_real period;
 } pendulum_kane_input;
 typedef struct {
+    int n;
+    const int *which;
+    const int *direction;
+    const int *terminal;
+    const pendulum_kane_real *level;
+    int capacity;
+    int *log_which;
+    pendulum_kane_real *log_t;
+    pendulum_kane_real *log_x;
+} pendulum_kane_events;
+typedef struct {
     long n_accepted;
     long n_rejected;
     long n_rhs;
+    long n_jac;
     int n_out;
+    int n_events;
+    int terminal;
     pendulum_kane_real t_last;
     pendulum_kane_real h_next;
     pendulum_kane_real x_last[4];
@@ -54,6 +68,7 @@ int pendulum_kane_advance(pendulum_kane_real t0, pendulum_kane_real t1, const pe
 int pendulum_kane_simulate_rows(pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt);
 int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_real *r, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_sim_stats *stats);
 int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_input *in, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_real *r_out, pendulum_kane_sim_stats *stats);
+int pendulum_kane_simulate_events(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_input *in, const pendulum_kane_events *ev, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_real *r_out, pendulum_kane_sim_stats *stats);
 int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B);
 int pendulum_kane_jacobian(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *Jx, pendulum_kane_real *Jr);
 int pendulum_kane_step_sensitivity(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *x, pendulum_kane_real *Fx, pendulum_kane_real *Fr);
