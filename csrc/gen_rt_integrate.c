@@ -87,6 +87,7 @@ int gen_rt_dopri5_trial(gen_rt_rhs_fn f, void *ctx, int nx, gen_rt_real t, gen_r
     for (i = 0; i < nx; ++i)
         ynew[i] = x[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] +
                               B5 * k5[i] + B6 * k6[i]);
+    if (!gen_rt_all_finite(nx, ynew)) return GEN_RT_ERR_DIVERGED; /* finite stages, overflow */
     if ((st = f(ctx, t + h, ynew, k7))) return st;
     for (i = 0; i < nx; ++i)
         y[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] +

@@ -855,6 +855,7 @@ static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t
             if (tk < e.t1 - tol1) {
                 /* inside the step: the dense output, projected */
                 dense_at(&e, (tk - t) / e.h, e.xi);
+                if (!gen_rt_all_finite(nx, e.xi)) { st = GEN_RT_ERR_DIVERGED; FAIL_AT_(t, x); }
                 if ((st = project_(&e, tk, e.xi))) FAIL_AT_(t, x);
                 xr = e.xi;
             }

@@ -168,7 +168,8 @@ def _build_drivers(model, out):
         src = out / f"src_{real}"
         gen.generate(model, src, real=real)
         exe = out / f"driver_{model.name}_{real}"
-        sources = [str(src / f"{model.name}.c")] + sorted(str(s) for s in src.glob("gen_rt_*.c"))
+        sources = [str(src / f"{model.name}.c"), str(src / f"{model.name}_lin.c")] + sorted(
+            str(s) for s in src.glob("gen_rt_*.c"))
         cmd = ["arm-linux-gnueabihf-gcc", "-static", "-O2", *STRICT,
                f"-DFW_MODEL={model.name}", f"-DFW_MODEL_UPPER={model.name.upper()}",
                f'-DFW_HEADER="{model.name}.h"', "-I", str(src), str(EMB / "driver.c"),

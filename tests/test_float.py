@@ -72,7 +72,7 @@ def test_float_sources_compile_clean(key, kane_model, lagrange_model, cart4, tmp
     model_c = (out / f"{p}.c").read_text()
     if key == "cart4":
         assert "sinf(" in model_c and "cosf(" in model_c
-    for f in [f"{p}.c", *sorted(x.name for x in out.glob("gen_rt_*.c"))]:
+    for f in [f"{p}.c", f"{p}_lin.c", *sorted(x.name for x in out.glob("gen_rt_*.c"))]:
         text = re.sub(r"/\*.*?\*/", "", (out / f).read_text(), flags=re.S)
         assert not DOUBLE_CALL.search(text), (f, DOUBLE_CALL.search(text).group(0))
     sources = [str(s) for s in sorted(out.glob("*.c"))]

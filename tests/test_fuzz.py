@@ -39,7 +39,8 @@ MODELS = {"kane": sp.kane_model, "lagrange": sp.lagrange_model,
 def _build(model, out, cc, flags, extra=()):
     gen.generate(model, out)
     p = model.name
-    srcs = [str(HARNESS), str(out / f"{p}.c")] + sorted(str(f) for f in out.glob("gen_rt_*.c"))
+    srcs = [str(HARNESS), str(out / f"{p}.c"), str(out / f"{p}_lin.c")] + sorted(
+        str(f) for f in out.glob("gen_rt_*.c"))
     exe = out / "harness"
     cmd = [cc, "-std=c99", "-g", "-O1", "-I", str(out), f'-DMODEL_H="{p}.h"',
            f"-DP(x)={p}_##x", f"-DPU(x)={p.upper()}_##x", *flags, *extra, *srcs,

@@ -367,6 +367,7 @@ inline int dopri5_trial(F &&f, S t, S h, const Mat<S, N, 1> &x, S rtol, S atol,
     for (int i = 0; i < N; ++i)
         ynew[i] = x[i] + h * (T::B1 * k1[i] + T::B3 * k3[i] + T::B4 * k4[i] + T::B5 * k5[i] +
                               T::B6 * k6[i]);
+    if (!finite(ynew)) return ERR_DIVERGED; // finite stages, overflow
     if ((st = f(t + h, ynew, k7))) return st;
     for (int i = 0; i < N; ++i)
         y[i] = h * (T::E1 * k1[i] + T::E3 * k3[i] + T::E4 * k4[i] + T::E5 * k5[i] +
@@ -2237,6 +2238,7 @@ struct Runtime {
                 if (tk < e.t1 - tol1) {
                     // inside the step: the dense output, projected
                     e.dense_at((tk - t) / e.h, e.xi);
+                    if (!finite(e.xi)) return fail_at(t, e.x), ERR_DIVERGED;
                     if ((st = e.project(tk, e.xi))) return fail_at(t, e.x), st;
                     xr = &e.xi;
                 }
