@@ -78,6 +78,9 @@ class Simulator:
         self._p_default = np.ascontiguousarray(self.constants, dtype=self.dtype)
         self._p_default_c = self._ffi.from_buffer(self._arr_t, self._p_default)
         self._xshape = (self.nx,)
+        self._rshape = (self.nr,)
+        self._fb = self._ffi.from_buffer
+        self._null = self._ffi.NULL
         self._rhs_c = self._fn("eval_rhs")
 
     @property
@@ -246,16 +249,25 @@ class Simulator:
         """x' (shape (nx,)), usable as solve_ivp's fun: rhs(t, x). An
         (N, nx) array of states gives an (N, nx) array in one C call
         (see rhs_batch). out: a preallocated C-contiguous result array."""
-        if (r is None and p is None and out is None and type(x) is np.ndarray
-                and x.dtype is self._dt and x.shape == self._xshape and x.flags.c_contiguous):
-            # the common call (solve_ivp): no conversions, no lookups
-            res = np.empty(self.nx, dtype=self._dt)
-            fb = self._ffi.from_buffer
-            st = self._rhs_c(t, fb(self._arr_t, x), self._ffi.NULL, self._p_default_c,
-                             fb(self._arr_t, res), self._ffi.NULL)
-            if st:
-                self._check(st, "eval_rhs", t, x)
-            return res
+        if (p is None and out is None and type(x) is np.ndarray and x.dtype is self._dt
+                and x.shape == self._xshape and (r is None or (
+                    type(r) is np.ndarray and r.dtype is self._dt and r.shape == self._rshape))):
+            # the common calls (solve_ivp, a controller's r): no conversions,
+            # no lookups; from_buffer refuses a non-contiguous array (ValueError),
+            # which takes the general path below. The C function checks the
+            # values (finite) itself.
+            fb, at, null = self._fb, self._arr_t, self._null
+            try:
+                xb = fb(at, x)
+                rb = null if r is None else fb(at, r)
+            except ValueError:
+                pass
+            else:
+                res = np.empty(self.nx, dtype=self._dt)
+                st = self._rhs_c(t, xb, rb, self._p_default_c, fb(at, res), null)
+                if st:
+                    self._check(st, "eval_rhs", t, x)
+                return res
         if np.ndim(x) == 2:
             return self.rhs_batch(t, x, r, p, out=out)
         x = self._vec(x, self.nx, "state x")

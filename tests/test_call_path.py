@@ -1,0 +1,52 @@
+"""The Python call path of Simulator.rhs (issue 17): the fast path (an
+ndarray state of the model's dtype and shape, inputs as such an array or
+None) gives exactly the general path's numbers (out=, lists, strided views,
+other dtypes), and bad values still raise with the model's names."""
+import numpy as np
+import pytest
+
+import cart_pole
+import gen
+from helpers import pendulum_state
+
+
+@pytest.fixture(scope="module")
+def cart():
+    return gen.compile(cart_pole.model())
+
+
+def test_fast_path_equals_general_path(kane_sim, cart):
+    x = pendulum_state(0.3, 0.1, 1.0, "kane")
+    ref = np.empty(4)
+    kane_sim.rhs(0.0, x, out=ref)                       # the general path
+    assert np.array_equal(kane_sim.rhs(0.0, x), ref)
+    assert np.array_equal(kane_sim.rhs(0.0, list(x)), ref)
+    v = np.zeros(8)
+    v[::2] = x
+    assert np.array_equal(kane_sim.rhs(0.0, v[::2]), ref)   # strided: general path
+    assert np.array_equal(kane_sim.rhs(0.0, x.astype(np.float32).astype(float)),
+                          kane_sim.rhs(0.0, x.astype(np.float32)))
+    xc, r = np.array([0.1, 0.2, 0.3, 0.4]), np.array([0.5])
+    refc = np.empty(4)
+    cart.rhs(0.0, xc, r, out=refc)
+    assert np.array_equal(cart.rhs(0.0, xc, r), refc)
+    assert np.array_equal(cart.rhs(0.0, xc, [0.5]), refc)
+    assert np.array_equal(cart.rhs(0.0, xc, 0.5), refc)
+    # the independent reference: M u' = f at this state, from the model's own M and f
+    M = cart.mass_matrix(xc[:2])
+    f = cart.forcing(xc[:2], xc[2:], r)
+    np.testing.assert_allclose(refc[2:], np.linalg.solve(M, f), rtol=1e-13)
+    np.testing.assert_array_equal(refc[:2], xc[2:])
+    # a fresh array every call (solve_ivp keeps them)
+    a, b = cart.rhs(0.0, xc, r), cart.rhs(0.0, xc + 0.1, r)
+    assert not np.shares_memory(a, b)
+
+
+def test_fast_path_still_refuses_bad_values(cart):
+    xc = np.array([0.1, 0.2, 0.3, 0.4])
+    with pytest.raises(ValueError, match="NaN or infinite"):
+        cart.rhs(0.0, xc, np.array([np.nan]))
+    with pytest.raises(ValueError, match="NaN or infinite"):
+        cart.rhs(0.0, np.array([0.1, np.inf, 0.3, 0.4]), np.array([0.5]))
+    with pytest.raises(ValueError, match="inputs r"):
+        cart.rhs(0.0, xc, np.array([0.5, 0.5]))
