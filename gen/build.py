@@ -36,7 +36,7 @@ from ._version import __version__
 from .errors import BuildError, ModelError
 from .eigen import eigen_version, find_eigen
 from .ir import plan as make_plan
-from .render import EIGEN_SOURCES, RUNTIME_SOURCES, Rendered, render
+from .render import EIGEN_SOURCES, RUNTIME_HEADERS, RUNTIME_SOURCES, Rendered, render
 
 __all__ = ["compile", "cache_dir", "build", "load", "Built", "cache_info", "clear_cache"]
 
@@ -395,9 +395,9 @@ def _runtime_objects(src: Path, cc: str):
         h.update(subprocess.run([cc, "--version"], capture_output=True, text=True).stdout.encode())
     except OSError as e:
         raise BuildError(f"the C compiler {cc!r} cannot be run: {e}") from None
-    for name in sorted(RUNTIME_SOURCES) + ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h",
-                                           "gen_rt_expm.h", "gen_rt_sens.h",
-                                           "gen_rt_config.h"]:
+    # every runtime source and header (a header missing here would leave
+    # stale objects in the cache when it changes)
+    for name in sorted(RUNTIME_SOURCES) + sorted(RUNTIME_HEADERS) + ["gen_rt_config.h"]:
         h.update(name.encode() + b"\0" + (src / name).read_bytes() + b"\0")
     folder = cache_dir() / f"runtime_{h.hexdigest()[:16]}"
     objs = [folder / (Path(s).stem + ".o") for s in RUNTIME_SOURCES]

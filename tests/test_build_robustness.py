@@ -307,3 +307,27 @@ def test_compile_killed_half_way_is_cleaned(tmp_path, monkeypatch, kane_model):
     gen.compile(kane_model)
     assert not any(t.exists() for t in temps)
     assert not list(cache.glob(".*"))
+
+
+def test_runtime_object_cache_key_covers_every_runtime_file(tmp_path, monkeypatch):
+    """The cached runtime objects are keyed by every runtime source and
+    header: changing any one of them (gen_rt_rodas4.h, say) gives another
+    cache folder, never stale objects."""
+    import shutil
+    from gen import build as b
+    from gen.render import RUNTIME_HEADERS, RUNTIME_SOURCES
+    from gen.resources import csrc_dir
+    monkeypatch.setenv("EOMGEN_CACHE", str(tmp_path / "cache"))
+    src = tmp_path / "src"
+    src.mkdir()
+    for f in RUNTIME_SOURCES + RUNTIME_HEADERS + ["gen_rt_config.h"]:
+        shutil.copy(csrc_dir() / f, src / f)
+    cc = b._compiler()
+    _, base = b._runtime_objects(src, cc)
+    for f in RUNTIME_SOURCES + RUNTIME_HEADERS:
+        text = (src / f).read_text()
+        (src / f).write_text(text + "\n/* changed */\n")
+        _, folder = b._runtime_objects(src, cc)
+        assert folder != base, f
+        (src / f).write_text(text)
+    assert b._runtime_objects(src, cc)[1] == base
