@@ -36,7 +36,7 @@ from ._version import __version__
 from .errors import BuildError, ModelError
 from .eigen import eigen_version, find_eigen
 from .ir import plan as make_plan
-from .render import EIGEN_SOURCES, RUNTIME_HEADERS, RUNTIME_SOURCES, Rendered, render
+from .render import EIGEN_SOURCES, RUNTIME_HEADERS, RUNTIME_SOURCES, Rendered, plan_lin, render
 
 __all__ = ["compile", "cache_dir", "build", "load", "Built", "cache_info", "clear_cache"]
 
@@ -517,7 +517,7 @@ def compile(model, backend="c", real="double", verbose=False, sources=None,  # n
         raise ModelError(f"unknown backend {backend!r}: choose one of {list(BACKENDS)}")
     timings = {} if timings is None else timings
     t0 = time.perf_counter()
-    plan = make_plan(model)
+    plan = make_plan(model, lin=plan_lin(backend))
     timings["kernels"] = time.perf_counter() - t0
     rendered = render(plan, real=real, backend=backend, timings=timings)
     if sources is not None:

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 import sympy as sm
 
 __all__ = ["Arg", "Output", "Kernel", "Plan", "plan", "make_kernel", "differentiate_graph",
+           "jvp_graph", "make_jvp_kernel", "JVP_MIN_VARIABLES",
            "partial", "build_kernels", "mass_structure"]
 
 
@@ -233,6 +234,72 @@ def differentiate_graph(assignments, exprs, wrt, prefix="d"):
     return new, jac
 
 
+def jvp_graph(assignments, exprs, seeds, prefix="t"):
+    """Forward-mode directional derivatives (one tangent per temporary):
+    the derivative of ``exprs`` (written over the temporaries of
+    ``assignments``) along the direction ``seeds`` {variable: tangent
+    symbol}. Returns (new_assignments, tangents of exprs). The tangent graph
+    is a few times the size of the primal one, whatever the number of
+    variables (differentiate_graph's is that many times larger)."""
+    namer = _Namer(prefix)
+    reverse = {}
+    for s, e in assignments:
+        if not e.is_Atom:
+            reverse.setdefault(e, s)
+    tangent = {}                 # temporary -> tangent symbol
+    new = []
+
+    def dexpr(e):
+        out = sm.S.Zero
+        for a in sorted(e.free_symbols, key=sm.default_sort_key):
+            da = seeds.get(a, tangent.get(a))
+            if da is None:
+                continue
+            pd = partial(e, a)
+            if pd != 0:
+                out = out + pd * da
+        return out.xreplace(reverse) if reverse and out != 0 else out
+
+    for s, e in assignments:
+        d = dexpr(e)
+        if d == 0:
+            continue
+        if d.is_Atom:
+            tangent[s] = d
+        else:
+            ts = next(namer)
+            new.append((ts, d))
+            tangent[s] = ts
+    return new, [dexpr(e) for e in exprs]
+
+
+def make_jvp_kernel(name, args, funcs, seeds):
+    """A kernel of directional derivatives: outputs[k] = d funcs[k] along
+    the seeds {variable: tangent symbol} (the tangents are among args), all
+    from one joint CSE of the primal and one of the tangents.
+
+    funcs: [(out_name, column Matrix)]"""
+    flat, shapes = [], []
+    for oname, mat in funcs:
+        f, shp = _flatten(mat)
+        shapes.append((oname, len(f)))
+        flat.extend(f)
+    assignments, reduced = sm.cse(flat, symbols=_Namer("w"), order="none") if flat else ([], [])
+    new, outs_flat = jvp_graph(assignments, reduced, seeds)
+    if new or outs_flat:
+        tsyms = [s for s, _ in new]
+        texprs = [e for _, e in new]
+        a2, r2 = sm.cse(texprs + list(outs_flat), symbols=_Namer("v"), order="none")
+        new_assign = list(a2) + list(zip(tsyms, r2[:len(tsyms)]))
+        outs_flat = r2[len(tsyms):]
+        new = _toposort(new_assign, set(s for s, _ in assignments))
+    outs, k = [], 0
+    for oname, n in shapes:
+        outs.append(Output(oname, n, 1, list(outs_flat[k:k + n])))
+        k += n
+    return prune(Kernel(name, list(args), outs, list(assignments) + list(new)))
+
+
 def make_jacobian_kernel(name, args, plain, jacobians, cse_derivatives=True):
     """A kernel whose outputs are plain matrices and Jacobians of
     matrices, all from one joint CSE.
@@ -397,9 +464,18 @@ def collect_constants(mat, variables, cache=None):
     return sm.Matrix(mat.shape[0], mat.shape[1], [walk(x) for x in mat])
 
 
-def build_kernels(model, mass=None):
+# the linearization kernels: above this many variables (nq + nu + nr) the
+# Jacobian blocks come from a directional-derivative kernel called once per
+# column ("jvp") instead of one unrolled kernel ("unrolled"): code (and
+# compile time) that grows like the right-hand side, not n times it
+JVP_MIN_VARIABLES = 30
+
+
+def build_kernels(model, mass=None, lin="auto"):
     """Every kernel a model's C code needs, as plain data. mass: the
-    (symmetric, nonzero) structure of M, computed when not given."""
+    (symmetric, nonzero) structure of M, computed when not given. lin:
+    "unrolled", "jvp" or "auto" (by JVP_MIN_VARIABLES): how the
+    linearization's Jacobian blocks are generated."""
     m = model
     symmetric, _ = mass if mass is not None else mass_structure(model)
     Aq = Arg("q", tuple(m.q))
@@ -480,8 +556,30 @@ def build_kernels(model, mass=None):
         jacs.append(("Jc", m.fc, m.q))
     if m.mv and qd_model:
         jacs.append(("Sqd", S, Qd))
-    kernels["lin_terms"] = make_jacobian_kernel(
-        "lin_terms", [Aq, Au, Aqd, Aud, Alam, Ar, Ap, At], plain, jacs)
+    lin_args = [Aq, Au, Aqd, Aud, Alam, Ar, Ap, At]
+    if lin == "auto":
+        lin = "jvp" if m.nq + m.nu + m.nr >= JVP_MIN_VARIABLES else "unrolled"
+    if lin == "unrolled":
+        kernels["lin_terms"] = make_jacobian_kernel("lin_terms", lin_args, plain, jacs)
+        return kernels
+    # the Jacobian blocks column by column: one kernel of directional
+    # derivatives along (dq, du, dr, dqd), called once per variable by the
+    # generated lin_terms (a unit seed in one block gives that variable's
+    # column of every block), and the plain blocks apart
+    seeds = {}
+    seed_args = []
+    for aname, syms in (("dq", m.q), ("du", m.u), ("dr", m.r),
+                        ("dqd", Qd if (m.mv and qd_model) else [])):
+        tang = tuple(sm.Dummy(f"{aname}{i}") for i in range(len(syms)))
+        seeds.update(zip(syms, tang))
+        seed_args.append(Arg(aname, tang))
+    funcs = [("jkin", kin_res), ("jR", R)]
+    if m.mv:
+        funcs += [("jS", S), ("jV", m.A * U + m.b)]
+    if m.mc:
+        funcs.append(("jJc", m.fc))
+    kernels["lin_plain"] = make_kernel("lin_plain", lin_args, plain)
+    kernels["lin_jvp"] = make_jvp_kernel("lin_jvp", lin_args + seed_args, funcs, seeds)
     return kernels
 
 
@@ -507,10 +605,11 @@ def accel_method(model, mass_symmetric):
     return "ldlt" if mass_symmetric else "lu"
 
 
-def plan(model):
-    """The Plan of a canonical model (nothing is stored on the model)."""
+def plan(model, lin="auto"):
+    """The Plan of a canonical model (nothing is stored on the model).
+    lin: how the Jacobian blocks are generated (build_kernels)."""
     symmetric, nonzero = mass_structure(model)
-    kernels = build_kernels(model, (symmetric, nonzero))
+    kernels = build_kernels(model, (symmetric, nonzero), lin=lin)
     return Plan(model, kernels, symmetric, nonzero, accel_method(model, symmetric))
 
 

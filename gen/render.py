@@ -70,7 +70,7 @@ EIGEN_SOURCES = ["{name}.cpp"]
 
 BACKENDS = {"c": C_TEMPLATES, "eigen": EIGEN_TEMPLATES}
 # the kernels of <name>_lin.c (C backend)
-LIN_KERNELS = ("lin_terms", "output_jacobian")
+LIN_KERNELS = ("lin_terms", "lin_plain", "lin_jvp", "output_jacobian")
 # the cffi module: its declarations and its source (header + batch loops)
 CFFI_TEMPLATES = {"cdef": "cffi/cdef.h.j2", "module_source": "cffi/module.c.j2"}
 
@@ -244,7 +244,15 @@ def build_context(plan, iface, timings=None, backend="c"):
         # unit of their own compiled in parallel with <name>.c
         "lin_kernels": [k for k in LIN_KERNELS if k in kernels],
         "has_accel_terms": "accel_terms" in kernels,
-        "lin_outputs": [o.name for o in kernels["lin_terms"].outputs],
+        # "unrolled": one lin_terms kernel writes every block; "jvp": lin_plain
+        # writes the plain blocks and lin_jvp, called once per variable,
+        # the columns of the Jacobian blocks (gen/ir.py JVP_MIN_VARIABLES)
+        "lin_mode": "jvp" if "lin_jvp" in kernels else "unrolled",
+        "lin_outputs": [o.name for o in kernels["lin_terms"].outputs] if "lin_terms" in kernels
+        else [o.name for o in kernels["lin_plain"].outputs],
+        "jvp_outputs": ([o.name for o in kernels["lin_jvp"].outputs] if "lin_jvp" in kernels
+                        else []),
+        "has_sqd": "lin_jvp" in kernels and len(kernels["lin_jvp"].args[-1].symbols) > 0,
         "p_default": [_fmt_real(v, real) for v in m.p_values],
         "p_default_double": [_fmt_real(v, "double") for v in m.p_values],
         "defaults": {f.name: _field_default(f, real) for f in opts.fields},
@@ -317,9 +325,16 @@ def render_files(model, real="double", backend="c", timings=None):
     """{file name: text} of a model (nothing written)."""
     timings = {} if timings is None else timings
     t0 = time.perf_counter()
-    plan = make_plan(model)
+    plan = make_plan(model, lin=plan_lin(backend))
     timings["kernels"] = time.perf_counter() - t0
     return render(plan, real=real, backend=backend, timings=timings).files
+
+
+def plan_lin(backend):
+    """How a backend's plan generates the Jacobian blocks: the C backend
+    chooses by size (gen/ir.py JVP_MIN_VARIABLES); the Eigen backend's
+    templates print the unrolled kernel."""
+    return "auto" if backend == "c" else "unrolled"
 
 
 def write_atomic(files, out_dir):
