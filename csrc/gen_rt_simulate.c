@@ -370,14 +370,21 @@ static int control_(engine *e, int st, gen_rt_real err, gen_rt_real hh, int last
     return 1;
 }
 
-/* the trial step from t towards t_stop: hh and whether it reaches t_stop */
-static int trial_size_(engine *e, gen_rt_real *hh, gen_rt_real hmin)
+/* the next trial step from t towards t_stop: *hh, and *last when it is
+ * clipped to reach t_stop (a step within 0.01% of it stretches to it) */
+static int trial_size_(engine *e, gen_rt_real t, gen_rt_real t_stop, gen_rt_real hmin,
+                       gen_rt_real *hh, int *last)
 {
     long max_steps = e->o->max_steps > 0 ? e->o->max_steps : 100000L;
     if (e->attempts >= max_steps) return GEN_RT_ERR_MAX_STEPS;
     if (e->h_next < hmin) return GEN_RT_ERR_STEP_UNDERFLOW;
     e->attempts += 1;
     *hh = e->h_next;
+    *last = 0;
+    if (t + *hh >= t_stop || t + GEN_RT_C(1.0001) * *hh >= t_stop) {
+        *hh = t_stop - t;
+        *last = 1;
+    }
     return GEN_RT_OK;
 }
 
@@ -428,8 +435,7 @@ static int step_(engine *e, gen_rt_real t, gen_rt_real t_stop)
         for (;;) {
             gen_rt_real hh, err = 0;
             int last = 0;
-            if ((st = trial_size_(e, &hh, hmin))) return st;
-            if (t + hh >= t_stop || t + GEN_RT_C(1.0001) * hh >= t_stop) { hh = t_stop - t; last = 1; }
+            if ((st = trial_size_(e, t, t_stop, hmin, &hh, &last))) return st;
             st = gen_rt_dopri5_trial(rhs_cb, c, nx, t, hh, e->x, o->rtol, o->atol, k, y, ynew,
                                      &err);
             e->s->n_rhs += 6;
@@ -492,8 +498,7 @@ static int step_(engine *e, gen_rt_real t, gen_rt_real t_stop)
         for (;;) {
             gen_rt_real hh, err = 0;
             int last = 0;
-            if ((st = trial_size_(e, &hh, hmin))) return st;
-            if (t + hh >= t_stop || t + GEN_RT_C(1.0001) * hh >= t_stop) { hh = t_stop - t; last = 1; }
+            if ((st = trial_size_(e, t, t_stop, hmin, &hh, &last))) return st;
             st = gen_rt_rodas4_trial(rhs_cb, c, nx, t, hh, e->x, f0, J, dfdt, o->rtol, o->atol,
                                      rw, e->piv, ynew, &err);
             e->s->n_rhs += 5;
@@ -793,6 +798,14 @@ static int emit_row(engine *e, const row_sink *o, int k, int last, gen_rt_real t
     return GEN_RT_OK;
 }
 
+static void stats_reset(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,
+                        gen_rt_sim_stats *s)
+{
+    s->n_accepted = 0; s->n_rejected = 0; s->n_rhs = 0; s->n_jac = 0;
+    s->n_out = 0; s->n_events = 0; s->terminal = -1; s->t_last = t0; s->h_next = 0;
+    copy_n(NX_(m), x0, s->x_last);
+}
+
 /* simulate, simulate_input and simulate_events: in == NULL for a constant
  * r, ev == NULL for no events */
 static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,
@@ -811,10 +824,8 @@ static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t
     engine e;
     row_sink out;
     gen_rt_real t = t0;
-    s->n_accepted = 0; s->n_rejected = 0; s->n_rhs = 0; s->n_jac = 0;
-    s->n_out = 0; s->n_events = 0; s->terminal = -1; s->t_last = t0; s->h_next = 0;
+    stats_reset(m, x0, t0, s);
     copy_n(nx, x0, x);
-    copy_n(nx, x0, s->x_last);
     rows = gen_rt_simulate_rows(t0, t_end, dt);
     if (rows < 0) return rows;
     if (o->every < 0 || o->final_only < 0 || !method_ok(o)) return GEN_RT_ERR_BAD_ARG;
@@ -892,13 +903,6 @@ int gen_rt_model_simulate(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_r
                      x_out, lam_out, NULL, s);
 }
 
-static void stats_reset(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,
-                        gen_rt_sim_stats *s)
-{
-    s->n_accepted = 0; s->n_rejected = 0; s->n_rhs = 0; s->n_jac = 0;
-    s->n_out = 0; s->n_events = 0; s->terminal = -1; s->t_last = t0; s->h_next = 0;
-    copy_n(NX_(m), x0, s->x_last);
-}
 
 int gen_rt_model_simulate_input(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,
                                 gen_rt_real t_end, gen_rt_real dt, const gen_rt_input *in,

@@ -1849,13 +1849,20 @@ struct Runtime {
         }
 
         /* the trial step: hh, within the step budget and above hmin */
-        int trial_size(S &hh, S hmin) noexcept
+        // the next trial step from t towards t_stop: hh, and last when it is
+        // clipped to reach t_stop (a step within 0.01% of it stretches to it)
+        int trial_size(S t, S t_stop, S hmin, S &hh, bool &last) noexcept
         {
             const long max_steps = o.max_steps > 0 ? o.max_steps : 100000L;
             if (attempts >= max_steps) return ERR_MAX_STEPS;
             if (h_next < hmin) return ERR_STEP_UNDERFLOW;
             attempts += 1;
             hh = h_next;
+            last = false;
+            if (t + hh >= t_stop || t + S(1.0001) * hh >= t_stop) {
+                hh = t_stop - t;
+                last = true;
+            }
             return OK;
         }
 
@@ -1902,11 +1909,7 @@ struct Runtime {
                 for (;;) {
                     S hh, err = 0;
                     bool last = false;
-                    if ((st = trial_size(hh, hmin))) return st;
-                    if (t + hh >= t_stop || t + S(1.0001) * hh >= t_stop) {
-                        hh = t_stop - t;
-                        last = true;
-                    }
+                    if ((st = trial_size(t, t_stop, hmin, hh, last))) return st;
                     st = dopri5_trial<S, NX>(f, t, hh, x, o.rtol, o.atol, k, y, ynew, err);
                     s.n_rhs += 6;
                     if (!control(st, err, hh, last, 5)) {
@@ -1965,11 +1968,7 @@ struct Runtime {
                 for (;;) {
                     S hh, err = 0;
                     bool last = false;
-                    if ((st = trial_size(hh, hmin))) return st;
-                    if (t + hh >= t_stop || t + S(1.0001) * hh >= t_stop) {
-                        hh = t_stop - t;
-                        last = true;
-                    }
+                    if ((st = trial_size(t, t_stop, hmin, hh, last))) return st;
                     st = rodas4_trial<S, NX>(f, t, hh, x, f0, J, dfdt, o.rtol, o.atol, rw, ynew,
                                              err);
                     s.n_rhs += 5;
