@@ -63,6 +63,19 @@ const char *gen_rt_status_message(int status);
 /* 1 if all n values are finite. */
 int gen_rt_all_finite(int n, const gen_rt_real *v);
 
+/* The same, inline: for the argument checks of the generated functions,
+ * where n is a constant the compiler unrolls (no call per array). */
+static inline int gen_rt_finite_n(int n, const gen_rt_real *v)
+{
+    int i;
+    for (i = 0; i < n; ++i) {
+        /* x - x is NaN for NaN and inf, 0 otherwise; no libm needed */
+        gen_rt_real d = v[i] - v[i];
+        if (d != d) return 0;
+    }
+    return 1;
+}
+
 /* ---- dense linear algebra (gen_rt_linalg.c) --------------------------- */
 
 /* LU with partial pivoting, in place: a (n x n) becomes L\U, piv[n] the

@@ -148,6 +148,20 @@ static int rhs_(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
     m->rhs_terms(q, u, r, p, t, m->explicit_kinematics ? NULL : Kqd, dxdt, M, f,
                  mv ? A : NULL, mv ? a : NULL);
     if ((st = solve_kinematics(m, Kqd, kpiv, dxdt))) return st;
+    if (m->accel == GEN_RT_ACCEL_LDLT && !mv) {
+        /* The unrolled LDL^T reads M's lower triangle (the upper holds the
+         * same values) and rejects a pivot that is not > its tolerance: NaN
+         * or inf in M ends there (an infinite diagonal makes every
+         * tolerance infinite) or in a non-finite solution, and so does NaN
+         * or inf in f. So a finite solution means finite M and f, and only a
+         * failure pays for the checks that name the culprit. */
+        st = m->mass_solve(M, f, dxdt + nq);
+        if (!st && finite_n(nu, dxdt + nq)) return GEN_RT_OK;
+        if (!finite_n(nu * nu, M) || !finite_n(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
+        /* an overflowing solution (a tiny mass under a large force) is
+         * singular, as with LU */
+        return st ? st : GEN_RT_ERR_SINGULAR;
+    }
     if (mv && m->accel_terms) m->accel_terms(q, u, dxdt, p, t, a);
     if (!finite_n(nu * nu, M) || !finite_n(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
     if (mv) {
@@ -158,12 +172,6 @@ static int rhs_(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
                                             dxdt + nq, lam);
         /* Lagrange: accelerations and multipliers from the KKT system */
         return gen_rt_accel_kkt(nu, mv, M, f, A, a, w, iw, dxdt + nq, lam);
-    }
-    if (m->accel == GEN_RT_ACCEL_LDLT) {
-        /* the unrolled LDL^T checks its pivots; an overflowing solution
-         * (a tiny mass under a large force) is singular too, as with LU */
-        if ((st = m->mass_solve(M, f, dxdt + nq))) return st;
-        return finite_n(nu, dxdt + nq) ? GEN_RT_OK : GEN_RT_ERR_SINGULAR;
     }
     return gen_rt_accel_kkt(nu, 0, M, f, NULL, NULL, w, iw, dxdt + nq, NULL);
 }
@@ -381,14 +389,14 @@ static int linearize_(const gen_rt_model *m, const gen_rt_real *x_op,
     /* accelerations and multipliers at the operating point */
     st = gen_rt_model_eval_kinematics(m, q, u, p, t, scratch, iwork, qd);
     if (st) return st;
-    m->mass_matrix(q, p, t, M);
-    m->forcing(q, u, r_op, p, t, f);
+    {
+        /* M, f (and A, a) from the joint right-hand-side kernel; its
+         * kinematics outputs are not needed here */
+        gen_rt_real *qdt = scratch, *Kt = qdt + nq;
+        m->rhs_terms(q, u, r_op, p, t, m->explicit_kinematics ? NULL : Kt, qdt, M, f, A, a);
+    }
     if (!finite_n(nu * nu, M) || !finite_n(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
     if (mv) {
-        /* A and a from the joint right-hand-side kernel (its other outputs
-         * are not needed here) */
-        gen_rt_real *qdt = scratch, *Mt = qdt + nq, *ft = Mt + nu * nu, *Kt = ft + nu;
-        m->rhs_terms(q, u, r_op, p, t, m->explicit_kinematics ? NULL : Kt, qdt, Mt, ft, A, a);
         if (m->accel_terms) m->accel_terms(q, u, qd, p, t, a);
         if (!finite_n(mv * nu, A) || !finite_n(mv, a)) return GEN_RT_ERR_NONFINITE_MODEL;
         st = gen_rt_accel_kkt(nu, mv, M, f, A, a, scratch, iwork, ud, lam);

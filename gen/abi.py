@@ -28,7 +28,7 @@ from .resources import csrc_dir
 
 __all__ = ["Status", "Field", "Struct", "Param", "Function", "Interface", "STATUSES",
            "STRUCTS", "FUNCTIONS", "BATCH_FUNCTIONS", "METHODS", "status_name", "status_value",
-           "status_message", "interface"]
+           "status_message", "interface", "host_interface", "ABI_TAG", "DERIVATIVE_VERBS"]
 
 
 # ------------------------------------------------------------------ statuses
@@ -158,6 +158,9 @@ STRUCTS = (
         Field("x_last", "real", "last good state (on failure: where it failed)", 0.0, "NX"),
     )),
 )
+
+
+STRUCT_NAMES = tuple(s.name for s in STRUCTS)
 
 
 # ----------------------------------------------------------------- functions
@@ -342,6 +345,22 @@ BATCH_FUNCTIONS = (
 )
 
 
+def _abi_tag():
+    """A tag of the plugin table's layout (<name>_api.c and the Python host
+    module): it changes with any function, parameter or struct field, so a
+    host never calls a model through a table of another layout."""
+    import hashlib
+    h = hashlib.sha256()
+    for s in STRUCTS:
+        h.update(repr((s.name, [(f.name, f.ctype, f.count) for f in s.fields])).encode())
+    for f in FUNCTIONS + BATCH_FUNCTIONS:
+        h.update(repr((f.verb, f.ret, [(a.name, a.ctype, a.role) for a in f.params])).encode())
+    return "eomgen-abi-" + h.hexdigest()[:16]
+
+
+ABI_TAG = _abi_tag()
+
+
 # ---------------------------------------------------------------- interface
 @dataclass
 class Interface:
@@ -394,6 +413,18 @@ class Interface:
 
     def struct(self, name):
         return next(s for s in self.structs if s.name == name)
+
+    @property
+    def abi_tag(self):
+        """ABI_TAG: the plugin table's layout."""
+        return ABI_TAG
+
+    @property
+    def struct_verbs(self):
+        """The functions that take a struct (the plugin table passes those
+        as void pointers through a trampoline)."""
+        return [f for f in self.functions
+                if any(a.ctype in STRUCT_NAMES for a in f.params)]
 
     def function(self, verb):
         return next(f for f in self.functions + self.batch_functions if f.verb == verb)
@@ -460,3 +491,22 @@ def interface(model, real="double", accel="lu"):
         auxiliary_labels=list(getattr(m, "auxiliary_labels", [])),
         output_names=list(getattr(m, "output_names", [])),
         output_labels=list(getattr(m, "output_labels", [])))
+
+
+def host_interface(real="double"):
+    """The Interface of the Python host module (gen.build): the shared
+    description under the prefix "eomgen", for models of every size."""
+    sizes = {k: 0 for k in ("NQ", "NU", "NX", "NR", "NP", "MC", "MV", "NS", "NA", "NY")}
+    return Interface(
+        name="eomgen", real=real, method="", sizes=sizes, state_names=[], state_labels=[],
+        input_names=[], input_labels=[], constant_names=[], constant_labels=[],
+        independent_state_names=[], q_ind=[], q_dep=[], u_ind=[], u_dep=[], constants=[],
+        has_energy=False, explicit_kinematics=True, accel="lu", functions=FUNCTIONS,
+        batch_functions=BATCH_FUNCTIONS, structs=STRUCTS)
+
+
+# the functions that call the derivative kernels (<name>_lin.c): a model
+# compiled without them (gen.compile builds them on first use) must have them
+# before these run; advance and the simulations need them only with RODAS4
+DERIVATIVE_VERBS = frozenset({"linearize", "jacobian", "step_sensitivity", "linearize_outputs",
+                              "linearize_discrete", "linearize_batch"})

@@ -2,13 +2,19 @@
 exceptions from gen.errors; wrong shapes raise ValueError naming the
 expected shape. Every call returns fresh arrays (safe with solve_ivp).
 
-A Simulator is made from the compiled cffi module and the model's interface
-description (gen.abi.Interface): it needs no sympy object."""
+A Simulator is made from the host module (gen/host.py), the model
+library's plugin table and the model's interface description
+(gen.abi.Interface). It needs no sympy object, except through
+``derivatives``: a function that builds the derivative kernels on their
+first use (gen.compile's lazy build)."""
 from __future__ import annotations
+
+import functools
+import threading
 
 import numpy as np
 
-from .abi import METHODS, status_name
+from .abi import DERIVATIVE_VERBS, METHODS, status_name
 from .errors import ConvergenceError, DivergenceError, SingularError, SolverError
 
 __all__ = ["Simulator", "EXCEPTIONS"]
@@ -36,16 +42,22 @@ class Simulator:
     state_names, input_names, constant_names, independent_state_names,
     constants (default values), has_energy, interface (gen.abi.Interface)."""
 
-    def __init__(self, module, interface):
+    def __init__(self, host, api, interface, derivatives=None):
         iface = interface
         self.interface = iface
-        self._mod = module
-        self._ffi = module.ffi
-        self._lib = module.lib
+        self._mod = host
+        self._ffi = host.ffi
+        self._lib = host.lib
+        self._api = api
+        # builds the derivative kernels: () -> (table, Built, timings); None
+        # once the library has them
+        self._derive = derivatives
+        self._derive_lock = threading.Lock()
+        self.build_info = {}
         self._p = iface.name
         self.real = iface.real
         self.dtype = np.float64 if iface.real == "double" else np.float32
-        self._ctype = f"{iface.name}_real"
+        self._ctype = "eomgen_real"
         self.name = iface.name
         self.method = iface.method
         self.nq, self.nu, self.nx = iface.nq, iface.nu, iface.nx
@@ -81,7 +93,13 @@ class Simulator:
         self._rshape = (self.nr,)
         self._fb = self._ffi.from_buffer
         self._null = self._ffi.NULL
-        self._rhs_c = self._fn("eval_rhs")
+        self._rhs_c = self._lib.eomgen_eval_rhs    # the fast path passes the table itself
+        for k, n in (("nq", self.nq), ("nu", self.nu), ("nr", self.nr), ("np", self.np),
+                     ("mc", self.mc), ("mv", self.mv), ("ns", self.ns), ("ny", self.ny),
+                     ("na", self.na)):
+            if getattr(api, k) != n:
+                raise ValueError(f"the library of '{self.name}' has {k} = {getattr(api, k)}, "
+                                 f"its interface {n}: a library of another model")
 
     @property
     def state_labels(self):
@@ -97,10 +115,43 @@ class Simulator:
 
     # ------------------------------------------------------------ helpers
     def _fn(self, name):
+        """The C function <p>_<name> (through the host module, its table
+        bound): a function taking the C function's own arguments."""
         f = self._fns.get(name)
         if f is None:
-            f = self._fns[name] = getattr(self._lib, f"{self._p}_{name}")
+            if name in DERIVATIVE_VERBS:
+                self._need_derivatives()
+            f = self._fns[name] = functools.partial(getattr(self._lib, f"eomgen_{name}"),
+                                                    self._api)
         return f
+
+    @property
+    def has_derivatives(self):
+        """Whether the derivative kernels (linearize, jacobian,
+        step_sensitivity, RODAS4) are compiled in; they are built on first
+        use otherwise."""
+        return self._derive is None
+
+    def _need_derivatives(self):
+        """Build (or load from the cache) the derivative kernels and switch
+        to the complete library: once, thread-safe."""
+        if self._derive is None:
+            return
+        with self._derive_lock:
+            if self._derive is None:
+                return
+            api, built, timings = self._derive()
+            self._api = api
+            self._fns.clear()
+            self.build_info.update(timings, module=str(built.path), derivatives=True)
+            self._derive = None
+
+    def _new(self, struct):
+        """A zeroed C struct of the interface ("sim_options", "input",
+        "events", "sim_stats"), as the host module declares it."""
+        if struct == "sim_stats":
+            return self._ffi.new("eomgen_sim_stats *", {"x_last": max(1, self.nx)})
+        return self._ffi.new(f"eomgen_{struct} *")
 
     def _out_sizes(self, verb):
         """The true sizes of a function's array outputs (interface description)."""
@@ -264,7 +315,7 @@ class Simulator:
                 pass
             else:
                 res = np.empty(self.nx, dtype=self._dt)
-                st = self._rhs_c(t, xb, rb, self._p_default_c, fb(at, res), null)
+                st = self._rhs_c(self._api, t, xb, rb, self._p_default_c, fb(at, res), null)
                 if st:
                     self._check(st, "eval_rhs", t, x)
                 return res
@@ -389,7 +440,9 @@ class Simulator:
             raise ValueError(f"this run would return {rows} rows ({full} output times, every="
                              f"{every}), more than max_rows={max_rows}: use a larger dt or "
                              "every=, or final_only=True")
-        opts = self._ffi.new(f"{self._p}_sim_options *")
+        if method == "rodas4":
+            self._need_derivatives()       # its Jacobian
+        opts = self._new("sim_options")
         self._fn("sim_options_default")(opts)
         opts.method = METHODS[method]
         opts.project = 1 if project else 0
@@ -398,7 +451,7 @@ class Simulator:
         opts.max_steps = int(max_steps)
         opts.every = every
         opts.final_only = 1 if final_only else 0
-        stats = self._ffi.new(f"{self._p}_sim_stats *")
+        stats = self._new("sim_stats")
         t = np.empty(rows, dtype=self.dtype)
         X = np.empty((rows, self.nx), dtype=self.dtype)
         lam = np.empty((rows, max(1, self.mv)), dtype=self.dtype)
@@ -600,10 +653,7 @@ class Simulator:
         raise ValueError(f"{what} must have shape ({width},) or ({n}, {width}), got {a.shape}")
 
     def _batch_fn(self, name):
-        f = getattr(self._lib, f"{self._p}_{name}", None)
-        if f is None:
-            raise NotImplementedError(f"this compiled module has no {name}; rebuild it")
-        return f
+        return self._fn(name)
 
     def _batch_check(self, idx, status, where, X, t=None):
         if idx >= 0:

@@ -1,15 +1,25 @@
-"""Build generated sources with cffi (API mode, out of line) into a cache
-keyed by the content of the generated files and the generator version.
+"""Build generated sources into a model library (a plain shared library:
+the model's kernels, the runtime and its plugin table ``<name>_api.c``) in a
+cache keyed by the content of the generated files and the generator
+version. Python calls every model through one host module (gen/host.py),
+so a model's build compiles no Python binding code.
+
+A model is compiled without its derivative kernels first (the largest
+code, needed only by linearize, jacobian, step_sensitivity and RODAS4);
+build_derivatives adds them on first use, reusing the model's objects, and
+records the result next to the first build, so later processes load the
+complete library directly.
 
 Builds happen in a private temporary directory and are moved into the
 cache with an atomic rename, so two processes building the same model at
-once both succeed and load the same module. A failed compile raises
+once both succeed and load the same library. A failed compile raises
 BuildError with the full compiler log.
 
 The cache (cache_dir(): $EOMGEN_CACHE, else $XDG_CACHE_HOME/eomgen or
-~/.cache/eomgen) holds one folder per built module (``_eomgen_<name>_<key>``)
-and the shared runtime objects (``runtime_<key>``); everything in it can be
-deleted at any time (cache_info, clear_cache). A build's temporary directory
+~/.cache/eomgen) holds one folder per built library (``_eomgen_<name>_<key>``),
+the shared runtime objects (``runtime_<key>``) and the host modules
+(``host_<real>_<key>``); everything in it can be deleted at any time
+(cache_info, clear_cache). A build's temporary directory
 is ``.<module>.<pid>.XXXX`` (with an ``owner`` file: pid and host); one left
 by a killed process (dead pid on this host, or older than STALE_SECONDS) is
 removed by the next build. A cache that cannot be written (read-only, full,
@@ -19,7 +29,6 @@ from __future__ import annotations
 
 import errno
 import hashlib
-import importlib.util
 import os
 import re
 import socket
@@ -29,16 +38,18 @@ import sys
 import sysconfig
 import tempfile
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ._version import __version__
 from .errors import BuildError, ModelError
 from .eigen import eigen_version, find_eigen
-from .ir import plan as make_plan
-from .render import EIGEN_SOURCES, RUNTIME_HEADERS, RUNTIME_SOURCES, Rendered, plan_lin, render
+from .ir import DERIVATIVE_KERNELS, plan as make_plan, with_derivatives
+from .render import (EIGEN_SOURCES, RUNTIME_HEADERS, RUNTIME_SOURCES, Rendered, plan_lin,
+                     render)
 
-__all__ = ["compile", "cache_dir", "build", "load", "Built", "cache_info", "clear_cache"]
+__all__ = ["compile", "cache_dir", "build", "build_derivatives", "load", "Built", "cache_info",
+           "clear_cache"]
 
 C_FLAGS = ["-std=c99", "-O2", "-fno-strict-aliasing"]
 # added for <name>_lin.c, the derivative kernels (see _c_objects)
@@ -62,9 +73,11 @@ def cache_dir() -> Path:
 # owner file) is stale after this long; one whose process is dead at once
 STALE_SECONDS = 30 * 60
 # what eomgen puts in the cache: module folders, runtime objects, temporary dirs
-_ENTRY = re.compile(r"^(_eomgen_\w+|runtime_[0-9a-f]{16})$")
+_ENTRY = re.compile(r"^(_eomgen_\w+|runtime_[0-9a-f]{16}|host_(?:double|float)_[0-9a-f]{16}"
+                    r"|templates_[0-9a-f]{16})$")
 # (older eomgen versions wrote no pid: .<module>.XXXXXXXX, stale by age)
-_TEMP = re.compile(r"^\.(_eomgen_\w+|runtime_[0-9a-f]{16})\.(?:(\d+)\.)?\w+$")
+_TEMP = re.compile(r"^\.(_eomgen_\w+|runtime_[0-9a-f]{16}|host_(?:double|float)_[0-9a-f]{16})"
+                   r"\.(?:(\d+)\.)?\w+$")
 
 
 def _cache_error(e: OSError, folder: Path, what: str):
@@ -170,16 +183,17 @@ def _size(path: Path) -> int:
 
 
 def cache_info():
-    """{"path", "exists", "modules", "runtimes", "temporary", "entries", "bytes"}
-    of the build cache (only eomgen's entries are counted)."""
+    """{"path", "exists", "modules", "runtimes", "hosts", "temporary", "entries",
+    "bytes"} of the build cache (only eomgen's entries are counted)."""
     root = cache_dir()
     ents = _entries(root)
     mods = [d for d in ents if d.name.startswith("_eomgen_")]
     rts = [d for d in ents if d.name.startswith("runtime_")]
+    hosts = [d for d in ents if d.name.startswith("host_")]
     tmps = [d for d in ents if d.name.startswith(".")]
     return {"path": root, "exists": root.is_dir(), "modules": len(mods), "runtimes": len(rts),
-            "temporary": len(tmps), "entries": len(mods) + len(rts),
-            "bytes": sum(_size(d) for d in ents)}
+            "hosts": len(hosts), "temporary": len(tmps),
+            "entries": len(mods) + len(rts) + len(hosts), "bytes": sum(_size(d) for d in ents)}
 
 
 def clear_cache():
@@ -239,148 +253,220 @@ def eigen_include_dir():
 
 @dataclass
 class Built:
-    """A compiled cffi module: where it is, its name, its interface."""
+    """A compiled model library: the file, its cache folder's name (the
+    module name), the interface, and whether it has the derivative kernels
+    (else their stand-ins: build_derivatives makes the complete library)."""
     path: Path
     modname: str
     interface: object
+    derivatives: bool = True
+    backend: str = "c"
+
+    @property
+    def folder(self) -> Path:
+        return self.path.parent
+
+
+# the library file in a module folder
+_LIB_SUFFIX = ".dylib" if sys.platform == "darwin" else ".so"
+# in a folder built without the derivative kernels: the name of the folder
+# of the complete library, once build_derivatives has made it
+_DERIVED = "derivatives"
+
+
+def _hash(*parts):
+    h = hashlib.sha256()
+    for part in parts:
+        h.update(part if isinstance(part, bytes) else str(part).encode())
+        h.update(b"\0")
+    return h.hexdigest()[:16]
+
+
+def _check_platform():
+    if os.name != "posix":
+        raise BuildError("gen.compile builds model libraries with a POSIX C compiler (cc "
+                         "-shared) and does not support this platform yet: generate the "
+                         "sources with gen.generate and build them with CMake")
 
 
 def build(rendered: Rendered, verbose=False, timings=None):
-    """Compile a Rendered (gen.render.render) into a cffi extension in the
-    cache, keyed by the content of everything compiled; return a Built.
+    """Compile a Rendered (gen.render.render(..., project=False)) into a
+    model library in the cache, keyed by the content of everything
+    compiled; return a Built. A library built without the derivative
+    kernels whose complete twin exists (build_derivatives) gives the twin.
     Nothing is rendered here."""
     iface = rendered.interface
     name, backend, files = iface.name, rendered.backend, rendered.files
     if backend not in BACKENDS:
         raise ModelError(f"unknown backend {backend!r}: choose one of {list(BACKENDS)}")
+    _check_platform()
     t1 = time.perf_counter()
     eigen_dir = eigen_include_dir() if backend == "eigen" else None
-    cdef, wrapper = rendered.cdef, rendered.module_source
-    h = hashlib.sha256()
-    h.update(__version__.encode())
-    h.update(sys.version.encode())
-    h.update(" ".join(C_FLAGS + ["lin:"] + C_LIN_FLAGS).encode())
+    parts = [__version__, " ".join(C_FLAGS + ["lin:"] + C_LIN_FLAGS), _compiler()]
     if backend != "c":
         # the backend, its flags and the Eigen it compiles against
-        h.update(f"\0backend={backend}\0{' '.join(CXX_FLAGS)}\0eigen={eigen_dir}:"
-                 f"{eigen_version(eigen_dir)}\0".encode())
-    h.update(cdef.encode())
-    h.update(wrapper.encode())
+        parts.append(f"backend={backend}\0{' '.join(CXX_FLAGS)}\0{_cxx_compiler()}\0"
+                     f"eigen={eigen_dir}:{eigen_version(eigen_dir)}")
     for k in sorted(files):
-        h.update(k.encode() + b"\0" + files[k].encode() + b"\0")
-    key = h.hexdigest()[:16]
+        parts += [k, files[k]]
+    key = _hash(*parts)
     modname = (f"_eomgen_{name}_{key}" if backend == "c"
                else f"_eomgen_{name}_{backend}_{key}")
     root = cache_dir()
     final = root / modname
-    so = _find_module(final, modname)
-    if so is not None:
+    lib = _find_library(final, modname)
+    if lib is not None:
+        built = Built(lib, modname, iface, rendered.derivatives, backend)
         if timings is not None:
             timings["compile"] = 0.0
             timings["cached"] = True
-        return Built(so, modname, iface)
-    try:
-        root.mkdir(parents=True, exist_ok=True)
-        clean_stale(root)
-        tmp = _make_temp(root, modname)
-    except OSError as e:
-        raise _cache_error(e, root, "create a build directory") from None
+        return _derived(built) or built
+    tmp = _new_build_dir(root, modname)
     try:
         src = tmp / "src"
         try:
             src.mkdir()
             for fname, text in files.items():
                 (src / fname).write_text(text)
+            (tmp / "obj").mkdir()
         except OSError as e:
             raise _cache_error(e, root, "write the sources") from None
-        import cffi
-        ffi = cffi.FFI()
-        try:
-            ffi.cdef(cdef)
-        except Exception as e:  # cffi's CDefError and parse errors
-            raise BuildError(f"internal error: the cffi declarations do not parse: {e}", cdef) from e
         if backend == "c":
-            own = [f"{name}.c", f"{name}_lin.c"] + RUNTIME_SOURCES
-            # the model and the runtime as objects, compiled in parallel (the
-            # runtime's objects are shared by every model with the same runtime
-            # sources, scalar type and flags); cffi then compiles its wrapper
-            ffi.set_source(modname, wrapper, include_dirs=[str(src)],
-                           extra_compile_args=list(C_FLAGS), libraries=["m"])
-            # cffi's wrapper is compiled with the model and the runtime, all in
-            # parallel, then linked here (cffi's own compile would come after)
-            wrap = None
-            if _can_link_directly():
-                try:
-                    import contextlib
-                    import io
-                    wrap = tmp / f"{modname}.c"
-                    with contextlib.redirect_stdout(io.StringIO()):   # cffi says "generating"
-                        ffi.emit_c_code(str(wrap))
-                except OSError as e:
-                    raise _cache_error(e, root, "write the sources") from None
-            try:
-                objects = _c_objects(name, src, tmp, wrap)
-            except OSError as e:
-                raise _cache_error(e, root, "compile") from None
-            if wrap is None:
-                ffi.set_source(modname, wrapper, extra_objects=[str(o) for o in objects],
-                               include_dirs=[str(src)], extra_compile_args=list(C_FLAGS),
-                               libraries=["m"])
+            lin = f"{name}_lin.c" if rendered.derivatives else f"{name}_lin_stub.c"
+            own = [(f"{name}_lin.c", C_LIN_FLAGS)] if rendered.derivatives else []
+            own += [(f"{name}.c", ()), (f"{name}_api.c", ())]
+            if not rendered.derivatives:
+                own.append((lin, ()))
+            objects = _c_objects(src, tmp / "obj", own, name)
+            so = _link(modname, objects, tmp, cxx=False)
         else:
-            # all C++: the extern "C" layer over the typed API, and cffi's wrapper
             own = [s.format(name=name) for s in EIGEN_SOURCES]
-            ffi.set_source(modname, wrapper,
-                           sources=[str(src / s) for s in own], source_extension=".cpp",
-                           include_dirs=[str(src)],
-                           extra_compile_args=[*CXX_FLAGS, "-isystem", str(eigen_dir)],
-                           libraries=["stdc++", "m"])
-        bdir = tmp / "build"
-        try:
-            bdir.mkdir()
-        except OSError as e:
-            raise _cache_error(e, root, "compile") from None
-        try:
-            if backend == "c" and wrap is not None:
-                so_path = _link_module(modname, objects, bdir)
-            else:
-                so_path = ffi.compile(tmpdir=str(bdir), verbose=verbose)
-        except Exception as e:
-            if isinstance(e, OSError) and e.errno in _CACHE_ERRNOS:
-                raise _cache_error(e, root, "compile") from None
-            if backend == "c":
-                ok, log = _compile_log(src, own)
-            else:
-                ok, log = _compile_log(src, own, ["-isystem", str(eigen_dir)],
-                                       compiler=_cxx_compiler(), flags=CXX_STRICT_FLAGS)
-            raise BuildError(f"compiling the model '{name}' failed ({type(e).__name__}: {e})",
-                             log or str(e)) from None
-        dest_tmp = tmp / modname
-        try:
-            dest_tmp.mkdir()
-            shutil.copy2(so_path, dest_tmp / Path(so_path).name)
-            shutil.copytree(src, dest_tmp / "src")
-        except OSError as e:
-            raise _cache_error(e, root, "store the module") from None
-        try:
-            os.rename(dest_tmp, final)
-        except OSError as e:
-            # another process won the race: use its build
-            if _find_module(final, modname) is None:
-                raise _cache_error(e, root, "store the module") from None
+            objects = _eigen_objects(src, tmp / "obj", own, name, eigen_dir)
+            so = _link(modname, objects, tmp, cxx=True)
+        _store(tmp, final, modname, so, src, keep_objects=(backend == "c"
+                                                           and not rendered.derivatives))
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-    so = _find_module(final, modname)
-    if so is None:
-        raise BuildError(f"the built module for '{name}' is missing from {final}")
+    lib = _find_library(final, modname)
+    if lib is None:
+        raise BuildError(f"the built library for '{name}' is missing from {final}")
     if timings is not None:
         timings["compile"] = time.perf_counter() - t1
         timings["cached"] = False
-    return Built(so, modname, iface)
+    return Built(lib, modname, iface, rendered.derivatives, backend)
 
 
-def _cc_object(cc, src: Path, obj: Path, include: Path, extra=()):
-    cmd = [cc, *C_FLAGS, "-fPIC", "-I", str(include), *extra, "-c", str(src), "-o", str(obj)]
-    proc = subprocess.run(cmd, capture_output=True, text=True)
+def build_derivatives(base: Built, lin_source: str, timings=None):
+    """The complete library of a model built without its derivative kernels
+    (base): <name>_lin.c (lin_source) compiled and linked with base's own
+    objects and the runtime's; cached, and recorded in base's folder so that
+    build() of base's sources finds it. Returns its Built."""
+    if base.derivatives:
+        return base
+    t1 = time.perf_counter()
+    name = base.interface.name
+    key = _hash(base.modname, " ".join(C_FLAGS + ["lin:"] + C_LIN_FLAGS), lin_source)
+    modname = f"_eomgen_{name}_{key}"
+    root = cache_dir()
+    final = root / modname
+    lib = _find_library(final, modname)
+    if lib is None:
+        core = base.folder
+        tmp = _new_build_dir(root, modname)
+        try:
+            src = tmp / "src"
+            try:
+                shutil.copytree(core / "src", src)
+                (src / f"{name}_lin_stub.c").unlink(missing_ok=True)
+                (src / f"{name}_lin.c").write_text(lin_source)
+                (tmp / "obj").mkdir()
+            except OSError as e:
+                raise _cache_error(e, root, "write the sources") from None
+            mine = [core / "obj" / f"{name}.o", core / "obj" / f"{name}_api.o"]
+            if not all(o.is_file() for o in mine):
+                # an older or pruned cache folder: compile the model again
+                objects = _c_objects(src, tmp / "obj", [(f"{name}_lin.c", C_LIN_FLAGS),
+                                                        (f"{name}.c", ()),
+                                                        (f"{name}_api.c", ())], name)
+            else:
+                objects = _c_objects(src, tmp / "obj", [(f"{name}_lin.c", C_LIN_FLAGS)], name)
+                objects = objects[:1] + mine + objects[1:]
+            so = _link(modname, objects, tmp, cxx=False)
+            _store(tmp, final, modname, so, src, keep_objects=False)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+        lib = _find_library(final, modname)
+        if lib is None:
+            raise BuildError(f"the built library for '{name}' is missing from {final}")
+    _write_atomic(base.folder / _DERIVED, modname)
+    if timings is not None:
+        timings["compile_derivatives"] = time.perf_counter() - t1
+    return Built(lib, modname, base.interface, True, base.backend)
+
+
+def _derived(built: Built):
+    """The complete twin of a library built without derivatives, if made."""
+    if built.derivatives:
+        return None
+    try:
+        modname = (built.folder / _DERIVED).read_text().strip()
+    except OSError:
+        return None
+    if not re.fullmatch(r"_eomgen_\w+", modname):
+        return None
+    lib = _find_library(cache_dir() / modname, modname)
+    return None if lib is None else Built(lib, modname, built.interface, True, built.backend)
+
+
+def _write_atomic(path: Path, text: str):
+    tmp = path.with_name(f".{path.name}.{os.getpid()}")
+    try:
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    except OSError:
+        # a read-only cache keeps working: the twin is found by its key
+        try:
+            tmp.unlink()
+        except OSError:
+            pass
+
+
+def _new_build_dir(root: Path, modname: str) -> Path:
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        clean_stale(root)
+        return _make_temp(root, modname)
+    except OSError as e:
+        raise _cache_error(e, root, "create a build directory") from None
+
+
+def _store(tmp: Path, final: Path, modname: str, so: Path, src: Path, keep_objects: bool):
+    """Move a finished build into the cache (atomic rename; a concurrent
+    builder that got there first wins, both are identical)."""
+    root = final.parent
+    dest = tmp / modname
+    try:
+        dest.mkdir()
+        shutil.copy2(so, dest / so.name)
+        shutil.copytree(src, dest / "src")
+        if keep_objects:
+            shutil.copytree(tmp / "obj", dest / "obj")
+    except OSError as e:
+        raise _cache_error(e, root, "store the library") from None
+    try:
+        os.rename(dest, final)
+    except OSError as e:
+        if _find_library(final, modname) is None:
+            raise _cache_error(e, root, "store the library") from None
+
+
+def _cc_object(cc, src: Path, obj: Path, include: Path, extra=(), flags=None):
+    flags = C_FLAGS if flags is None else flags
+    cmd = [cc, *flags, "-fPIC", "-I", str(include), *extra, "-c", str(src), "-o", str(obj)]
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+    except OSError as e:
+        raise BuildError(f"the compiler {cc!r} cannot be run: {e}") from None
     if proc.returncode != 0:
         raise BuildError(f"compiling {src.name} failed",
                          "$ " + " ".join(cmd) + "\n" + proc.stdout + proc.stderr)
@@ -408,77 +494,85 @@ def _runtime_objects(src: Path, cc: str):
     return None, folder
 
 
-def _can_link_directly():
-    """Link the extension with the C compiler here (Linux, macOS): the
-    wrapper then compiles in parallel with the model."""
-    import sysconfig
-    return ((sys.platform.startswith("linux") or sys.platform == "darwin")
-            and bool(sysconfig.get_config_var("EXT_SUFFIX")))
-
-
-def _link_module(modname, objects, bdir: Path):
-    """cc -shared: the extension module from its objects."""
-    import sysconfig
-    cc = _compiler()
-    out = bdir / (modname + sysconfig.get_config_var("EXT_SUFFIX"))
+def _link(modname, objects, tmp: Path, cxx=False) -> Path:
+    """cc -shared: the model library from its objects."""
+    cc = _cxx_compiler() if cxx else _compiler()
+    out = tmp / (modname + _LIB_SUFFIX)
     cmd = [cc, "-shared", *[str(o) for o in objects], "-lm", "-o", str(out)]
-    if sys.platform == "darwin":
-        cmd[2:2] = ["-undefined", "dynamic_lookup"]
-    proc = subprocess.run(cmd, capture_output=True, text=True)
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+    except OSError as e:
+        raise BuildError(f"the compiler {cc!r} cannot be run: {e}") from None
     if proc.returncode != 0:
         raise BuildError(f"linking {out.name} failed",
                          "$ " + " ".join(cmd) + "\n" + proc.stdout + proc.stderr)
-    return str(out)
+    return out
 
 
-def _c_objects(name, src: Path, tmp: Path, wrap: Path | None = None):
-    """Compile the model's C file, cffi's wrapper (when given) and (unless
-    cached) the runtime, two at a time; return the object files to link."""
+def _c_objects(src: Path, objdir: Path, own, name):
+    """Compile the model's own C files (own: [(file, extra flags)], the
+    largest first) and, unless cached, the runtime, two at a time; return
+    the object files to link (own first, in order, then the runtime)."""
     from concurrent.futures import ThreadPoolExecutor
     cc = _compiler()
-    objdir = tmp / "obj"
-    objdir.mkdir()
     runtime, rt_folder = _runtime_objects(src, cc)
-    # the derivative kernels first (the largest file starts first), at -O1:
-    # gcc's time on their straight-line code is the largest cost of a build,
-    # and -O1 takes a quarter less (n = 20 cart: 8.8 -> 6.6 s) for a
-    # linearize 4-12% slower (52 -> 54 us; n = 10: 10.7 -> 12.0 us); IEEE
-    # semantics are the same at every level (no -ffast-math), so the numbers
-    # are too (tests/golden/seed_numbers.json, bit for bit)
-    jobs = [(src / f"{name}_lin.c", objdir / f"{name}_lin.o", tuple(C_LIN_FLAGS)),
-            (src / f"{name}.c", objdir / f"{name}.o", ())]
-    if wrap is not None:
-        import sysconfig
-        paths = sysconfig.get_paths()
-        py = sorted({paths["include"], paths["platinclude"]})
-        jobs.append((wrap, objdir / (wrap.stem + ".o"),
-                     tuple(a for d in py for a in ("-I", d))))
-    own = len(jobs)
+    # the derivative kernels at -O1 (C_LIN_FLAGS after C_FLAGS): gcc's time on
+    # their straight-line code is the largest cost of a build, and -O1 takes a
+    # quarter less (n = 20 cart: 8.8 -> 6.6 s) for a linearize 4-12% slower;
+    # IEEE semantics are the same at every level (no -ffast-math), so the
+    # numbers are too (tests/golden/seed_numbers.json, bit for bit)
+    jobs = [(src / f, objdir / (Path(f).stem + ".o"), tuple(extra)) for f, extra in own]
+    n_own = len(jobs)
     if runtime is None:
-        rt_tmp = tmp / "runtime"
+        rt_tmp = objdir.parent / "runtime"
         rt_tmp.mkdir()
         jobs += [(src / s, rt_tmp / (Path(s).stem + ".o"), ()) for s in RUNTIME_SOURCES]
     with ThreadPoolExecutor(max_workers=max(1, min(len(jobs), os.cpu_count() or 1))) as ex:
-        futures = [ex.submit(_cc_object, cc, s, o, src, e) for s, o, e in jobs]
+        futures = [ex.submit(_cc_object, cc, s, o, src, (), [*C_FLAGS, *e])
+                   for s, o, e in jobs]
         try:
             results = [f.result() for f in futures]
-        except BuildError:
-            ok, log = _compile_log(src, [f"{name}.c", f"{name}_lin.c"] + RUNTIME_SOURCES)
-            raise BuildError(f"compiling the model '{name}' failed", log) from None
+        except BuildError as err:
+            ok, log = _compile_log(src, [f for f, _ in own] + RUNTIME_SOURCES)
+            raise BuildError(f"compiling the model '{name}' failed", log or err.log) from None
     if runtime is None:
         # publish the runtime objects for the next model (atomic rename; a
         # concurrent builder that got there first wins, both are identical)
         rt_folder.parent.mkdir(parents=True, exist_ok=True)
         try:
             os.rename(rt_tmp, rt_folder)
-            runtime = [rt_folder / Path(o).name for o in results[own:]]
+            runtime = [rt_folder / Path(o).name for o in results[n_own:]]
         except OSError:
-            runtime = results[own:]
+            runtime = results[n_own:]
             if all((rt_folder / Path(o).name).is_file() for o in runtime):
                 runtime = [rt_folder / Path(o).name for o in runtime]
-    return [*results[:own], *runtime]
+    return [*results[:n_own], *runtime]
 
 
+def _eigen_objects(src: Path, objdir: Path, own, name, eigen_dir):
+    """The Eigen backend's objects: its C++ sources (the extern "C" layer
+    over the typed API) and the plugin table, in parallel."""
+    from concurrent.futures import ThreadPoolExecutor
+    cxx, cc = _cxx_compiler(), _compiler()
+    jobs = [(cxx, src / f, objdir / (Path(f).stem + ".o"),
+             [*CXX_FLAGS, "-isystem", str(eigen_dir)]) for f in own]
+    jobs.append((cc, src / f"{name}_api.c", objdir / f"{name}_api.o", list(C_FLAGS)))
+    with ThreadPoolExecutor(max_workers=max(1, min(len(jobs), os.cpu_count() or 1))) as ex:
+        futures = [ex.submit(_cc_object, c, s, o, src, (), fl) for c, s, o, fl in jobs]
+        try:
+            return [f.result() for f in futures]
+        except BuildError as err:
+            ok, log = _compile_log(src, own, ["-isystem", str(eigen_dir)],
+                                   compiler=cxx, flags=CXX_STRICT_FLAGS)
+            raise BuildError(f"compiling the model '{name}' failed", log or err.log) from None
+
+
+def _find_library(folder: Path, modname: str):
+    lib = folder / (modname + _LIB_SUFFIX)
+    return lib if lib.is_file() else None
+
+
+# a module folder of the cache (the host module's: gen/host.py)
 def _find_module(folder: Path, modname: str):
     if not folder.is_dir():
         return None
@@ -489,54 +583,96 @@ def _find_module(folder: Path, modname: str):
 
 
 def load(built: Built):
-    """Import a Built's extension module (once per process)."""
-    so, modname = built.path, built.modname
-    if modname in sys.modules:
-        return sys.modules[modname]
-    spec = importlib.util.spec_from_file_location(modname, str(so))
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    sys.modules[modname] = mod
-    return mod
+    """(host module, table): the model library's plugin table as a pointer
+    of the host module for its scalar type (gen/host.py)."""
+    from .host import host_module, open_model
+    host = host_module(built.interface.real)
+    return host, open_model(built.path, built.interface.name, host)
+
+
+def derivatives_source(plan, real="double", timings=None):
+    """<name>_lin.c of a plan made without derivatives (the kernels are
+    generated now: sympy's share of what a first linearize costs)."""
+    t0 = time.perf_counter()
+    full = with_derivatives(plan)
+    t1 = time.perf_counter()
+    lin_only = replace(full, kernels={k: v for k, v in full.kernels.items()
+                                      if k in DERIVATIVE_KERNELS})
+    tm = {}
+    files = render(lin_only, real=real, backend="c", project=False, only={"lin"}, timings=tm)
+    if timings is not None:
+        timings["kernels_derivatives"] = t1 - t0
+        timings["printing_derivatives"] = tm.get("printing", 0.0) + tm.get("templates", 0.0)
+    return files.files[f"{plan.model.name}_lin.c"]
 
 
 def compile(model, backend="c", real="double", verbose=False, sources=None,  # noqa: A001
-            timings=None):
-    """Generate, build through cffi (cached) and return a Simulator: the one
-    path from a model to compiled code (the CLI and gen.verify call it).
+            timings=None, derivatives="lazy"):
+    """Generate, build (cached) and return a Simulator: the one path from a
+    model to compiled code (the CLI and gen.verify call it).
 
     backend: "c" (C99 model + C runtime) or "eigen" (C++17 over Eigen 3.4,
     through its extern "C" layer: the same API, the same Simulator).
     real: "double" or "float".
     sources: a folder written by gen.generate (possibly edited since): its
-    files are compiled instead of freshly generated ones.
+    files are compiled instead of freshly generated ones (derivatives
+    included).
+    derivatives: "lazy" (default, C backend): the derivative kernels
+    (linearize, jacobian, step_sensitivity, RODAS4) are generated and
+    compiled on their first use, and loaded from the cache when they were
+    built before; True: now. The Eigen backend always builds them.
     timings: a dict that receives the time of each stage (kernels, printing,
-    templates, compile) and whether the build was cached."""
+    templates, compile; later kernels_derivatives, printing_derivatives,
+    compile_derivatives) and whether the build was cached."""
     from .bindings import Simulator
     if backend not in BACKENDS:
         raise ModelError(f"unknown backend {backend!r}: choose one of {list(BACKENDS)}")
+    if derivatives not in ("lazy", True):
+        raise ModelError(f"derivatives must be 'lazy' or True, got {derivatives!r}")
     timings = {} if timings is None else timings
+    lazy = backend == "c" and sources is None and derivatives == "lazy"
     t0 = time.perf_counter()
-    plan = make_plan(model, lin=plan_lin(backend))
+    plan = make_plan(model, lin=plan_lin(backend), derivatives=not lazy)
     timings["kernels"] = time.perf_counter() - t0
-    rendered = render(plan, real=real, backend=backend, timings=timings)
+    rendered = render(plan, real=real, backend=backend, timings=timings, project=False)
     if sources is not None:
-        rendered.files = _read_sources(sources, rendered.files, model.name)
+        rendered.files = _read_sources(sources, rendered.files, model.name, backend)
+        rendered.derivatives = True
     built = build(rendered, verbose=verbose, timings=timings)
-    sim = Simulator(load(built), built.interface)
-    sim.build_info = {"module": str(built.path), **timings}
+    t0 = time.perf_counter()
+    host, api = load(built)
+    timings["load"] = time.perf_counter() - t0
+    derive = None
+    if not built.derivatives:
+        def derive():
+            tm = {}
+            lin = derivatives_source(plan, real=real, timings=tm)
+            full = build_derivatives(built, lin, timings=tm)
+            return open_model_api(full, host), full, tm
+    sim = Simulator(host, api, built.interface, derivatives=derive)
+    sim.build_info = {"module": str(built.path), "derivatives": built.derivatives, **timings}
     if backend != "c":
         sim.build_info["backend"] = backend
     return sim
 
 
-def _read_sources(folder, expected, name):
-    """The files of a generated folder, by the names rendering produces."""
+def open_model_api(built, host):
+    from .host import open_model
+    return open_model(built.path, built.interface.name, host)
+
+
+def _read_sources(folder, expected, name, backend="c"):
+    """The files of a generated folder that the build compiles: those
+    rendering produces, with the derivative kernels (<name>_lin.c) in place
+    of their stand-ins."""
     folder = Path(folder)
     if not folder.is_dir():
         raise ModelError(f"sources folder {folder} does not exist")
+    names = [f for f in expected if f != f"{name}_lin_stub.c"]
+    if backend == "c" and f"{name}_lin.c" not in names:
+        names.append(f"{name}_lin.c")
     files = {}
-    for fname in expected:
+    for fname in names:
         path = folder / fname
         if not path.is_file():
             raise ModelError(f"{path} is missing: {folder} is not a generated '{name}' project")

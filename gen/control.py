@@ -84,7 +84,7 @@ class LinearFeedback:
 
 
 class InputPlan:
-    """The <p>_input struct and everything it points to, kept alive for the
+    """The input struct (<p>_input) and everything it points to, kept alive for the
     duration of one C call. ``error`` holds an exception raised by a Python
     callable (re-raised after the call)."""
 
@@ -92,7 +92,7 @@ class InputPlan:
         self.sim = sim
         self.keep = []
         self.error = None
-        self.struct = sim._ffi.new(f"{sim._p}_input *")
+        self.struct = sim._new("input")
 
     def array(self, a):
         a = np.ascontiguousarray(a, dtype=self.sim.dtype)
@@ -122,7 +122,7 @@ class InputPlan:
                     self.error = e
                 return 1
 
-        handle = ffi.callback(f"{sim._p}_controller", cb)
+        handle = ffi.callback("eomgen_controller", cb)
         self.keep.append(handle)
         return handle
 

@@ -30,7 +30,7 @@ class EventPlan:
         self.direction = np.asarray(direction, dtype=np.intc)
         self.terminal = np.asarray(terminal, dtype=np.intc)
         self.level = np.asarray(level, dtype=sim.dtype)
-        self.struct = ffi.new(f"{sim._p}_events *")
+        self.struct = sim._new("events")
         s = self.struct
         s.n = len(names)
         s.which = ffi.from_buffer("int[]", self.which)

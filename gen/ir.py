@@ -26,9 +26,11 @@ from dataclasses import dataclass, field
 
 import sympy as sm
 
-__all__ = ["Arg", "Output", "Kernel", "Plan", "plan", "make_kernel", "differentiate_graph",
-           "jvp_graph", "make_jvp_kernel", "JVP_MIN_VARIABLES",
-           "partial", "build_kernels", "mass_structure"]
+__all__ = ["Arg", "Output", "Kernel", "Plan", "plan", "with_derivatives", "lin_mode",
+           "make_kernel", "differentiate_graph", "jvp_graph", "make_jvp_kernel",
+           "JVP_MIN_VARIABLES", "DERIVATIVE_KERNELS", "partial", "build_kernels",
+           "mass_structure", "float_values", "core_kernels", "derivative_kernels",
+           "kernel_inputs", "KernelInputs"]
 
 
 @dataclass(frozen=True)
@@ -389,10 +391,76 @@ def _toposort(assign, known):
 
 
 # --------------------------------------------------------------------------
+# sympy functions the fast float evaluator knows (anything else: the slow,
+# exact path of mass_structure)
+def _float_functions():
+    import math
+
+    def sign(v):
+        return (v > 0) - (v < 0)
+    return {sm.sin: math.sin, sm.cos: math.cos, sm.tan: math.tan, sm.asin: math.asin,
+            sm.acos: math.acos, sm.atan: math.atan, sm.atan2: math.atan2, sm.sinh: math.sinh,
+            sm.cosh: math.cosh, sm.tanh: math.tanh, sm.exp: math.exp, sm.log: math.log,
+            sm.Abs: abs, sm.sign: sign, sm.floor: math.floor, sm.ceiling: math.ceil,
+            sm.Min: min, sm.Max: max}
+
+
+class _NoFloat(Exception):
+    """An expression the fast float evaluator does not handle."""
+
+
+def float_values(exprs, values):
+    """The float values of sympy expressions at {symbol: float}: a walk of
+    the expression graph in double precision (each shared subexpression
+    once), far faster than xreplace + evalf on large mass matrices. Raises
+    _NoFloat for a node it does not know or a value that is not a finite
+    real (the caller falls back to sympy)."""
+    import math
+    funcs = _float_functions()
+    memo = {}
+
+    def ev(e):
+        hit = memo.get(e)
+        if hit is not None:
+            return hit
+        if e.is_Number:
+            v = float(e)
+        elif e.is_Symbol:
+            try:
+                v = values[e]
+            except KeyError:
+                raise _NoFloat(e) from None
+        elif e.is_Add:
+            v = 0.0
+            for a in e.args:
+                v += ev(a)
+        elif e.is_Mul:
+            v = 1.0
+            for a in e.args:
+                v *= ev(a)
+        elif e.is_Pow:
+            v = ev(e.args[0]) ** ev(e.args[1])
+        else:
+            fn = funcs.get(type(e))
+            if fn is None:
+                raise _NoFloat(e)
+            v = fn(*[ev(a) for a in e.args])
+        if not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise _NoFloat(e)
+        memo[e] = v = float(v)
+        return v
+
+    try:
+        return [ev(e) for e in exprs]
+    except (ZeroDivisionError, OverflowError, ValueError, TypeError, RecursionError) as err:
+        raise _NoFloat(err) from None
+
+
 def mass_structure(model):
     """(symmetric, nonzero): whether the mass matrix is symmetric (checked
     numerically at two random points: exact symmetry of the expressions is
-    not needed, only of the values) and its structural nonzero pattern."""
+    not needed, only of the values, to 1e-9 of the matrix's largest entry)
+    and its structural nonzero pattern."""
     import random
     M = model.M
     n = M.shape[0]
@@ -400,22 +468,32 @@ def mass_structure(model):
     symmetric = all(nonzero[i][j] == nonzero[j][i] for i in range(n) for j in range(i))
     rnd = random.Random(12345)
     syms = sorted(M.free_symbols, key=str)
-    for _ in range(2 if symmetric else 0):
-        vals = {s: sm.Float(rnd.uniform(0.3, 1.3), 30) for s in syms}
-        Mv = M.xreplace(vals)
-        for i in range(n):
-            for j in range(i):
-                a, b = Mv[i, j], Mv[j, i]
-                try:
-                    a, b = complex(a.evalf(30)), complex(b.evalf(30))
-                except (TypeError, ValueError):
-                    symmetric = False
-                    break
-                if abs(a - b) > 1e-20 + 1e-12 * max(abs(a), abs(b)):
-                    symmetric = False
-                    break
-            if not symmetric:
+    pairs = [(i, j) for i in range(n) for j in range(i) if nonzero[i][j]]
+    for _ in range(2 if symmetric and pairs else 0):
+        vals = {s: rnd.uniform(0.3, 1.3) for s in syms}
+        try:
+            flat = float_values([M[i, j] for i in range(n) for j in range(n)], vals)
+        except _NoFloat:
+            flat = None
+        if flat is not None:
+            scale = max(abs(v) for v in flat)
+            if any(abs(flat[i * n + j] - flat[j * n + i]) > 1e-300 + 1e-9 * scale
+                   for i, j in pairs):
+                symmetric = False
+            continue
+        # what the float walk cannot evaluate: sympy at 30 digits
+        Mv = M.xreplace({s: sm.Float(v, 30) for s, v in vals.items()})
+        for i, j in pairs:
+            try:
+                a, b = complex(Mv[i, j].evalf(30)), complex(Mv[j, i].evalf(30))
+            except (TypeError, ValueError):
+                symmetric = False
                 break
+            if abs(a - b) > 1e-20 + 1e-12 * max(abs(a), abs(b)):
+                symmetric = False
+                break
+        if not symmetric:
+            break
     return symmetric, nonzero
 
 
@@ -471,40 +549,66 @@ def collect_constants(mat, variables, cache=None):
 JVP_MIN_VARIABLES = 30
 
 
-def build_kernels(model, mass=None, lin="auto"):
+@dataclass
+class KernelInputs:
+    """What every kernel of a model is written over: the argument arrays
+    and M and f with their constant sums collected (computed once, shared by
+    the core and the derivative kernels)."""
+    model: object
+    q: Arg
+    u: Arg
+    r: Arg
+    p: Arg
+    t: Arg
+    M: sm.Matrix           # symmetric M with its upper triangle from the lower one
+    f: sm.Matrix
+
+
+def kernel_inputs(model, symmetric):
+    m = model
+    variables = set(m.q) | set(m.u) | set(m.r) | {m.t}
+    cache = {}
+    return KernelInputs(
+        m, Arg("q", tuple(m.q)), Arg("u", tuple(m.u)), Arg("r", tuple(m.r)),
+        Arg("p", tuple(m.p)), Arg("t", (m.t,), scalar=True),
+        collect_constants(_mass_for_kernels(m, symmetric), variables, cache),
+        collect_constants(m.f, variables, cache))
+
+
+def build_kernels(model, mass=None, lin="auto", derivatives=True, inputs=None):
     """Every kernel a model's C code needs, as plain data. mass: the
     (symmetric, nonzero) structure of M, computed when not given. lin:
     "unrolled", "jvp" or "auto" (by JVP_MIN_VARIABLES): how the
-    linearization's Jacobian blocks are generated."""
-    m = model
-    symmetric, _ = mass if mass is not None else mass_structure(model)
-    Aq = Arg("q", tuple(m.q))
-    Au = Arg("u", tuple(m.u))
-    Ar = Arg("r", tuple(m.r))
-    Ap = Arg("p", tuple(m.p))
-    At = Arg("t", (m.t,), scalar=True)
-    U = sm.Matrix(m.u)
-    Qd = [sm.Dummy(f"qd{i}") for i in range(m.nq)]
-    Ud = [sm.Dummy(f"ud{i}") for i in range(m.nu)]
-    Lam = [sm.Dummy(f"lam{i}") for i in range(m.mv)]
-    Aqd = Arg("qd", tuple(Qd))
-    Aud = Arg("ud", tuple(Ud))
-    Alam = Arg("lam", tuple(Lam))
+    linearization's Jacobian blocks are generated. derivatives=False leaves
+    out the derivative kernels (derivative_kernels): the largest kernels,
+    needed only by linearize, jacobian, step_sensitivity and RODAS4.
 
-    variables = set(m.q) | set(m.u) | set(m.r) | {m.t}
-    cache = {}
-    Msym = collect_constants(_mass_for_kernels(m, symmetric), variables, cache)
-    F = collect_constants(m.f, variables, cache)
+    M and f have no kernels of their own: the runtime gets them from
+    rhs_terms (one CSE for everything the right-hand side needs; separate
+    kernels repeated most of its code)."""
+    if inputs is None:
+        symmetric, _ = mass if mass is not None else mass_structure(model)
+        inputs = kernel_inputs(model, symmetric)
+    kernels = core_kernels(inputs)
+    if derivatives:
+        kernels.update(derivative_kernels(inputs, lin))
+    return kernels
+
+
+def core_kernels(inputs):
+    """The kernels of evaluation and simulation: kinematics, rhs_terms (q'
+    or its system, M, f and the velocity-constraint terms, jointly CSE'd),
+    constraints, energy, reactions, outputs."""
+    m, Aq, Au, Ar, Ap, At = inputs.model, inputs.q, inputs.u, inputs.r, inputs.p, inputs.t
+    U = sm.Matrix(m.u)
     kernels = {}
-    kernels["mass_matrix"] = make_kernel("mass_matrix", [Aq, Ap, At], [("M", Msym)])
-    kernels["forcing"] = make_kernel("forcing", [Aq, Au, Ar, Ap, At], [("f", F)])
     if m.qdot is not None:
         kin_out = [("qdot", m.qdot)]
     else:
         kin_out = [("Kqd", m.Kqd), ("kr", -(m.Ku * U + m.kf))]
     kernels["kinematics"] = make_kernel("kinematics", [Aq, Au, Ap, At], kin_out)
     # everything the right-hand side needs, jointly CSE'd
-    rhs_out = list(kin_out) + [("M", Msym), ("f", F)]
+    rhs_out = list(kin_out) + [("M", inputs.M), ("f", inputs.f)]
     qd_model = list(getattr(m, "qd", []) or [])
     if m.mv:
         # with implicit kinematics a holds q' (m.qd): rhs_terms writes it at
@@ -531,10 +635,28 @@ def build_kernels(model, mass=None, lin="auto"):
         kernels["auxiliary"] = make_kernel(
             "auxiliary", [Aq, Au, Arg("ud", tuple(m.ud)), Ar, Ap, At],
             [("F", m.aux_F), ("g", m.aux_g)])
-
     if getattr(m, "ny", 0):
-        # outputs y(q, u, r, p, t) and their Jacobians (C and D of linearize)
+        # outputs y(q, u, r, p, t) (their Jacobians are derivative kernels)
         kernels["outputs"] = make_kernel("outputs", [Aq, Au, Ar, Ap, At], [("y", m.y)])
+    return kernels
+
+
+def derivative_kernels(inputs, lin="auto"):
+    """The derivative kernels: the Jacobian blocks of the linearization
+    (lin_terms, or lin_plain and lin_jvp) and the outputs' Jacobians
+    (output_jacobian)."""
+    m, Aq, Au, Ar, Ap, At = inputs.model, inputs.q, inputs.u, inputs.r, inputs.p, inputs.t
+    Msym, F = inputs.M, inputs.f
+    U = sm.Matrix(m.u)
+    Qd = [sm.Dummy(f"qd{i}") for i in range(m.nq)]
+    Ud = [sm.Dummy(f"ud{i}") for i in range(m.nu)]
+    Lam = [sm.Dummy(f"lam{i}") for i in range(m.mv)]
+    Aqd = Arg("qd", tuple(Qd))
+    Aud = Arg("ud", tuple(Ud))
+    Alam = Arg("lam", tuple(Lam))
+    qd_model = list(getattr(m, "qd", []) or [])
+    kernels = {}
+    if getattr(m, "ny", 0):
         yj = [("Yq", m.y, m.q), ("Yu", m.y, m.u)] + ([("Yr", m.y, m.r)] if m.nr else [])
         kernels["output_jacobian"] = make_jacobian_kernel(
             "output_jacobian", [Aq, Au, Ar, Ap, At], [], yj)
@@ -557,8 +679,7 @@ def build_kernels(model, mass=None, lin="auto"):
     if m.mv and qd_model:
         jacs.append(("Sqd", S, Qd))
     lin_args = [Aq, Au, Aqd, Aud, Alam, Ar, Ap, At]
-    if lin == "auto":
-        lin = "jvp" if m.nq + m.nu + m.nr >= JVP_MIN_VARIABLES else "unrolled"
+    lin = lin_mode(m, lin)
     if lin == "unrolled":
         kernels["lin_terms"] = make_jacobian_kernel("lin_terms", lin_args, plain, jacs)
         return kernels
@@ -583,16 +704,26 @@ def build_kernels(model, mass=None, lin="auto"):
     return kernels
 
 
+# the derivative kernels (build_kernels(..., derivatives=True) adds them):
+# the C backend compiles them apart, in <name>_lin.c
+DERIVATIVE_KERNELS = ("lin_terms", "lin_plain", "lin_jvp", "output_jacobian")
+
+
 @dataclass
 class Plan:
     """What the generator will write for a model: its kernels, the
     structure of its mass matrix and the solver its accelerations use
-    (decided here, carried out by the runtime)."""
+    (decided here, carried out by the runtime). derivatives: whether the
+    derivative kernels are among the kernels; lin: how they are (or would
+    be) generated, "unrolled" or "jvp"."""
     model: object
     kernels: dict
     mass_symmetric: bool
     mass_nonzero: list
     accel: str          # "partitioned", "kkt", "ldlt" (unrolled for this M) or "lu"
+    derivatives: bool = True
+    lin: str = "unrolled"
+    inputs: KernelInputs | None = None     # kept for with_derivatives
 
 
 def accel_method(model, mass_symmetric):
@@ -605,12 +736,40 @@ def accel_method(model, mass_symmetric):
     return "ldlt" if mass_symmetric else "lu"
 
 
-def plan(model, lin="auto"):
+def lin_mode(model, lin="auto"):
+    """"unrolled" or "jvp": how a model's Jacobian blocks are generated
+    (lin="auto" chooses by JVP_MIN_VARIABLES)."""
+    if lin == "auto":
+        return "jvp" if model.nq + model.nu + model.nr >= JVP_MIN_VARIABLES else "unrolled"
+    if lin not in ("unrolled", "jvp"):
+        raise ValueError(f"lin must be 'auto', 'unrolled' or 'jvp', got {lin!r}")
+    return lin
+
+
+def plan(model, lin="auto", derivatives=True):
     """The Plan of a canonical model (nothing is stored on the model).
-    lin: how the Jacobian blocks are generated (build_kernels)."""
+    lin: how the Jacobian blocks are generated (build_kernels);
+    derivatives=False: without the derivative kernels (with_derivatives adds
+    them later)."""
     symmetric, nonzero = mass_structure(model)
-    kernels = build_kernels(model, (symmetric, nonzero), lin=lin)
-    return Plan(model, kernels, symmetric, nonzero, accel_method(model, symmetric))
+    mode = lin_mode(model, lin)
+    inputs = kernel_inputs(model, symmetric)
+    kernels = build_kernels(model, lin=mode, derivatives=derivatives, inputs=inputs)
+    return Plan(model, kernels, symmetric, nonzero, accel_method(model, symmetric),
+                derivatives=derivatives, lin=mode, inputs=inputs)
+
+
+def with_derivatives(p):
+    """The Plan p with its derivative kernels (p itself when it has them):
+    the same kernels otherwise, so the sources it renders differ from p's
+    only by the derivative kernels."""
+    if p.derivatives:
+        return p
+    inputs = p.inputs or kernel_inputs(p.model, p.mass_symmetric)
+    kernels = dict(p.kernels)
+    kernels.update(derivative_kernels(inputs, p.lin))
+    return Plan(p.model, kernels, p.mass_symmetric, p.mass_nonzero, p.accel,
+                derivatives=True, lin=p.lin, inputs=inputs)
 
 
 def prune(kernel):

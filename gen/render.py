@@ -7,7 +7,7 @@ deterministic (no timestamps).
     rendered = render(plan, real="double", backend="c")
     rendered.files        # {file name: text}: the project (sources, CMake, main.c)
     rendered.interface    # gen.abi.Interface: what the bindings need
-    rendered.cdef, rendered.module_source   # the cffi declarations and module source
+    render(plan, project=False).files    # only what gen.build compiles
 """
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ import jinja2
 from ._version import __version__
 from .abi import METHODS, interface
 from .errors import ModelError
-from .ir import plan as make_plan
+from .ir import DERIVATIVE_KERNELS, plan as make_plan
 from .printers import ModelCPrinter, ModelCxxPrinter, print_kernel_body
 from .resources import csrc_dir, templates_dir
 from .solvers import ldlt_program
@@ -42,16 +42,22 @@ RUNTIME_HEADERS = ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h", "gen_rt_rod
 EIGEN_RUNTIME_HEADERS = ["eigen/gen_rt_eigen.hpp", "eigen/gen_rt_expm.hpp", "gen_rt_status.h", "gen_rt_rodas4.h",
                          "gen_rt_dopri5.h"]
 
-# (file name, template) for the C backend: the list is data.
+# (file name, template, role) for the C backend: the list is data. role:
+# "model" (compiled into the model library by gen.build), "lin" (the
+# derivative kernels, compiled apart; a plan without them gets "stub"
+# instead, which gen.build links until they are built), "project" (the CMake
+# project and the standalone simulator: gen.generate only)
 C_TEMPLATES = [
-    ("{name}.h", "c/model.h.j2"),
-    ("{name}.c", "c/model.c.j2"),
-    ("{name}_lin.c", "c/model_lin.c.j2"),          # the derivative kernels, compiled apart
-    ("{name}_kernels.h", "c/model_kernels.h.j2"),  # their prototypes, shared by both
-    ("main.c", "c/main.c.j2"),
-    ("CMakeLists.txt", "c/CMakeLists.txt.j2"),
-    ("arm-none-eabi.cmake", "c/arm-none-eabi.cmake.j2"),   # Cortex-M4F toolchain file
-    ("gen_rt_config.h", "c/gen_rt_config.h.j2"),           # the runtime's scalar type
+    ("{name}.h", "c/model.h.j2", "model"),
+    ("{name}.c", "c/model.c.j2", "model"),
+    ("{name}_lin.c", "c/model_lin.c.j2", "lin"),          # the derivative kernels
+    ("{name}_lin_stub.c", "c/model_lin_stub.c.j2", "stub"),  # ... until they are built
+    ("{name}_kernels.h", "c/model_kernels.h.j2", "model"),   # the functions of _lin.c
+    ("{name}_api.c", "c/model_api.c.j2", "model"),        # the plugin table (gen/host.py)
+    ("gen_rt_config.h", "c/gen_rt_config.h.j2", "model"),  # the runtime's scalar type
+    ("main.c", "c/main.c.j2", "project"),
+    ("CMakeLists.txt", "c/CMakeLists.txt.j2", "project"),
+    ("arm-none-eabi.cmake", "c/arm-none-eabi.cmake.j2", "project"),  # Cortex-M4F toolchain
 ]
 
 # The C++17/Eigen backend: the typed API (header-only templates over the
@@ -59,20 +65,19 @@ C_TEMPLATES = [
 # API (the same header, from the same interface description), and the same
 # standalone simulator main.c linked against that layer.
 EIGEN_TEMPLATES = [
-    ("{name}.h", "c/model.h.j2"),
-    ("{name}.hpp", "eigen/model.hpp.j2"),
-    ("{name}.cpp", "eigen/model.cpp.j2"),
-    ("main.c", "c/main.c.j2"),
-    ("CMakeLists.txt", "eigen/CMakeLists.txt.j2"),
+    ("{name}.h", "c/model.h.j2", "model"),
+    ("{name}.hpp", "eigen/model.hpp.j2", "model"),
+    ("{name}.cpp", "eigen/model.cpp.j2", "model"),
+    ("{name}_api.c", "c/model_api.c.j2", "model"),
+    ("main.c", "c/main.c.j2", "project"),
+    ("CMakeLists.txt", "eigen/CMakeLists.txt.j2", "project"),
 ]
 # the C++ sources of the extern "C" library (compiled by gen.build)
 EIGEN_SOURCES = ["{name}.cpp"]
 
 BACKENDS = {"c": C_TEMPLATES, "eigen": EIGEN_TEMPLATES}
 # the kernels of <name>_lin.c (C backend)
-LIN_KERNELS = ("lin_terms", "lin_plain", "lin_jvp", "output_jacobian")
-# the cffi module: its declarations and its source (header + batch loops)
-CFFI_TEMPLATES = {"cdef": "cffi/cdef.h.j2", "module_source": "cffi/module.c.j2"}
+LIN_KERNELS = DERIVATIVE_KERNELS
 
 # the model prefix is also the C++ namespace of the Eigen backend
 CXX_RESERVED = frozenset("""
@@ -107,15 +112,43 @@ _KERNEL_DOCS = {
 
 @dataclass
 class Rendered:
-    """The output of rendering: the project's files, the interface
-    description, and what the cffi build compiles (never re-rendered)."""
+    """The output of rendering: the files (the whole project, or with
+    project=False only what gen.build compiles) and the interface
+    description. derivatives: whether the derivative kernels are among the
+    files (else the build links <name>_lin_stub.c in their place)."""
     files: dict
     interface: object
     backend: str
     real: str
-    cdef: str
-    module_source: str
+    derivatives: bool = True
     timings: dict = field(default_factory=dict)
+
+
+class _BytecodeCache(jinja2.FileSystemBytecodeCache):
+    """Jinja's compiled templates in the build cache (parsing and compiling
+    them is most of the first render in a process); a cache that cannot be
+    written is skipped, never an error."""
+
+    def load_bytecode(self, bucket):
+        try:
+            super().load_bytecode(bucket)
+        except (OSError, ValueError, EOFError):
+            bucket.reset()
+
+    def dump_bytecode(self, bucket):
+        try:
+            os.makedirs(self.directory, exist_ok=True)
+            super().dump_bytecode(bucket)
+        except OSError:
+            pass
+
+
+def _bytecode_cache():
+    import hashlib
+    import sys
+    from .build import cache_dir
+    key = hashlib.sha256(f"{__version__}\0{jinja2.__version__}\0{sys.version}".encode())
+    return _BytecodeCache(str(cache_dir() / f"templates_{key.hexdigest()[:16]}"))
 
 
 @functools.lru_cache(maxsize=None)
@@ -123,7 +156,8 @@ def _env(root):
     return jinja2.Environment(
         loader=jinja2.FileSystemLoader(root),
         trim_blocks=True, lstrip_blocks=True, keep_trailing_newline=True,
-        undefined=jinja2.StrictUndefined, autoescape=False)
+        undefined=jinja2.StrictUndefined, autoescape=False,
+        bytecode_cache=_bytecode_cache())
 
 
 def template_env():
@@ -248,8 +282,9 @@ def build_context(plan, iface, timings=None, backend="c"):
         # writes the plain blocks and lin_jvp, called once per variable,
         # the columns of the Jacobian blocks (gen/ir.py JVP_MIN_VARIABLES)
         "lin_mode": "jvp" if "lin_jvp" in kernels else "unrolled",
-        "lin_outputs": [o.name for o in kernels["lin_terms"].outputs] if "lin_terms" in kernels
-        else [o.name for o in kernels["lin_plain"].outputs],
+        "lin_outputs": ([o.name for o in kernels["lin_terms"].outputs] if "lin_terms" in kernels
+                        else [o.name for o in kernels["lin_plain"].outputs]
+                        if "lin_plain" in kernels else []),
         "jvp_outputs": ([o.name for o in kernels["lin_jvp"].outputs] if "lin_jvp" in kernels
                         else []),
         "has_sqd": "lin_jvp" in kernels and len(kernels["lin_jvp"].args[-1].symbols) > 0,
@@ -297,9 +332,12 @@ def _eigen_context(model, kernels):
     }
 
 
-def render(plan, real="double", backend="c", timings=None):
-    """Render a Plan (gen.ir.plan) to a Rendered: the project's files, the
-    interface description and the cffi declarations and module source.
+def render(plan, real="double", backend="c", timings=None, project=True, only=None):
+    """Render a Plan (gen.ir.plan) to a Rendered: the project's files and
+    the interface description. project=False: only what gen.build compiles
+    (the model library's sources, with the derivative kernels when the plan
+    has them, else their stand-ins). only: a set of template roles ("model",
+    "lin", "stub", "project") to render, nothing else (no runtime files).
     Nothing is written and nothing is stored on the model."""
     if real not in ("double", "float"):
         raise ModelError(f"real must be 'double' or 'float', got {real!r}")
@@ -311,14 +349,17 @@ def render(plan, real="double", backend="c", timings=None):
     env = template_env()
     t0 = time.perf_counter()
     name = plan.model.name
+    if project and not plan.derivatives:
+        raise ModelError("a generated project has the derivative kernels: render a plan made "
+                         "with derivatives=True")
+    roles = {"model", "lin" if plan.derivatives else "stub"} | ({"project"} if project else set())
     files = {fname.format(name=name): env.get_template(tname).render(**ctx)
-             for fname, tname in BACKENDS[backend]}
+             for fname, tname, role in BACKENDS[backend] if role in (only or roles)}
     runtime = (RUNTIME_SOURCES + RUNTIME_HEADERS) if backend == "c" else EIGEN_RUNTIME_HEADERS
-    for src in runtime:
+    for src in runtime if only is None else ():
         files[Path(src).name] = (csrc_dir() / src).read_text()
-    cffi = {k: env.get_template(t).render(**ctx) for k, t in CFFI_TEMPLATES.items()}
     timings["templates"] = time.perf_counter() - t0
-    return Rendered(files, iface, backend, real, cffi["cdef"], cffi["module_source"], timings)
+    return Rendered(files, iface, backend, real, plan.derivatives, timings)
 
 
 def render_files(model, real="double", backend="c", timings=None):

@@ -14,7 +14,7 @@ import re
 import pytest
 
 import gen
-from gen import abi, bindings, render
+from gen import abi, host, bindings, render
 from gen.ir import plan
 from gen.resources import csrc_dir
 
@@ -67,7 +67,7 @@ def test_generated_status_macros_are_the_table(kane_model):
 
 def test_a_new_struct_field_appears_everywhere(monkeypatch, kane_model):
     """Add a field to sim_options in the description only; the C header, the
-    cdef and the C++ header all carry it."""
+    host module's cdef (gen/host.py) and the C++ header all carry it."""
     structs = []
     for s in abi.STRUCTS:
         if s.name == "sim_options":
@@ -80,22 +80,31 @@ def test_a_new_struct_field_appears_everywhere(monkeypatch, kane_model):
     e = render.render(p, backend="eigen")
     decl = re.compile(r"pendulum_kane_real probe_gain;")
     assert decl.search(c.files["pendulum_kane.h"])
-    assert decl.search(c.cdef)
+    cdef, source = host.host_sources("double")
+    assert re.search(r"eomgen_real probe_gain;", cdef) and cdef in source
     assert decl.search(e.files["pendulum_kane.h"])
     assert re.search(r"\bS probe_gain\b|\bScalar probe_gain\b", e.files["pendulum_kane.hpp"])
     import cffi
-    cffi.FFI().cdef(c.cdef)                       # the cdef still parses
+    cffi.FFI().cdef(cdef)                         # the cdef still parses
 
 
-def test_header_cdef_and_footprint_list_one_function_list(kane_model):
+def test_header_table_cdef_and_footprint_list_one_function_list(kane_model):
+    """The header, the plugin table (<name>_api.c, in order), the host
+    module's functions and the footprint's list are the same list."""
     r = render.render(plan(kane_model))
     names = r.interface.public_names
-    for n in names:
-        assert re.search(rf"\b{n}\(", r.files["pendulum_kane.h"]), n
-        assert re.search(rf"\b{n}\(", r.cdef), n
-    for fn in r.interface.batch_functions:
-        assert f"pendulum_kane_{fn.verb}(" in r.cdef
-        assert f"pendulum_kane_{fn.verb}(" in r.module_source
+    table = r.files["pendulum_kane_api.c"]
+    body = table[table.index("pendulum_kane_api = {"):]
+    at = [body.index(f"{n},") if f"{n}," in body else body.index(f"{n}\n") for n in
+          (f"pendulum_kane_{'api_' if f in r.interface.struct_verbs else ''}{f.verb}"
+           for f in r.interface.functions)]
+    assert at == sorted(at)
+    cdef, source = host.host_sources("double")
+    for fn in r.interface.functions + r.interface.batch_functions:
+        if fn in r.interface.functions:
+            assert re.search(rf"\bpendulum_kane_{fn.verb}\(", r.files["pendulum_kane.h"])
+        assert re.search(rf"\beomgen_{fn.verb}\(const eomgen_api \*api", cdef), fn.verb
+        assert re.search(rf"\beomgen_{fn.verb}\(const eomgen_api \*api[^;]*\)\n\{{", source)
     from gen import footprint
     assert [f"pendulum_kane_{f.verb}" for f in footprint.FUNCTIONS] == names
 

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import pytest
 
+import gen.host
 import gen.ir
 import gen.render
 
@@ -37,12 +38,17 @@ RUNTIME_COPIES = {Path(f).name for f in (gen.render.RUNTIME_SOURCES + gen.render
 
 
 def render(model, backend, real="double"):
-    """{file name: text} of the files the templates render for a model (the
-    cffi declarations and module source included)."""
+    """{file name: text} of the files the templates render for a model (with
+    the C backend: the stand-ins of the derivative kernels that gen.compile
+    links before they are built, and the Python host module's declarations
+    and source, gen/host.py)."""
     out = gen.render.render(gen.ir.plan(model), real=real, backend=backend)
     files = {k: v for k, v in out.files.items() if k not in RUNTIME_COPIES}
-    files["cffi/cdef.h"] = out.cdef
-    files["cffi/module.c"] = out.module_source
+    if backend == "c":
+        core = gen.ir.plan(model, derivatives=False)
+        files.update(gen.render.render(core, real=real, backend=backend, project=False,
+                                       only={"stub"}).files)
+        files["host/host.h"], files["host/host.c"] = gen.host.host_sources(real)
     return files
 
 

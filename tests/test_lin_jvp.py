@@ -27,8 +27,8 @@ MODELS = {
 
 
 def _sim(model, lin):
-    b = build(render(ir.plan(model, lin=lin)))
-    return Simulator(load(b), b.interface)
+    b = build(render(ir.plan(model, lin=lin), project=False))
+    return Simulator(*load(b), b.interface)
 
 
 def _skate():

@@ -1484,20 +1484,18 @@ struct Runtime {
         VelocityMatrix A; // 0 x NU without velocity constraints
         int st = qdot_from(q, u, p, t, qd);
         if (st) return st;
-        Model::mass_matrix(q.data(), p.data(), t, M.data());
-        Model::forcing(q.data(), u.data(), r_op.data(), p.data(), t, f.data());
+        Multipliers a;
+        {
+            // M, f (and A, a) from the joint right-hand-side kernel; its
+            // kinematics outputs are not needed here
+            Coords qdt;
+            Mat<S, NQ, NQ> Kt;
+            Model::rhs_terms(q.data(), u.data(), r_op.data(), p.data(), t, Kt.data(), qdt.data(),
+                             M.data(), f.data(), A.data(), a.data());
+        }
         if (!finite(M) || !finite(f)) return ERR_NONFINITE_MODEL;
         if constexpr (MV > 0) {
             // accelerations and multipliers at the operating point (KKT, as the C API)
-            Multipliers a;
-            {
-                Coords qdt;
-                MassMatrix Mt;
-                Speeds ft;
-                Mat<S, NQ, NQ> Kt;
-                Model::rhs_terms(q.data(), u.data(), r_op.data(), p.data(), t, Kt.data(),
-                                 qdt.data(), Mt.data(), ft.data(), A.data(), a.data());
-            }
             if constexpr (AccelTerms<Model>::value)
                 Model::accel_terms(q.data(), u.data(), qd.data(), p.data(), t, a.data());
             if (!finite(A) || !finite(a)) return ERR_NONFINITE_MODEL;

@@ -25,34 +25,11 @@ static const int pendulum_kane_u_ind[1] = { 0 };
 static const int pendulum_kane_u_dep[1] = { 1 };
 static const pendulum_kane_real pendulum_kane_p_default[3] = { 1.0, 1.0, 9.81 };
 static const pendulum_kane_real pendulum_kane_r_zero[1] = { 0 };
+static const pendulum_kane_real pendulum_kane_u_zero[2] = { 0 };
 
 /* ------------------------------------------------------------------ */
 /* Kernels: straight-line code from one CSE per kernel family.        */
 /* ------------------------------------------------------------------ */
-
-/* M(q) (0 temporaries) */
-static void pendulum_kane_k_mass_matrix(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_M)
-{
-    (void)q;
-    (void)p;
-    (void)t;
-    out_M[0] = p[1];
-    out_M[1] = 0;
-    out_M[2] = 0;
-    out_M[3] = p[1];
-}
-
-/* f(q, u, r, t) (0 temporaries) */
-static void pendulum_kane_k_forcing(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_f)
-{
-    (void)q;
-    (void)u;
-    (void)r;
-    (void)p;
-    (void)t;
-    out_f[0] = 0;
-    out_f[1] = p[1]*p[2];
-}
 
 /* q' (or Kqd and its right-hand side) (0 temporaries) */
 static void pendulum_kane_k_kinematics(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_kr)
@@ -186,6 +163,27 @@ static void pendulum_kane_k_energy(const pendulum_kane_real *q, const pendulum_k
 /* The model for the runtime: kernels under the runtime's signatures  */
 /* ------------------------------------------------------------------ */
 
+/* M(q) and f(q, u, r, t) for the runtime's evaluation functions, from the
+ * joint right-hand-side kernel (kernels of their own would repeat most of
+ * its code): M at u = 0 and r = 0 (it depends on q alone), the kernel's
+ * other outputs dropped */
+static void pendulum_kane_mass_matrix(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *M)
+{
+    pendulum_kane_real qd[2], f[2];
+    pendulum_kane_real Kqd[4];
+    pendulum_kane_real A[2], a[1];
+    pendulum_kane_k_rhs_terms(q, pendulum_kane_u_zero, pendulum_kane_r_zero, p, t, Kqd, qd, M, f, A, a);
+}
+
+static void pendulum_kane_forcing(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p,
+                      pendulum_kane_real t, pendulum_kane_real *f)
+{
+    pendulum_kane_real qd[2], M[4];
+    pendulum_kane_real Kqd[4];
+    pendulum_kane_real A[2], a[1];
+    pendulum_kane_k_rhs_terms(q, u, r, p, t, Kqd, qd, M, f, A, a);
+}
+
 static void pendulum_kane_kinematics(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t,
                          pendulum_kane_real *Kqd, pendulum_kane_real *qd)
 {
@@ -198,18 +196,11 @@ static void pendulum_kane_rhs_terms(const pendulum_kane_real *q, const pendulum_
     pendulum_kane_k_rhs_terms(q, u, r, p, t, Kqd, qd, M, f, A, a);
 }
 
-static void pendulum_kane_lin_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *ud,
-                        const pendulum_kane_real *lam, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t,
-                        const gen_rt_lin_out *o)
-{
-    pendulum_kane_k_lin_terms(q, u, qd, ud, lam, r, p, t, o->Kqd, o->Ku, o->M, o->A, o->Kq, o->Rq, o->Ru, o->Sq, o->Su, o->Vq, o->Jc, o->Sqd);
-}
-
 static const gen_rt_model pendulum_kane_model = {
     2, 2, 0, 3, 1, 1,
     0, GEN_RT_ACCEL_PARTITIONED,
     pendulum_kane_q_ind, pendulum_kane_q_dep, pendulum_kane_u_ind, pendulum_kane_u_dep,
-    pendulum_kane_k_mass_matrix, pendulum_kane_k_forcing, pendulum_kane_kinematics, pendulum_kane_rhs_terms,
+    pendulum_kane_mass_matrix, pendulum_kane_forcing, pendulum_kane_kinematics, pendulum_kane_rhs_terms,
     pendulum_kane_k_constraints, pendulum_kane_k_constraint_jacobian,
     pendulum_kane_k_velocity_constraints, pendulum_kane_k_velocity_constraint_matrix,
     pendulum_kane_k_energy,
@@ -226,7 +217,7 @@ static const gen_rt_model pendulum_kane_model = {
 
 static int pendulum_kane_finite(int n, const pendulum_kane_real *v)
 {
-    return n <= 0 || gen_rt_all_finite(n, v);
+    return gen_rt_finite_n(n, v);
 }
 
 #define PENDULUM_KANE_CHECK_IN(ptr, n)                                            \

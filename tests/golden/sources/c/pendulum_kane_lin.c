@@ -6,16 +6,17 @@
  */
 /*
  * The model's derivative kernels (Jacobian blocks for linearize, jacobian,
- * step_sensitivity and the RODAS4 integrator; output Jacobians): the
- * largest kernels, in a translation unit of their own so that they compile
- * in parallel with pendulum_kane.c. Straight-line code, one CSE per kernel.
+ * step_sensitivity and the RODAS4 integrator; output Jacobians) and the
+ * two functions the runtime calls them through (pendulum_kane_kernels.h): the
+ * largest code, in a translation unit of its own so that it compiles in
+ * parallel with pendulum_kane.c. Straight-line code, one CSE per kernel.
  */
 #include <math.h>
 #include <stddef.h>
 #include "pendulum_kane_kernels.h"
 
 /* Jacobian blocks of the linearization (79 temporaries) */
-void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *ud, const pendulum_kane_real *lam, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_Ku, pendulum_kane_real *out_M, pendulum_kane_real *out_A, pendulum_kane_real *out_Kq, pendulum_kane_real *out_Rq, pendulum_kane_real *out_Ru, pendulum_kane_real *out_Sq, pendulum_kane_real *out_Su, pendulum_kane_real *out_Vq, pendulum_kane_real *out_Jc, pendulum_kane_real *out_Sqd)
+static void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *ud, const pendulum_kane_real *lam, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_Ku, pendulum_kane_real *out_M, pendulum_kane_real *out_A, pendulum_kane_real *out_Kq, pendulum_kane_real *out_Rq, pendulum_kane_real *out_Ru, pendulum_kane_real *out_Sq, pendulum_kane_real *out_Su, pendulum_kane_real *out_Vq, pendulum_kane_real *out_Jc, pendulum_kane_real *out_Sqd)
 {
     (void)q;
     (void)u;
@@ -141,3 +142,15 @@ void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulum_kane_
     out_Sqd[0] = d30;
     out_Sqd[1] = d31;
 }
+
+/* ------------------------------------------------------------------ */
+/* The derivative kernels under the runtime's signatures              */
+/* ------------------------------------------------------------------ */
+
+void pendulum_kane_lin_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *ud,
+                        const pendulum_kane_real *lam, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t,
+                        const gen_rt_lin_out *o)
+{
+    pendulum_kane_k_lin_terms(q, u, qd, ud, lam, r, p, t, o->Kqd, o->Ku, o->M, o->A, o->Kq, o->Rq, o->Ru, o->Sq, o->Su, o->Vq, o->Jc, o->Sqd);
+}
+

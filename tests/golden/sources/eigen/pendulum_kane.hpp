@@ -186,32 +186,6 @@ namespace detail {
 // Straight-line code from one CSE per kernel family (the C backend's
 // kernels, printed with std:: functions and Scalar(...) literals).
 
-/* M(q) (0 temporaries) */
-template <typename Scalar>
-inline void k_mass_matrix(const Scalar *q, const Scalar *p, Scalar t, Scalar *out_M) noexcept
-{
-    (void)q;
-    (void)p;
-    (void)t;
-    out_M[0] = p[1];
-    out_M[1] = 0;
-    out_M[2] = 0;
-    out_M[3] = p[1];
-}
-
-/* f(q, u, r, t) (0 temporaries) */
-template <typename Scalar>
-inline void k_forcing(const Scalar *q, const Scalar *u, const Scalar *r, const Scalar *p, Scalar t, Scalar *out_f) noexcept
-{
-    (void)q;
-    (void)u;
-    (void)r;
-    (void)p;
-    (void)t;
-    out_f[0] = 0;
-    out_f[1] = p[1]*p[2];
-}
-
 /* q' (or Kqd and its right-hand side) (0 temporaries) */
 template <typename Scalar>
 inline void k_kinematics(const Scalar *q, const Scalar *u, const Scalar *p, Scalar t, Scalar *out_Kqd, Scalar *out_kr) noexcept
@@ -492,15 +466,21 @@ struct Model {
     static constexpr const auto &u_ind = pendulum_kane::u_ind;
     static constexpr const auto &u_dep = pendulum_kane::u_dep;
 
+    // M and f from the joint right-hand-side kernel (kernels of their own
+    // would repeat most of its code): M at u = 0 and r = 0, the kernel's
+    // other outputs dropped
     template <class S>
     static void mass_matrix(const S *q, const S *p, S t, S *M) noexcept
     {
-        k_mass_matrix<S>(q, p, t, M);
+        const S u[2] = {}, r[1] = {};
+        S qd[2], f[2], Kqd[4], A[2], a[1];
+        rhs_terms<S>(q, u, r, p, t, Kqd, qd, M, f, A, a);
     }
     template <class S>
     static void forcing(const S *q, const S *u, const S *r, const S *p, S t, S *f) noexcept
     {
-        k_forcing<S>(q, u, r, p, t, f);
+        S qd[2], M[4], Kqd[4], A[2], a[1];
+        rhs_terms<S>(q, u, r, p, t, Kqd, qd, M, f, A, a);
     }
     template <class S>
     static void kinematics(const S *q, const S *u, const S *p, S t, S *Kqd, S *qd) noexcept

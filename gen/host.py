@@ -1,0 +1,153 @@
+"""The Python host module: one compiled cffi module per scalar type (and
+Python ABI) through which the bindings call every model.
+
+A model is compiled into a plain shared library (gen.build: its kernels,
+the runtime, and ``<name>_api.c``, a constant table of its sizes and public
+functions). The host module holds, for every public function of gen/abi.py,
+a C function that takes that table first and calls through it, plus the
+batch loops. So a model's build compiles no Python binding code at all (no
+Python headers, no per-model wrapper: that was the largest fixed cost of a
+build), and the host is compiled once per installation into the cache
+(``host_<real>_<key>``, keyed by everything it is compiled from).
+
+    host = host_module("double")          # the cffi module (ffi, lib)
+    api = open_model(path, name, host)    # the model's table, a cdata pointer
+    host.lib.eomgen_eval_rhs(api, t, x, r, p, dxdt, lam)
+"""
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import hashlib
+import importlib.util
+import io
+import os
+import shutil
+import sys
+import sysconfig
+import threading
+from pathlib import Path
+
+from ._version import __version__
+from .abi import ABI_TAG, host_interface
+from .errors import BuildError
+
+__all__ = ["host_module", "host_sources", "open_model", "HOST_FLAGS"]
+
+# the host is glue: every call forwards to the model's table
+HOST_FLAGS = ["-O2"]
+_lock = threading.Lock()
+_modules = {}          # real -> loaded module
+_libraries = {}        # path -> ctypes handle (kept open for the process)
+
+
+def host_sources(real="double"):
+    """(cdef, C source) of the host module for a scalar type."""
+    from .render import template_env
+    env = template_env()
+    iface = host_interface(real)
+    decl = env.get_template("cffi/host.h.j2").render(iface=iface, real=real)
+    source = env.get_template("cffi/host.c.j2").render(iface=iface, real=real,
+                                                       declarations=decl)
+    return decl, source
+
+
+def _key(real, cdef, source):
+    h = hashlib.sha256()
+    for part in (__version__, ABI_TAG, real, sys.version, sysconfig.get_config_var("EXT_SUFFIX")
+                 or "", sysconfig.get_config_var("CC") or "", os.environ.get("CC", ""),
+                 " ".join(HOST_FLAGS), cdef, source):
+        h.update(str(part).encode() + b"\0")
+    return h.hexdigest()[:16]
+
+
+def host_module(real="double"):
+    """The host module for real ("double" or "float"), built into the cache
+    on first use (once per installation; concurrent builders both succeed)
+    and imported once per process."""
+    with _lock:
+        mod = _modules.get(real)
+        if mod is not None:
+            return mod
+        mod = _modules[real] = _build_and_load(real)
+        return mod
+
+
+def _build_and_load(real):
+    from .build import _cache_error, _find_module, _make_temp, cache_dir, clean_stale
+    cdef, source = host_sources(real)
+    key = _key(real, cdef, source)
+    modname = f"_eomgen_host_{real}_{key}"
+    root = cache_dir()
+    final = root / f"host_{real}_{key}"
+    so = _find_module(final, modname)
+    if so is None:
+        try:
+            root.mkdir(parents=True, exist_ok=True)
+            clean_stale(root)
+            tmp = _make_temp(root, f"host_{real}_{key}")
+        except OSError as e:
+            raise _cache_error(e, root, "create a build directory") from None
+        try:
+            import cffi
+            ffi = cffi.FFI()
+            ffi.cdef(cdef)
+            ffi.set_source(modname, source, extra_compile_args=list(HOST_FLAGS))
+            try:
+                with contextlib.redirect_stdout(io.StringIO()):
+                    built = ffi.compile(tmpdir=str(tmp / "build"))
+            except Exception as e:  # noqa: BLE001 - the compiler's own error, with its log
+                raise BuildError(f"compiling eomgen's host module ({real}) failed: {e}",
+                                 str(e)) from None
+            dest = tmp / final.name
+            try:
+                dest.mkdir()
+                shutil.copy2(built, dest / Path(built).name)
+                os.rename(dest, final)
+            except OSError as e:
+                if _find_module(final, modname) is None:
+                    raise _cache_error(e, root, "store the host module") from None
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+        so = _find_module(final, modname)
+        if so is None:
+            raise BuildError(f"eomgen's host module is missing from {final}")
+    if modname in sys.modules:
+        return sys.modules[modname]
+    spec = importlib.util.spec_from_file_location(modname, str(so))
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    sys.modules[modname] = mod
+    return mod
+
+
+def open_model(path, name, host, real_size=None):
+    """The plugin table <name>_api of the shared library at path, as a
+    ``const eomgen_api *`` of the host module; the library stays loaded for
+    the life of the process. A table of another layout (ABI_TAG) or scalar
+    size is a BuildError."""
+    path = str(path)
+    with _lock:
+        lib = _libraries.get(path)
+        if lib is None:
+            try:
+                lib = ctypes.CDLL(path, mode=getattr(os, "RTLD_LOCAL", 0))
+            except OSError as e:
+                raise BuildError(f"cannot load the model library {path}: {e}") from None
+            _libraries[path] = lib
+    try:
+        addr = ctypes.addressof(ctypes.c_char.in_dll(lib, f"{name}_api"))
+    except ValueError:
+        raise BuildError(f"{path} has no table {name}_api: not an eomgen model library "
+                         f"for '{name}'") from None
+    ffi = host.ffi
+    api = ffi.cast("const eomgen_api *", addr)
+    tag = ffi.string(api.abi).decode()
+    if tag != ABI_TAG:
+        raise BuildError(f"the model library {path} has the table layout {tag}, this eomgen "
+                         f"expects {ABI_TAG}: rebuild it (eomgen cache clear)")
+    want = ffi.sizeof("eomgen_real")
+    if api.real_size != want:
+        raise BuildError(f"the model library {path} is built for {api.real_size}-byte reals, "
+                         f"the host for {want}-byte reals")
+    return api
