@@ -514,6 +514,25 @@ def collect_constants(mat, variables, cache=None):
     from collections import defaultdict
     variables = frozenset(variables)
     cache = {} if cache is None else cache
+    deps = {}
+
+    def dep(e):
+        """Whether e holds a variable (memoized: free_symbols is not)."""
+        hit = deps.get(e)
+        if hit is None:
+            hit = deps[e] = (e in variables) if e.is_Atom else any(dep(a) for a in e.args)
+        return hit
+
+    def split(term):
+        """term.as_independent(*variables, as_Add=False), by the memo."""
+        if term.is_Mul:
+            c = [a for a in term.args if not dep(a)]
+            if len(c) == len(term.args):
+                return term, sm.S.One
+            if not c:
+                return sm.S.One, term
+            return sm.Mul(*c), sm.Mul(*[a for a in term.args if dep(a)])
+        return (sm.S.One, term) if dep(term) else (term, sm.S.One)
 
     def walk(e):
         if e.is_Atom:
@@ -526,7 +545,7 @@ def collect_constants(mat, variables, cache=None):
             groups = defaultdict(list)
             order = []
             for term in args:
-                c, d = term.as_independent(*variables, as_Add=False)
+                c, d = split(term)
                 if d not in groups:
                     order.append(d)
                 groups[d].append(c)

@@ -650,12 +650,15 @@ class Model:
         sub[t] = T
 
         qd_subs = {k: v for k, v in qdot_subs.items()}
+        # one memo for every matrix: M and f (and the rest) share most of
+        # their subexpressions, each converted once
+        memo_qd, memo = {}, {}
 
         def conv(mat, what):
             mat = sm.Matrix(mat)
             if qd_subs:
-                mat = mat.xreplace(qd_subs) if mat.shape[0] * mat.shape[1] else mat
-            out = mat.xreplace(sub) if mat.shape[0] * mat.shape[1] else mat
+                mat = _xreplace_shared(mat, qd_subs, memo_qd)
+            out = _xreplace_shared(mat, sub, memo)
             check_printable(out, what, {v: k for k, v in sub.items()}, T)
             _check_expressions(out, what, set(Q) | set(U) | set(R) | set(P) | {T})
             return out
@@ -1006,12 +1009,56 @@ def _eliminate_reactions(M, f, aux, udots, coords):
     return M - J, f_sub.xreplace(zero)
 
 
+def _xreplace_shared(mat, rule, memo):
+    """mat.xreplace(rule), each distinct subexpression rebuilt once (memo,
+    shared between calls): sympy's xreplace rebuilds a subexpression every
+    time it appears, and Kane's M and f repeat theirs many times."""
+    if not rule or not mat.shape[0] * mat.shape[1]:
+        return mat
+
+    def walk(e):
+        hit = memo.get(e)
+        if hit is not None:
+            return hit
+        if e in rule:
+            out = rule[e]
+        elif not e.args:
+            out = e
+        else:
+            args = tuple(walk(a) if isinstance(a, sm.Basic) else a for a in e.args)
+            out = e.func(*args) if any(a is not b for a, b in zip(args, e.args)) else e
+        memo[e] = out
+        return out
+
+    return sm.Matrix(mat.shape[0], mat.shape[1], [walk(e) for e in mat])
+
+
+def _scan(mat):
+    """(free symbols, derivatives, undefined functions) of a matrix's
+    entries, each distinct subexpression visited once."""
+    free, derivs, undef = set(), set(), set()
+    seen = set()
+    stack = list(mat)
+    while stack:
+        e = stack.pop()
+        if e in seen:
+            continue
+        seen.add(e)
+        if e.is_Symbol:
+            free.add(e)
+            continue
+        if isinstance(e, sm.Derivative):
+            derivs.add(e)
+        elif isinstance(e, sm.core.function.AppliedUndef):
+            undef.add(e)
+        stack.extend(a for a in e.args if isinstance(a, sm.Basic))
+    return free, derivs, undef
+
+
 def _check_expressions(mat, what, allowed):
     """Refuse free symbols, leftover derivatives and unknown functions,
     naming the culprit."""
-    free = set()
-    for e in mat:
-        free |= e.free_symbols
+    free, derivs, undef = _scan(mat)
     extra = free - allowed
     if extra:
         names = sorted(str(s) for s in extra)
@@ -1019,17 +1066,14 @@ def _check_expressions(mat, what, allowed):
             f"the {what} contain symbol(s) {', '.join(names)} that are neither coordinates, "
             "speeds, inputs nor constants: give them a value in constants={...} or list "
             "them in inputs=[...]")
-    for e in mat:
-        d = e.atoms(sm.Derivative)
-        if d:
-            raise ModelError(
-                f"the {what} contain derivative term(s) {sorted(map(str, d))[:3]}: "
-                "express them through the speeds (kinematic equations) or declare them")
-        for fn in e.atoms(sm.Function):
-            if isinstance(fn, sm.core.function.AppliedUndef):
-                raise ModelError(
-                    f"the {what} contain {fn.func}(t), a function of time that is not a "
-                    "coordinate, "
-                    "speed or declared input: list it in inputs=[...]")
-            # printability (in the user's spelling) is checked before this by
-            # gen.printers.check_printable, which knows every function it prints
+    if derivs:
+        raise ModelError(
+            f"the {what} contain derivative term(s) {sorted(map(str, derivs))[:3]}: "
+            "express them through the speeds (kinematic equations) or declare them")
+    for fn in sorted(undef, key=str):
+        raise ModelError(
+            f"the {what} contain {fn.func}(t), a function of time that is not a "
+            "coordinate, "
+            "speed or declared input: list it in inputs=[...]")
+    # printability (in the user's spelling) is checked before this by
+    # gen.printers.check_printable, which knows every function it prints

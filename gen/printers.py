@@ -157,14 +157,22 @@ class ModelCPrinter(C99CodePrinter):
 
 
 def print_kernel_body(kernel, printer, indent="    "):
-    """Lines of C for a kernel: temporaries then output stores."""
+    """Lines of C for a kernel: temporaries then output stores. Each
+    expression goes to the printer's _print directly: what doprint adds
+    (assignment targets, a walk for UnevaluatedExpr, code formatting,
+    collecting unsupported nodes) does nothing for a kernel's single-line
+    expressions, and strict printers raise on an unsupported node in _print
+    itself."""
     lines = []
     rt = printer.real_type
+    printer._not_supported = set()
+    printer._number_symbols = set()
+    pr = printer._print
     for s, e in kernel.assignments:
-        lines.append(f"{indent}const {rt} {s.name} = {printer.doprint(e)};")
+        lines.append(f"{indent}const {rt} {s.name} = {pr(e)};")
     for o in kernel.outputs:
         for k, e in enumerate(o.exprs):
-            lines.append(f"{indent}out_{o.name}[{k}] = {printer.doprint(e)};")
+            lines.append(f"{indent}out_{o.name}[{k}] = {pr(e)};")
     return lines
 
 
