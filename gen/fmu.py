@@ -194,14 +194,13 @@ def _token(model, parts):
     return "{" + f"{d[:8]}-{d[8:12]}-{d[12:16]}-{d[16:20]}-{d[20:32]}" + "}"
 
 
-def _start_state(model, start, real):
-    """The start state x0 (consistent with the constraints): the given
-    entries (names or sympy labels), zero for the others, the dependent
-    entries solved from the independent ones (the given ones are the
-    guess) by the model's own consistent_state."""
+def _start_state(model, start):
+    """The start state x0: the given entries (C names or sympy labels),
+    zero for the others. The dependent entries are the guess from which the
+    FMU solves them at initialization (initial="approx")."""
     import numpy as np
     m = model
-    x0 = np.zeros(m.nx)
+    x0 = [0.0] * m.nx
     for key, value in (start or {}).items():
         i = _lookup(key, m.state_names, m.state_labels, "state")
         if i is None:
@@ -215,27 +214,12 @@ def _start_state(model, start, real):
         if not np.isfinite(v):
             raise ModelError(f"start: the value of {key} must be finite, got {value!r}")
         x0[i] = v
-    if m.mc or m.mv:
-        from .build import compile as compile_model
-        from .errors import SolverError
-        sim = compile_model(m, real=real)
-        try:
-            x0 = sim.consistent_state(x0)
-        except SolverError as e:
-            ind = m.independent_state_names
-            dep = [n for n in m.state_names if n not in ind]
-            raise ModelError(
-                f"the FMU's start state cannot be made consistent with the constraints: {e}. "
-                f"Give a start state with start={{...}}: the independent entries "
-                f"({', '.join(ind)}) and a guess for the dependent ones ({', '.join(dep)}), "
-                f"for example a state the model reaches") from None
-    return [float(v) for v in x0]
+    return x0
 
 
 def describe(model, fmi_version="2.0", kind="both", real="double", start=None, units=None,
-             cs_method="dopri5", x_start=None):
-    """The FmuDescription of a model (see export_fmu for the arguments);
-    x_start: the consistent start state when already known."""
+             cs_method="dopri5"):
+    """The FmuDescription of a model (see export_fmu for the arguments)."""
     m = model
     if fmi_version not in FMI_VERSIONS:
         raise ModelError(f"fmi_version must be one of {', '.join(FMI_VERSIONS)}, "
@@ -247,7 +231,7 @@ def describe(model, fmi_version="2.0", kind="both", real="double", start=None, u
         raise ModelError(f"real must be 'double' or 'float', got {real!r}")
     if cs_method not in CS_METHODS:
         raise ModelError(f"cs_method must be one of {', '.join(CS_METHODS)}, got {cs_method!r}")
-    x0 = x_start if x_start is not None else _start_state(m, start, real)
+    x0 = _start_state(m, start)
     deps = dependencies(m)
     nq, nx, ns = m.nq, m.nx, m.ns
     independent = list(deps.independent)
@@ -303,8 +287,8 @@ def describe(model, fmi_version="2.0", kind="both", real="double", start=None, u
         ind = i in independent
         desc = (f"{m.state_labels[i]}: {'independent' if ind else 'dependent'} {what}"
                 + (" (a continuous state)" if ind else
-                   " (solved from the independent state and the constraints; the start "
-                   "value is the guess)"))
+                   " (solved from the independent state and the constraints at every "
+                   "evaluation; the start value is the guess)"))
         add(name=m.state_names[i], vr=vr_x + i, causality="local", variability="continuous",
             initial="exact" if ind else "approx", start=_fmt(x0[i]), description=desc,
             unit=unit_of.get(("x", i)))
@@ -467,12 +451,44 @@ def platform_folder(fmi_version):
     return fmi2
 
 
-def _compile(files, headers, name, out, cc=None):
-    """Compile the sources/ of files into the shared library out."""
-    cc = cc or os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
+# the binary's flags: those of gen.compile, position independent, and only
+# the FMI functions exported (two FMUs in one process cannot clash)
+C_FLAGS = ["-std=c99", "-O2", "-fno-strict-aliasing", "-fPIC", "-fvisibility=hidden"]
+C_LIN_FLAGS = ["-O1"]     # the derivative kernels, as gen.compile builds them
+
+
+def _compiler():
+    cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
     if not cc:
         raise BuildError("no C compiler found for the FMU's binary: install gcc (or set CC), "
                          "or export with binary=False (a source FMU)")
+    return cc.split()[0]
+
+
+def _runtime_cache(src, runtime, cc):
+    """(folder of cached runtime objects or None, its key): the runtime
+    (gen_rt_*.c) is the same for every model of a scalar type, so its
+    objects are kept in eomgen's build cache (eomgen cache clear removes
+    them), keyed by every runtime file, the flags and the compiler."""
+    from .build import cache_dir
+    h = hashlib.sha256()
+    h.update(f"fmu {__version__} {cc} {' '.join(C_FLAGS)}".encode())
+    try:
+        h.update(subprocess.run([cc, "--version"], capture_output=True, text=True).stdout.encode())
+    except OSError as e:
+        raise BuildError(f"the C compiler {cc!r} cannot be run: {e}") from None
+    for f in sorted(p.name for p in src.iterdir() if p.name.startswith("gen_rt")):
+        h.update(f.encode() + b"\0" + (src / f).read_bytes() + b"\0")
+    try:
+        return cache_dir(), f"runtime_{h.hexdigest()[:16]}"
+    except EomgenError:
+        return None, None
+
+
+def _compile(files, headers, name, out):
+    """Compile the sources/ of files into the shared library out (the
+    runtime's objects from the cache when they are there)."""
+    cc = _compiler()
     suffix = {"Windows": ".dll", "Darwin": ".dylib"}.get(platform.system(), ".so")
     if suffix == ".dll":
         raise BuildError("building the FMU's binary on Windows is not supported: export with "
@@ -485,29 +501,54 @@ def _compile(files, headers, name, out, cc=None):
             if path.startswith("sources/"):
                 (src / path[len("sources/"):]).write_text(text)
         sources = sorted(p.name for p in src.glob("*.c"))
-        common = [cc, "-std=c99", "-fPIC", "-fvisibility=hidden", "-I", "sources", "-isystem",
-                  str(headers)]
+        runtime = [f for f in sources if f.startswith("gen_rt_")]
+        root, key = _runtime_cache(src, runtime, cc)
+        cached = root / key if root is not None else None
+        objdir = tmp / "obj"
+        objdir.mkdir()
+        if cached is not None and all((cached / f"{f}.o").is_file() for f in runtime):
+            todo, rt_objs = [f for f in sources if f not in runtime], \
+                [cached / f"{f}.o" for f in runtime]
+        else:
+            todo, rt_objs = sources, None
 
         def one(c_file):
-            # the derivative kernels at -O1, as gen.compile builds them
-            opt = "-O1" if c_file == f"{name}_lin.c" else "-O2"
-            cmd = common + [opt, "-c", f"sources/{c_file}", "-o", f"{c_file}.o"]
-            r = subprocess.run(cmd, cwd=tmp, capture_output=True, text=True)
-            return cmd, r
+            extra = C_LIN_FLAGS if c_file == f"{name}_lin.c" else []
+            # relative names, run in the sources: no path of this machine in the binary
+            cmd = [cc, *C_FLAGS, *extra, "-I", ".", "-isystem", str(headers), "-c", c_file,
+                   "-o", str(objdir / f"{c_file}.o")]
+            return cmd, subprocess.run(cmd, cwd=src, capture_output=True, text=True)
 
-        with ThreadPoolExecutor(max_workers=max(1, os.cpu_count() or 1)) as pool:
-            results = list(pool.map(one, sources))
+        # the largest files first: the derivative kernels, the model
+        todo.sort(key=lambda f: -(src / f).stat().st_size)
+        with ThreadPoolExecutor(max_workers=max(1, min(len(todo), os.cpu_count() or 1))) as ex:
+            results = list(ex.map(one, todo))
         for cmd, r in results:
             if r.returncode != 0:
-                raise BuildError(f"compiling the FMU's binary failed ({' '.join(cmd)})",
+                raise BuildError(f"compiling the FMU's binary failed: $ {' '.join(cmd)}",
                                  r.stdout + r.stderr)
-        cmd = [cc, "-shared", "-o", f"{name}{suffix}"] + [f"{s}.o" for s in sources] + ["-lm"]
-        r = subprocess.run(cmd, cwd=tmp, capture_output=True, text=True)
+        if rt_objs is None:
+            rt_objs = [objdir / f"{f}.o" for f in runtime]
+            if cached is not None:      # publish for the next FMU (atomic rename)
+                try:
+                    root.mkdir(parents=True, exist_ok=True)
+                    part = Path(tempfile.mkdtemp(prefix=f".{key}.{os.getpid()}.", dir=root))
+                    for o in rt_objs:
+                        shutil.copy2(o, part / o.name)
+                    try:
+                        os.rename(part, cached)
+                    except OSError:
+                        shutil.rmtree(part, ignore_errors=True)   # another build won
+                except OSError:
+                    pass                                          # no cache: fine
+        objs = [objdir / f"{f}.o" for f in sources if f not in runtime] + list(rt_objs)
+        lib = tmp / f"{name}{suffix}"
+        cmd = [cc, "-shared", "-o", str(lib), *[str(o) for o in objs], "-lm"]
+        r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
-            raise BuildError(f"linking the FMU's binary failed ({' '.join(cmd)})",
+            raise BuildError(f"linking the FMU's binary failed: $ {' '.join(cmd)}",
                              r.stdout + r.stderr)
-        data = (tmp / f"{name}{suffix}").read_bytes()
-    Path(out).write_bytes(data)
+        Path(out).write_bytes(lib.read_bytes())
     return f"{name}{suffix}"
 
 
@@ -533,6 +574,31 @@ def _write_zip(entries, path):
     return path
 
 
+def _check_start(path, d):
+    """Initialize the FMU once with FMPy (the importer the tests use) at its
+    start values: a start state whose dependent coordinates cannot be solved
+    is refused here, with the FMU's own message, not left to the user's
+    first simulation."""
+    from fmpy import simulate_fmu
+    messages = []
+
+    def logger(*args):
+        messages.append(args[-1].decode("utf-8", "replace") if isinstance(args[-1], bytes)
+                        else str(args[-1]))
+
+    try:
+        simulate_fmu(str(path), fmi_type="CoSimulation" if d.cs else "ModelExchange",
+                     start_time=0.0, stop_time=1e-9, output_interval=1e-9, logger=logger)
+    except Exception as e:          # FMPy raises its own exception types
+        why = "; ".join(messages) or str(e)
+        dep = [d.state_names[i] for i in d.dependent]
+        ind = [d.state_names[i] for i in d.independent]
+        raise ModelError(
+            f"the FMU does not initialize at its start values: {why}. Give a start state "
+            f"with start={{...}}: the independent entries ({', '.join(ind)}) and a guess for "
+            f"the dependent ones ({', '.join(dep)}) near a state the model reaches") from None
+
+
 def export_fmu(model, path, fmi_version="2.0", kind="both", real="double", start=None,
                units=None, cs_method="dopri5", binary=True):
     """Write the model as an FMU (a zip) to path and return its Path.
@@ -540,15 +606,17 @@ def export_fmu(model, path, fmi_version="2.0", kind="both", real="double", start
     fmi_version: "2.0" or "3.0". kind: "cs" (Co-Simulation), "me" (Model
     Exchange) or "both". real: the model's scalar type ("double" or
     "float"; the FMU's variables are doubles either way).
-    start: the start state {state name: value} (C names or the sympy
-    spelling); the others are zero, and the dependent coordinates and
-    speeds are solved from the independent ones (the given values are the
-    guess), so the start values in modelDescription.xml are consistent.
+    start: the start values of the state {name: value} (C names or the
+    sympy spelling; the others are zero). The independent entries are
+    exact; the dependent coordinates and speeds are solved from them at
+    initialization, the values given being the guess (which branch of the
+    constraints). The FMU is initialized once here: a start state that
+    cannot be made consistent is a ModelError.
     units: {name of a state, input, constant or output: unit} in Modelica's
     unit syntax ("m", "rad/s", "N.m"); the derivatives get unit/s.
     cs_method: the Co-Simulation integrator, "dopri5" or "rodas4" (stiff).
     binary: compile binaries/<platform>/<name>.so for this machine (needs
-    a C compiler); False gives a source-only FMU.
+    a C compiler); False gives a source-only FMU (not initialized here).
 
     Needs FMPy for the FMI headers (pip install eomgen[fmu])."""
     from .model import Model
@@ -561,9 +629,19 @@ def export_fmu(model, path, fmi_version="2.0", kind="both", real="double", start
     headers = fmi_headers(fmi_version)
     files = render_fmu_files(model, d, real=real)
     entries = {k: v.encode("utf-8") for k, v in files.items()}
-    if binary:
-        folder = platform_folder(fmi_version)
-        with tempfile.TemporaryDirectory(prefix="eomgen-fmu-bin-") as tmp:
-            lib = _compile(files, headers, model.name, Path(tmp) / "lib")
-            entries[f"binaries/{folder}/{lib}"] = (Path(tmp) / "lib").read_bytes()
-    return _write_zip(entries, path)
+    if not binary:
+        return _write_zip(entries, path)
+    folder = platform_folder(fmi_version)
+    with tempfile.TemporaryDirectory(prefix="eomgen-fmu-bin-") as tmp:
+        lib = _compile(files, headers, model.name, Path(tmp) / "lib")
+        entries[f"binaries/{folder}/{lib}"] = (Path(tmp) / "lib").read_bytes()
+    # checked under a temporary name: a refused FMU leaves an older file as it was
+    path = Path(path)
+    trial = path.parent / f".{path.stem}.{os.getpid()}.trial.fmu"
+    try:
+        _write_zip(entries, trial)
+        _check_start(trial, d)
+        os.replace(trial, path)
+    finally:
+        trial.unlink(missing_ok=True)
+    return path
