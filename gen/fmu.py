@@ -373,7 +373,9 @@ def describe(model, fmi_version="2.0", kind="both", real="double", start=None, u
         derivatives=derivatives, initial_unknowns=initial, units=unit_names, sources=[],
         ns=ns, nout=nout, independent=independent, dependent=dependent,
         x_start=[_fmt(v) for v in x0], p_start=[_fmt(v) for v in m.p_values],
-        tunable=tunable, state_names=list(m.state_names))
+        tunable=tunable, state_names=list(m.state_names),
+        # the importer's default tolerance (float resolves about 1e-5)
+        default_tolerance=1e-8 if real == "double" else 1e-5)
     d.by_vr = by_vr
     return d
 
@@ -587,8 +589,9 @@ def _check_start(path, d):
                         else str(args[-1]))
 
     try:
+        # start = stop: initialization and the outputs there, no step
         simulate_fmu(str(path), fmi_type="CoSimulation" if d.cs else "ModelExchange",
-                     start_time=0.0, stop_time=1e-9, output_interval=1e-9, logger=logger)
+                     start_time=0.0, stop_time=0.0, output_interval=1.0, logger=logger)
     except Exception as e:          # FMPy raises its own exception types
         why = "; ".join(messages) or str(e)
         dep = [d.state_names[i] for i in d.dependent]

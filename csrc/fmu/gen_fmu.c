@@ -193,6 +193,15 @@ int gen_fmu_enter_init(gen_fmu *c, int tolerance_defined, double tolerance, doub
         return fail(c, c->message);
     }
     c->tolerance = tolerance_defined ? tolerance : 0;
+    if (tolerance_defined && tolerance < GEN_FMU_MIN_TOLERANCE) {
+        /* what the scalar type can resolve (float: about 1e-5) */
+        snprintf(c->message, sizeof c->message, "EnterInitializationMode: the tolerance %g "
+                 "is below what the model's %s arithmetic resolves; %g is used", tolerance,
+                 sizeof(gen_fmu_real) == sizeof(float) ? "float" : "double",
+                 GEN_FMU_MIN_TOLERANCE);
+        say(c, GEN_FMU_WARNING, c->message);
+        c->tolerance = GEN_FMU_MIN_TOLERANCE;
+    }
     c->time = start_time;
     c->fresh = 0;
     c->solved = 0;

@@ -73,6 +73,10 @@
 
 typedef GEN_FMU_REAL gen_fmu_real;
 
+/* the smallest integration tolerance the scalar type resolves (a hundred
+ * units of rounding); a smaller one asked for is raised to it */
+#define GEN_FMU_MIN_TOLERANCE (sizeof(gen_fmu_real) == sizeof(float) ? 1e-5 : 1e-14)
+
 /* how an FMI layer hands a message to the importer's logger */
 typedef void (*gen_fmu_log_fn)(void *layer, int status, const char *category,
                                const char *message);
