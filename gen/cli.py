@@ -625,7 +625,8 @@ def build_parser():
               "--start q1=0.8", common)
     fm.add_argument("file", help="model file (FILE.py or FILE.py:function)")
     fm.add_argument("-o", "--output", required=True, help="the FMU file (NAME.fmu)")
-    fm.add_argument("--fmi", default="2.0", choices=["2.0", "3.0"], help="FMI version (default 2.0)")
+    fm.add_argument("--fmi", default="2.0", choices=["2.0", "3.0"],
+                    help="FMI version (default 2.0)")
     fm.add_argument("--kind", default="both", choices=["cs", "me", "both"],
                     help="Co-Simulation, Model Exchange or both (default)")
     fm.add_argument("--start", action="append", metavar="NAME=VALUE",

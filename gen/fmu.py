@@ -49,7 +49,7 @@ import jinja2
 
 from ._version import __version__
 from .dependencies import dependencies
-from .errors import BuildError, MissingDependencyError, ModelError
+from .errors import BuildError, EomgenError, MissingDependencyError, ModelError
 from .resources import csrc_dir, templates_dir
 
 __all__ = ["export_fmu", "describe", "fmi_headers", "platform_folder", "FmuDescription",
@@ -467,7 +467,7 @@ def _compiler():
     return cc.split()[0]
 
 
-def _runtime_cache(src, runtime, cc):
+def _runtime_cache(src, cc):
     """(folder of cached runtime objects or None, its key): the runtime
     (gen_rt_*.c) is the same for every model of a scalar type, so its
     objects are kept in eomgen's build cache (eomgen cache clear removes
@@ -504,7 +504,7 @@ def _compile(files, headers, name, out):
                 (src / path[len("sources/"):]).write_text(text)
         sources = sorted(p.name for p in src.glob("*.c"))
         runtime = [f for f in sources if f.startswith("gen_rt_")]
-        root, key = _runtime_cache(src, runtime, cc)
+        root, key = _runtime_cache(src, cc)
         cached = root / key if root is not None else None
         objdir = tmp / "obj"
         objdir.mkdir()
