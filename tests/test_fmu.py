@@ -537,3 +537,32 @@ def test_float_and_rodas4(tmp_path):
                         kind="cs")
     _, X = _simulate(r4, "CoSimulation", names, relative_tolerance=1e-9)
     assert np.max(np.abs(X - X_ref)) < 1e-6
+
+
+@pytest.mark.slow
+# FMPy's CVODE callback reports the FMU's fmi3Error as an exception it cannot raise
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_partition_limit_in_model_exchange(tmp_path):
+    """The four-bar with the crank angle q1 independent: at its limit
+    position (q1 turns back near t = 0.93 s) no q2, q3 exist beyond it, so
+    CVODE's trial step past it is refused with a message naming the state,
+    as README's "what an importer must know" says, and nothing crashes;
+    Co-Simulation (the full state, projected) passes through it."""
+    _fmpy()
+    import four_bar
+    from fmpy import simulate_fmu
+    m = four_bar.model()
+    sim = gen.compile(m)
+    x0 = sim.consistent_state(0.3 * np.random.default_rng(1).standard_normal(sim.nx))
+    path = gen.export_fmu(m, tmp_path / "fb.fmu", start=dict(zip(sim.state_names, x0)))
+    messages = []
+    with pytest.raises(Exception):
+        simulate_fmu(str(path), fmi_type="ModelExchange", stop_time=1.0, output_interval=DT,
+                     relative_tolerance=1e-12, logger=lambda *a: messages.append(a[-1].decode()))
+    assert any("GetDerivatives: the dependent coordinates and speeds (q2, q3, u2, u3) cannot "
+               "be solved" in s and "q1 = " in s for s in messages), messages
+    t_ref, X_ref = sim.simulate(x0, 1.0, DT, method="dopri5", rtol=1e-12, atol=1e-12)
+    r = simulate_fmu(str(path), fmi_type="CoSimulation", stop_time=1.0, output_interval=DT,
+                     relative_tolerance=1e-10, output=sim.state_names)
+    X = np.column_stack([r[n] for n in sim.state_names])
+    assert np.max(np.abs(X - X_ref)) < CS_TOL
