@@ -450,3 +450,52 @@ int gen_fmu_do_step(gen_fmu *c, double t, double h)
     c->time = t1;
     return GEN_FMU_OK;
 }
+
+/* the header of a saved state: a fixed tag, then the token (NUL-padded) */
+static void state_header(unsigned char *h)
+{
+    memset(h, 0, 64);
+    memcpy(h, "eomgen-fmu-state", 16);
+    strncpy((char *)h + 16, GEN_FMU_TOKEN, 47);
+}
+
+void gen_fmu_save(const gen_fmu *c, unsigned char *state)
+{
+    state_header(state);
+    memcpy(state + 64, c, sizeof *c);
+}
+
+int gen_fmu_check_state(gen_fmu *c, const char *fn, const unsigned char *state, size_t size)
+{
+    unsigned char h[64];
+    gen_fmu saved;
+    state_header(h);
+    if (!state || size != GEN_FMU_STATE_SIZE || memcmp(state, h, 64) != 0) {
+        snprintf(c->message, sizeof c->message, "%s: the FMU state (%lu bytes) was not saved "
+                 "by this FMU (%s, %lu bytes)", fn, (unsigned long)size, GEN_FMU_MODEL_NAME,
+                 (unsigned long)GEN_FMU_STATE_SIZE);
+        return fail(c, c->message);
+    }
+    memcpy(&saved, state + 64, sizeof saved);
+    if (saved.kind != c->kind) {
+        snprintf(c->message, sizeof c->message, "%s: the FMU state was saved by a %s "
+                 "instance, this one is %s", fn, saved.kind == GEN_FMU_ME ? "Model Exchange"
+                 : "Co-Simulation", c->kind == GEN_FMU_ME ? "Model Exchange" : "Co-Simulation");
+        return fail(c, c->message);
+    }
+    return GEN_FMU_OK;
+}
+
+int gen_fmu_restore(gen_fmu *c, const char *fn, const unsigned char *state, size_t size)
+{
+    gen_fmu saved;
+    if (gen_fmu_check_state(c, fn, state, size)) return GEN_FMU_ERROR;
+    memcpy(&saved, state + 64, sizeof saved);
+    /* the importer's side stays this instance's */
+    saved.log = c->log;
+    saved.layer = c->layer;
+    saved.debug = c->debug;
+    memcpy(saved.name, c->name, sizeof saved.name);
+    *c = saved;
+    return GEN_FMU_OK;
+}

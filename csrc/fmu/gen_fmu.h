@@ -144,4 +144,14 @@ int gen_fmu_get_nominals(gen_fmu *c, double *nominal, size_t n);
 /* Co-Simulation: integrate from t to t + h (t must be the instance's time) */
 int gen_fmu_do_step(gen_fmu *c, double t, double h);
 
+/* FMU states (Get/SetFMUState and their serialization): everything of an
+ * instance but its importer (logger, debug flag, name) in
+ * GEN_FMU_STATE_SIZE bytes, which begin with a header naming this FMU
+ * (a state of another FMU or version is refused). */
+#define GEN_FMU_STATE_SIZE (sizeof(gen_fmu) + 64)
+void gen_fmu_save(const gen_fmu *c, unsigned char *state);
+/* GEN_FMU_OK when state (size bytes) is a state of this FMU and interface */
+int gen_fmu_check_state(gen_fmu *c, const char *fn, const unsigned char *state, size_t size);
+int gen_fmu_restore(gen_fmu *c, const char *fn, const unsigned char *state, size_t size);
+
 #endif /* GEN_FMU_H */

@@ -256,49 +256,85 @@ static fmi2Status unsupported(fmi2Component comp, const char *fn, const char *wh
     return fmi2Error;
 }
 
-#define NO_STATE "canGetAndSetFMUstate is false"
+/* ------------------------------------------------------------ FMU states */
+static void *state_alloc(fmi2_instance *s)
+{
+    return s->cb.allocateMemory ? s->cb.allocateMemory(1, GEN_FMU_STATE_SIZE)
+                                : calloc(1, GEN_FMU_STATE_SIZE);
+}
+
+static void state_free(fmi2_instance *s, void *p)
+{
+    if (s->cb.freeMemory) s->cb.freeMemory(p);
+    else free(p);
+}
 
 fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate *FMUstate)
 {
-    (void)FMUstate;
-    return unsupported(comp, "fmi2GetFMUstate", NO_STATE);
+    void *p;
+    CORE(comp);
+    if (!FMUstate) return null_arg(c, "fmi2GetFMUstate", "FMUstate");
+    /* a state given back is overwritten in place */
+    p = *FMUstate ? *FMUstate : state_alloc(INSTANCE(comp));
+    if (!p) return null_arg(c, "fmi2GetFMUstate", "the memory for the state (out of memory)");
+    gen_fmu_save(c, (unsigned char *)p);
+    *FMUstate = p;
+    return fmi2OK;
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate FMUstate)
 {
-    (void)FMUstate;
-    return unsupported(comp, "fmi2SetFMUstate", NO_STATE);
+    CORE(comp);
+    return (fmi2Status)gen_fmu_restore(c, "fmi2SetFMUstate", (const unsigned char *)FMUstate,
+                                       FMUstate ? GEN_FMU_STATE_SIZE : 0);
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component comp, fmi2FMUstate *FMUstate)
 {
-    (void)FMUstate;
-    return unsupported(comp, "fmi2FreeFMUstate", NO_STATE);
+    CORE(comp);
+    if (!FMUstate) return null_arg(c, "fmi2FreeFMUstate", "FMUstate");
+    if (*FMUstate) state_free(INSTANCE(comp), *FMUstate);
+    *FMUstate = NULL;
+    return fmi2OK;
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component comp, fmi2FMUstate FMUstate, size_t *size)
 {
+    CORE(comp);
     (void)FMUstate;
-    (void)size;
-    return unsupported(comp, "fmi2SerializedFMUstateSize", "canSerializeFMUstate is false");
+    if (!size) return null_arg(c, "fmi2SerializedFMUstateSize", "size");
+    *size = GEN_FMU_STATE_SIZE;
+    return fmi2OK;
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component comp, fmi2FMUstate FMUstate,
                                  fmi2Byte serializedState[], size_t size)
 {
-    (void)FMUstate;
-    (void)serializedState;
-    (void)size;
-    return unsupported(comp, "fmi2SerializeFMUstate", "canSerializeFMUstate is false");
+    CORE(comp);
+    if (gen_fmu_check_state(c, "fmi2SerializeFMUstate", (const unsigned char *)FMUstate,
+                            FMUstate ? GEN_FMU_STATE_SIZE : 0))
+        return fmi2Error;
+    if (!serializedState || size < GEN_FMU_STATE_SIZE)
+        return null_arg(c, "fmi2SerializeFMUstate", "serializedState (of at least "
+                        "fmi2SerializedFMUstateSize bytes)");
+    memcpy(serializedState, FMUstate, GEN_FMU_STATE_SIZE);
+    return fmi2OK;
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte serializedState[],
                                    size_t size, fmi2FMUstate *FMUstate)
 {
-    (void)serializedState;
-    (void)size;
-    (void)FMUstate;
-    return unsupported(comp, "fmi2DeSerializeFMUstate", "canSerializeFMUstate is false");
+    void *p;
+    CORE(comp);
+    if (!FMUstate) return null_arg(c, "fmi2DeSerializeFMUstate", "FMUstate");
+    if (gen_fmu_check_state(c, "fmi2DeSerializeFMUstate",
+                            (const unsigned char *)serializedState, size))
+        return fmi2Error;
+    p = *FMUstate ? *FMUstate : state_alloc(INSTANCE(comp));
+    if (!p) return null_arg(c, "fmi2DeSerializeFMUstate", "the memory (out of memory)");
+    memcpy(p, serializedState, GEN_FMU_STATE_SIZE);
+    *FMUstate = p;
+    return fmi2OK;
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp,

@@ -8,9 +8,9 @@
  *
  * Every function checks its instance and arrays first; a failure is a
  * status (fmi3Error) and a message through the importer's logger. The
- * variables are Float64 scalars: every other type, clocks, FMU states,
- * directional derivatives, event mode in Co-Simulation and Scheduled
- * Execution are refused with a message.
+ * variables are Float64 scalars: every other type, clocks, directional
+ * derivatives, event mode in Co-Simulation and Scheduled Execution are
+ * refused with a message.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -353,51 +353,74 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
                 "are in the ModelStructure of modelDescription.xml");
 }
 
-#define NO_STATE "not supported (canGetAndSetFMUState is false)"
-#define NO_SERIAL "not supported (canSerializeFMUState is false)"
-
+/* ------------------------------------------------------------ FMU states */
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
 {
-    (void)FMUState;
-    UNSUPPORTED(instance, "fmi3GetFMUState", NO_STATE);
+    void *p;
+    CORE(instance);
+    if (!FMUState) return refuse_call(c, "fmi3GetFMUState", "FMUState is NULL");
+    /* a state given back is overwritten in place */
+    p = *FMUState ? *FMUState : calloc(1, GEN_FMU_STATE_SIZE);
+    if (!p) return refuse_call(c, "fmi3GetFMUState", "out of memory");
+    gen_fmu_save(c, (unsigned char *)p);
+    *FMUState = p;
+    return fmi3OK;
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState)
 {
-    (void)FMUState;
-    UNSUPPORTED(instance, "fmi3SetFMUState", NO_STATE);
+    CORE(instance);
+    return (fmi3Status)gen_fmu_restore(c, "fmi3SetFMUState", (const unsigned char *)FMUState,
+                                       FMUState ? GEN_FMU_STATE_SIZE : 0);
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
 {
-    (void)FMUState;
-    UNSUPPORTED(instance, "fmi3FreeFMUState", NO_STATE);
+    CORE(instance);
+    if (!FMUState) return refuse_call(c, "fmi3FreeFMUState", "FMUState is NULL");
+    free(*FMUState);
+    *FMUState = NULL;
+    return fmi3OK;
 }
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState,
                                       size_t *size)
 {
+    CORE(instance);
     (void)FMUState;
-    (void)size;
-    UNSUPPORTED(instance, "fmi3SerializedFMUStateSize", NO_SERIAL);
+    if (!size) return refuse_call(c, "fmi3SerializedFMUStateSize", "size is NULL");
+    *size = GEN_FMU_STATE_SIZE;
+    return fmi3OK;
 }
 
 fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState,
                                  fmi3Byte serializedState[], size_t size)
 {
-    (void)FMUState;
-    (void)serializedState;
-    (void)size;
-    UNSUPPORTED(instance, "fmi3SerializeFMUState", NO_SERIAL);
+    CORE(instance);
+    if (gen_fmu_check_state(c, "fmi3SerializeFMUState", (const unsigned char *)FMUState,
+                            FMUState ? GEN_FMU_STATE_SIZE : 0))
+        return fmi3Error;
+    if (!serializedState || size < GEN_FMU_STATE_SIZE)
+        return refuse_call(c, "fmi3SerializeFMUState", "serializedState is NULL or smaller "
+                           "than fmi3SerializedFMUStateSize");
+    memcpy(serializedState, FMUState, GEN_FMU_STATE_SIZE);
+    return fmi3OK;
 }
 
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[],
                                    size_t size, fmi3FMUState *FMUState)
 {
-    (void)serializedState;
-    (void)size;
-    (void)FMUState;
-    UNSUPPORTED(instance, "fmi3DeserializeFMUState", NO_SERIAL);
+    void *p;
+    CORE(instance);
+    if (!FMUState) return refuse_call(c, "fmi3DeserializeFMUState", "FMUState is NULL");
+    if (gen_fmu_check_state(c, "fmi3DeserializeFMUState",
+                            (const unsigned char *)serializedState, size))
+        return fmi3Error;
+    p = *FMUState ? *FMUState : calloc(1, GEN_FMU_STATE_SIZE);
+    if (!p) return refuse_call(c, "fmi3DeserializeFMUState", "out of memory");
+    memcpy(p, serializedState, GEN_FMU_STATE_SIZE);
+    *FMUState = p;
+    return fmi3OK;
 }
 
 fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[],

@@ -164,8 +164,39 @@ static void test_cs(void)
     CHECK(fmi2DoStep(c, t, NAN, fmi2True) == fmi2Error);
     CHECK(fmi2DoStep(c, t, 0.0, fmi2True) == fmi2OK);
     CHECK(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, v) == fmi2OK && v[0] == t);
-    CHECK(fmi2GetFMUstate(c, NULL) == fmi2Error);
-    LOGGED("canGetAndSetFMUstate is false");
+    {   /* FMU states: save, step on, restore, step again: the same numbers,
+         * also through serialization; a foreign or cut state is refused */
+        fmi2FMUstate st = NULL, st2 = NULL;
+        fmi2ValueReference xs[4] = {Q2, Q1, U2, U1};
+        double a[4], b[4];
+        size_t size = 0;
+        fmi2Byte *bytes;
+        CHECK(fmi2GetFMUstate(c, NULL) == fmi2Error);
+        CHECK(fmi2GetFMUstate(c, &st) == fmi2OK && st != NULL);
+        for (k = 0; k < 10; ++k) CHECK(fmi2DoStep(c, t + k * h, h, fmi2False) == fmi2OK);
+        CHECK(fmi2GetReal(c, xs, 4, a) == fmi2OK);
+        CHECK(fmi2SerializedFMUstateSize(c, st, &size) == fmi2OK && size > 64);
+        bytes = (fmi2Byte *)malloc(size);
+        CHECK(bytes != NULL);
+        if (!bytes) return;
+        CHECK(fmi2SerializeFMUstate(c, st, bytes, size) == fmi2OK);
+        CHECK(fmi2SetFMUstate(c, st) == fmi2OK);
+        for (k = 0; k < 10; ++k) CHECK(fmi2DoStep(c, t + k * h, h, fmi2False) == fmi2OK);
+        CHECK(fmi2GetReal(c, xs, 4, b) == fmi2OK && memcmp(a, b, sizeof a) == 0);
+        CHECK(fmi2DeSerializeFMUstate(c, bytes, size, &st2) == fmi2OK && st2 != NULL);
+        CHECK(fmi2SetFMUstate(c, st2) == fmi2OK);
+        for (k = 0; k < 10; ++k) CHECK(fmi2DoStep(c, t + k * h, h, fmi2False) == fmi2OK);
+        CHECK(fmi2GetReal(c, xs, 4, b) == fmi2OK && memcmp(a, b, sizeof a) == 0);
+        CHECK(fmi2DeSerializeFMUstate(c, bytes, size - 1, &st2) == fmi2Error);
+        LOGGED("was not saved by this FMU");
+        bytes[3] ^= 1;
+        CHECK(fmi2DeSerializeFMUstate(c, bytes, size, &st2) == fmi2Error);
+        CHECK(fmi2SerializeFMUstate(c, st, bytes, size - 1) == fmi2Error);
+        free(bytes);
+        CHECK(fmi2FreeFMUstate(c, &st) == fmi2OK && st == NULL);
+        CHECK(fmi2FreeFMUstate(c, &st2) == fmi2OK && st2 == NULL);
+        t += 10 * h;
+    }
     CHECK(fmi2SetRealInputDerivatives(c, vr, 0, NULL, NULL) == fmi2Error);
     CHECK(fmi2Terminate(c) == fmi2OK);
     CHECK(fmi2DoStep(c, t, h, fmi2True) == fmi2Error);
@@ -252,6 +283,14 @@ static void test_me(void)
     CHECK(!enter && !stop);
     CHECK(fmi2SetTime(c, NAN) == fmi2Error);
     CHECK(fmi2DoStep(c, 0.25, 0.1, fmi2True) == fmi2Error);
+    {   /* the other instance takes this one's state */
+        fmi2FMUstate st = NULL;
+        double dx2[2];
+        CHECK(fmi2GetFMUstate(c, &st) == fmi2OK);
+        CHECK(fmi2SetFMUstate(c2, st) == fmi2OK);
+        CHECK(fmi2GetDerivatives(c2, dx2, 2) == fmi2OK && fabs(dx2[1] + g * 0.48) < 1e-12);
+        CHECK(fmi2FreeFMUstate(c, &st) == fmi2OK);
+    }
     CHECK(fmi2EnterEventMode(c) == fmi2OK);
     CHECK(set(c, G_, 1.0) == fmi2OK);                     /* tunable, in event mode */
     CHECK(fmi2Terminate(c) == fmi2OK);

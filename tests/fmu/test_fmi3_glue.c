@@ -104,6 +104,28 @@ static void test_cs(void)
     CHECK(set(c, L_, 3.0) == fmi3Error);
     LOGGED("fixed constant");
     CHECK(fmi3GetFMUState(c, NULL) == fmi3Error);
+    {   /* an FMU state, serialized and back: the same numbers */
+        fmi3FMUState st = NULL, st2 = NULL;
+        fmi3Byte bytes[sizeof(gen_fmu) + 64];
+        size_t size = 0;
+        double a, b;
+        CHECK(fmi3GetFMUState(c, &st) == fmi3OK);
+        CHECK(fmi3SerializedFMUStateSize(c, st, &size) == fmi3OK && size == sizeof bytes);
+        CHECK(fmi3SerializeFMUState(c, st, bytes, size) == fmi3OK);
+        CHECK(fmi3DoStep(c, t, h, fmi3True, &event, &stop, &early, &last_t) == fmi3OK);
+        a = get(c, Q2);
+        CHECK(fmi3DeserializeFMUState(c, bytes, size, &st2) == fmi3OK);
+        CHECK(fmi3SetFMUState(c, st2) == fmi3OK);
+        CHECK(fmi3DoStep(c, t, h, fmi3True, &event, &stop, &early, &last_t) == fmi3OK);
+        b = get(c, Q2);
+        CHECK(a == b);
+        CHECK(fmi3SetFMUState(c, st) == fmi3OK);       /* back to t */
+        CHECK(fmi3FreeFMUState(c, &st) == fmi3OK && st == NULL);
+        CHECK(fmi3FreeFMUState(c, &st2) == fmi3OK);
+        bytes[0] = 'x';
+        CHECK(fmi3DeserializeFMUState(c, bytes, size, &st2) == fmi3Error);
+        LOGGED("was not saved by this FMU");
+    }
     CHECK(fmi3Terminate(c) == fmi3OK);
     CHECK(fmi3Reset(c) == fmi3OK);
     CHECK(fmi3GetFloat64(c, vr, 1, v, 1) == fmi3Error);
