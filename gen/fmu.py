@@ -125,7 +125,7 @@ class FmuDescription:
     outputs: list                   # [Unknown]
     derivatives: list               # [Unknown], in continuous-state order
     initial_unknowns: list          # [Unknown], by value reference
-    units: list                     # [(name, description)] of the UnitDefinitions
+    units: list                     # [(name, [(BaseUnit attribute, value)] or None)]
     sources: list                   # file names in sources/
     ns: int
     nout: dict                      # counts of the output groups y, lam, fc, fv
@@ -167,6 +167,65 @@ def _per_second(unit):
         return f"{num}/s{int(m.group(1) or 1) + 1}"
     den = den[1:-1] if den.startswith("(") and den.endswith(")") else den
     return f"{num}/({den}.s)"
+
+
+# SI symbols of Modelica's unit syntax: {base unit: exponent}, factor to SI
+_SI = {
+    "m": ({"m": 1}, 1.0), "kg": ({"kg": 1}, 1.0), "g": ({"kg": 1}, 1e-3),
+    "s": ({"s": 1}, 1.0), "A": ({"A": 1}, 1.0), "K": ({"K": 1}, 1.0),
+    "mol": ({"mol": 1}, 1.0), "cd": ({"cd": 1}, 1.0), "rad": ({"rad": 1}, 1.0),
+    "deg": ({"rad": 1}, 0.017453292519943295), "min": ({"s": 1}, 60.0),
+    "h": ({"s": 1}, 3600.0), "Hz": ({"s": -1}, 1.0),
+    "N": ({"kg": 1, "m": 1, "s": -2}, 1.0), "Pa": ({"kg": 1, "m": -1, "s": -2}, 1.0),
+    "J": ({"kg": 1, "m": 2, "s": -2}, 1.0), "W": ({"kg": 1, "m": 2, "s": -3}, 1.0),
+    "C": ({"A": 1, "s": 1}, 1.0), "V": ({"kg": 1, "m": 2, "s": -3, "A": -1}, 1.0),
+}
+_PREFIX = {"G": 1e9, "M": 1e6, "k": 1e3, "c": 1e-2, "m": 1e-3, "u": 1e-6, "n": 1e-9}
+_BASE_ORDER = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
+
+
+def _base_unit(unit):
+    """The SI decomposition of a unit in Modelica's syntax ("N.m/s2",
+    "rad/(m.s)", "1/s", "mm"): [(attribute, value)] of an FMI BaseUnit, or
+    None for a unit it does not know (then the unit is declared by name)."""
+    def factors(text):
+        exps, factor = {}, 1.0
+        if text == "1":
+            return exps, factor
+        for part in text.split("."):
+            m = re.fullmatch(r"([A-Za-z]+)([+-]?\d+)?", part)
+            if not m:
+                return None
+            sym, power = m.group(1), int(m.group(2) or 1)
+            if sym in _SI:
+                base, f = _SI[sym]
+            elif sym[0] in _PREFIX and sym[1:] in _SI:
+                base, f = _SI[sym[1:]]
+                f *= _PREFIX[sym[0]]
+            else:
+                return None
+            for k, v in base.items():
+                exps[k] = exps.get(k, 0) + v * power
+            factor *= f ** power
+        return exps, factor
+
+    num, _, den = unit.partition("/")
+    if num.startswith("(") and num.endswith(")"):
+        num = num[1:-1]
+    if den.startswith("(") and den.endswith(")"):
+        den = den[1:-1]
+    a = factors(num)
+    b = factors(den) if den else ({}, 1.0)
+    if a is None or b is None or "/" in den:
+        return None
+    exps = dict(a[0])
+    for k, v in b[0].items():
+        exps[k] = exps.get(k, 0) - v
+    out = [(k, str(exps[k])) for k in _BASE_ORDER if exps.get(k)]
+    factor = a[1] / b[1]
+    if factor != 1.0:
+        out.append(("factor", repr(factor)))
+    return out
 
 
 def _check_unit(name, unit):
@@ -361,7 +420,7 @@ def describe(model, fmi_version="2.0", kind="both", real="double", start=None, u
     for u in outputs + derivatives + initial:
         u.index = by_vr[u.vr].index
         u.dependency_indices = [by_vr[k].index for k in u.dependencies]
-    unit_names = sorted({v.unit for v in variables if v.unit})
+    unit_names = [(u, _base_unit(u)) for u in sorted({v.unit for v in variables if v.unit})]
 
     me, cs = kind in ("me", "both"), kind in ("cs", "both")
     token = _token(m, [fmi_version, kind, real, cs_method, x0, sorted(unit_of.items())])

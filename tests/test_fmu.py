@@ -213,6 +213,10 @@ def test_model_description(fmu_dir):
     assert var["F"].causality == "input" and var["F"].unit == "N"
     assert var["m_c"].causality == "parameter" and var["m_c"].variability == "tunable"
     assert float(var["g"].start) == 9.81 and var["g"].unit == "m/s2"
+    # the units' SI decomposition
+    base = {u.name: u.baseUnit for u in md.unitDefinitions}
+    assert (base["N"].kg, base["N"].m, base["N"].s) == (1, 1, -2)
+    assert (base["rad/s2"].rad, base["rad/s2"].s, base["rad/s2"].m) == (1, -2, 0)
     assert [o.variable.name for o in md.outputs] == ["tip_x", "tip_y"]
     assert "theta" in var["theta"].description
     # continuous states in the order of the independent state
