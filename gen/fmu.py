@@ -148,7 +148,7 @@ def _fmt(v):
     return s
 
 
-def _lookup(key, names, labels, what):
+def _lookup(key, names, labels):
     if key in names:
         return names.index(key)
     if key in labels:
@@ -261,7 +261,7 @@ def _start_state(model, start):
     m = model
     x0 = [0.0] * m.nx
     for key, value in (start or {}).items():
-        i = _lookup(key, m.state_names, m.state_labels, "state")
+        i = _lookup(key, m.state_names, m.state_labels)
         if i is None:
             raise ModelError(f"start: unknown state {key!r}; the states are "
                              f"{', '.join(m.state_names)}")
@@ -302,7 +302,7 @@ def describe(model, fmi_version="2.0", kind="both", real="double", start=None, u
               ("p", m.constant_names, m.constant_labels), ("y", m.output_names, m.output_labels)]
     for key, unit in (units or {}).items():
         for g, names, labels in groups:
-            i = _lookup(key, names, labels, g)
+            i = _lookup(key, names, labels)
             if i is not None:
                 unit_of[(g, i)] = _check_unit(key, unit)
                 break

@@ -449,6 +449,18 @@ def test_dependencies_follow_blocks():
     assert d.derivative[3] == {("x", 1), ("p", 1), ("p", 3)}
 
 
+def test_units():
+    """Derivative units and SI decompositions in Modelica's unit syntax."""
+    from gen.fmu import _base_unit, _per_second
+    assert [_per_second(u) for u in ("m", "m/s", "rad/s2", "N.m/rad", "1", "m/(rad.s)")] == \
+        ["m/s", "m/s2", "rad/s3", "N.m/(rad.s)", "1/s", "m/(rad.s.s)"]
+    assert _base_unit("N.m/rad") == [("kg", "1"), ("m", "2"), ("s", "-2"), ("rad", "-1")]
+    assert _base_unit("kg.m2") == [("kg", "1"), ("m", "2")]
+    assert _base_unit("km/h") == [("m", "1"), ("s", "-1"), ("factor", repr(1000 / 3600))]
+    assert _base_unit("1/s") == [("s", "-1")] and _base_unit("1") == []
+    assert _base_unit("degC") is None and _base_unit("m/s/s") is None
+
+
 def test_packaging_ships_the_fmu_files():
     """pyproject.toml puts templates/fmu and csrc/fmu into the wheel."""
     tomllib = pytest.importorskip("tomllib", reason="tomllib needs Python 3.11")
