@@ -6,6 +6,7 @@ verified C simulators.
     sim = gen.compile(model)               # cffi module, numpy in and out
     A, B = sim.linearize(x_op)
     A, B = gen.linearize_symbolic(model, {q1: L, q2: 0})   # sympy matrices
+    gen.export_fmu(model, "pend.fmu", fmi_version="3.0")   # FMI 2.0/3.0, ME and CS
 """
 from ._version import __version__
 
@@ -17,7 +18,8 @@ from .build import compile  # noqa: E402,A001
 from .symbolic import linearize_symbolic  # noqa: E402
 from .verify import VerifyReport, verify  # noqa: E402
 from .control import LinearFeedback  # noqa: E402
+from .fmu import export_fmu  # noqa: E402
 
 __all__ = ["Model", "generate", "compile", "EomgenError", "ModelError", "BuildError",
            "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
-           "__version__"]
+           "export_fmu", "__version__"]

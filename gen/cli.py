@@ -31,6 +31,7 @@ EXAMPLES = """examples:
   eomgen verify examples/seed_pendulum.py --samples 20
   eomgen generate examples/seed_pendulum.py -o out/pend_f --real float
   eomgen report examples/seed_pendulum.py --target cortex-m4f -o footprint.txt
+  eomgen fmu examples/cart_pole.py -o cart_pole.fmu --fmi 3.0 --kind both
   eomgen cache            (where the build cache is, its size; eomgen cache clear empties it)
 
 A model file defines model() returning a gen.Model (or name a function: FILE.py:func).
@@ -425,6 +426,34 @@ def cmd_verify(a, progress):
     return 0 if ok else 1
 
 
+def cmd_fmu(a, progress):
+    """eomgen fmu: the model as an FMU (gen.export_fmu)."""
+    from .fmu import export_fmu
+    m = load_model(a.file, progress)
+    start = {m.state_names[i]: v for i, v in
+             _pairs(a.start, m.state_names, "state", m.state_labels).items()}
+    units = {}
+    names = m.state_names + m.input_names + m.constant_names + m.output_names
+    labels = m.state_labels + m.input_labels + m.constant_labels + m.output_labels
+    for it in a.unit or []:
+        k, eq, unit = it.partition("=")
+        if not eq or not unit.strip():
+            raise UsageError(f"--unit must be NAME=UNIT, got {it!r}")
+        if k.strip() not in names and k.strip() not in labels:
+            raise UsageError(f"--unit: unknown name {k.strip()!r}; units go to states, inputs, "
+                             f"constants and outputs: {', '.join(names)}")
+        units[k.strip()] = unit.strip()
+    kinds = {"cs": "Co-Simulation", "me": "Model Exchange",
+             "both": "Model Exchange and Co-Simulation"}
+    with progress.stage(f"export the FMU (FMI {a.fmi}, {kinds[a.kind]})"):
+        path = export_fmu(m, a.output, fmi_version=a.fmi, kind=a.kind, real=a.real,
+                          start=start, units=units, cs_method=a.cs_method,
+                          binary=not a.no_binary)
+    print(f"wrote {path} (FMI {a.fmi}, {kinds[a.kind]}"
+          + (", sources only)" if a.no_binary else ", sources and a binary for this platform)"))
+    return 0
+
+
 def cmd_report(a, progress):
     import json
     from .footprint import format_table, report_many
@@ -489,7 +518,7 @@ def build_parser():
                              "models.", epilog=EXAMPLES, parents=[_common(defaults=True)])
     ap.add_argument("--version", action="version", version=f"eomgen {__version__}")
     sub = ap.add_subparsers(dest="cmd", required=True, parser_class=_Parser,
-                            metavar="{generate,build,simulate,linearize,verify,report,cache}")
+                            metavar="{generate,build,simulate,linearize,verify,report,fmu,cache}")
 
     g = _sub(sub, "generate", "write the model's C (or C++/Eigen) sources and a CMake project",
              "eomgen generate examples/seed_pendulum.py -o out/pend --real float", common)
@@ -588,6 +617,32 @@ def build_parser():
     rp.add_argument("-o", "--output", help="write the table to this file (footprint.txt)")
     rp.add_argument("--json", metavar="FILE", help="also write the reports as JSON")
     rp.set_defaults(fn=cmd_report)
+
+    fm = _sub(sub, "fmu", "export the model as an FMU (FMI 2.0 or 3.0, Model Exchange and/or "
+              "Co-Simulation) for Simulink, Dymola, OpenModelica, FMPy...; needs "
+              "pip install eomgen[fmu]",
+              "eomgen fmu examples/seed_pendulum.py -o pend.fmu --fmi 3.0 --start q2=0.6 "
+              "--start q1=0.8", common)
+    fm.add_argument("file", help="model file (FILE.py or FILE.py:function)")
+    fm.add_argument("-o", "--output", required=True, help="the FMU file (NAME.fmu)")
+    fm.add_argument("--fmi", default="2.0", choices=["2.0", "3.0"],
+                    help="FMI version (default 2.0)")
+    fm.add_argument("--kind", default="both", choices=["cs", "me", "both"],
+                    help="Co-Simulation, Model Exchange or both (default)")
+    fm.add_argument("--start", action="append", metavar="NAME=VALUE",
+                    help="start value of a state (repeat); the dependent coordinates and "
+                         "speeds are solved from the independent ones, the values given are "
+                         "the guess")
+    fm.add_argument("--unit", action="append", metavar="NAME=UNIT",
+                    help="unit of a state, input, constant or output (repeat), Modelica "
+                         "syntax: m, rad/s, N.m")
+    fm.add_argument("--cs-method", default="dopri5", choices=["dopri5", "rodas4"],
+                    help="the Co-Simulation integrator (default dopri5; rodas4 for stiff "
+                         "models)")
+    fm.add_argument("--no-binary", action="store_true",
+                    help="sources only (compile with the importer, e.g. FMPy)")
+    _add_real(fm)
+    fm.set_defaults(fn=cmd_fmu)
 
     ca = _sub(sub, "cache", "show where eomgen's build cache is, its entries and size; "
               "'clear' deletes eomgen's entries from it",

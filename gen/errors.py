@@ -23,6 +23,11 @@ class BuildError(EomgenError, RuntimeError):
         self.log = log
 
 
+class MissingDependencyError(EomgenError, ImportError):
+    """An optional package a feature needs is not installed (the message
+    names the pip command that installs it)."""
+
+
 class SolverError(EomgenError, RuntimeError):
     """A generated C function returned a failure status.
 
