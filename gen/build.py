@@ -49,11 +49,19 @@ from .render import (EIGEN_SOURCES, RUNTIME_HEADERS, RUNTIME_SOURCES, Rendered, 
                      render)
 
 __all__ = ["compile", "cache_dir", "build", "build_derivatives", "load", "Built", "cache_info",
-           "clear_cache"]
+           "clear_cache", "compile_objects", "link_library"]
 
 C_FLAGS = ["-std=c99", "-O2", "-fno-strict-aliasing"]
-# added for <name>_lin.c, the derivative kernels (see _c_objects)
+# added for <name>_lin.c, the derivative kernels: gcc's time on their
+# straight-line code is the largest cost of a build, and -O1 takes a quarter
+# less (n = 20 cart: 8.8 -> 6.6 s) for a linearize 4-12% slower; IEEE
+# semantics are the same at every level (no -ffast-math), so the numbers are
+# too (tests/golden/seed_numbers.json, bit for bit)
 C_LIN_FLAGS = ["-O1"]
+# the runtime's objects (shared by every model library and FMU binary of a
+# scalar type): position independent, and hidden, so that a library exports
+# only its model's own functions
+RUNTIME_FLAGS = [*C_FLAGS, "-fPIC", "-fvisibility=hidden"]
 STRICT_FLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"]
 # the C++/Eigen backend (Eigen's own headers are -isystem: their warnings are not ours)
 CXX_FLAGS = ["-std=c++17", "-O2", "-fno-strict-aliasing"]
@@ -337,7 +345,7 @@ def build(rendered: Rendered, verbose=False, timings=None):
             own += [(f"{name}.c", ()), (f"{name}_api.c", ())]
             if not rendered.derivatives:
                 own.append((lin, ()))
-            objects = _c_objects(src, tmp / "obj", own, name)
+            objects = compile_objects(src, tmp / "obj", _own(own), name)
             so = _link(modname, objects, tmp, cxx=False)
         else:
             own = [s.format(name=name) for s in EIGEN_SOURCES]
@@ -385,11 +393,12 @@ def build_derivatives(base: Built, lin_source: str, timings=None):
             mine = [core / "obj" / f"{name}.o", core / "obj" / f"{name}_api.o"]
             if not all(o.is_file() for o in mine):
                 # an older or pruned cache folder: compile the model again
-                objects = _c_objects(src, tmp / "obj", [(f"{name}_lin.c", C_LIN_FLAGS),
-                                                        (f"{name}.c", ()),
-                                                        (f"{name}_api.c", ())], name)
+                objects = compile_objects(src, tmp / "obj", _own([
+                    (f"{name}_lin.c", C_LIN_FLAGS), (f"{name}.c", ()), (f"{name}_api.c", ())]),
+                    name)
             else:
-                objects = _c_objects(src, tmp / "obj", [(f"{name}_lin.c", C_LIN_FLAGS)], name)
+                objects = compile_objects(src, tmp / "obj",
+                                          _own([(f"{name}_lin.c", C_LIN_FLAGS)]), name)
                 objects = objects[:1] + mine + objects[1:]
             so = _link(modname, objects, tmp, cxx=False)
             _store(tmp, final, modname, so, src, keep_objects=False)
@@ -460,25 +469,27 @@ def _store(tmp: Path, final: Path, modname: str, so: Path, src: Path, keep_objec
             raise _cache_error(e, root, "store the library") from None
 
 
-def _cc_object(cc, src: Path, obj: Path, include: Path, extra=(), flags=None):
-    flags = C_FLAGS if flags is None else flags
-    cmd = [cc, *flags, "-fPIC", "-I", str(include), *extra, "-c", str(src), "-o", str(obj)]
+def _cc_object(cc, src: Path, fname: str, obj: Path, flags):
+    """Compile src/fname into obj, run in src with relative names: no path
+    of this machine in the object (an FMU's binary is reproducible)."""
+    cmd = [cc, *flags, "-I", ".", "-c", fname, "-o", str(obj)]
     try:
-        proc = subprocess.run(cmd, capture_output=True, text=True)
+        proc = subprocess.run(cmd, cwd=src, capture_output=True, text=True)
     except OSError as e:
         raise BuildError(f"the compiler {cc!r} cannot be run: {e}") from None
     if proc.returncode != 0:
-        raise BuildError(f"compiling {src.name} failed",
+        raise BuildError(f"compiling {fname} failed",
                          "$ " + " ".join(cmd) + "\n" + proc.stdout + proc.stderr)
     return obj
 
 
 def _runtime_objects(src: Path, cc: str):
-    """The runtime's object files, from a cache shared by every model: keyed
-    by the runtime sources, the scalar-type header, the flags and the
-    compiler. Returns (objects ready, sources still to compile into dir)."""
+    """The runtime's object files, from a cache shared by every model
+    library and FMU binary: keyed by the runtime sources, the scalar-type
+    header, the flags and the compiler. Returns (objects ready, or None and
+    the folder to publish them in)."""
     h = hashlib.sha256()
-    h.update(__version__.encode() + b"\0" + " ".join([cc, *C_FLAGS, "-fPIC"]).encode())
+    h.update(__version__.encode() + b"\0" + " ".join([cc, *RUNTIME_FLAGS]).encode())
     try:
         h.update(subprocess.run([cc, "--version"], capture_output=True, text=True).stdout.encode())
     except OSError as e:
@@ -496,8 +507,12 @@ def _runtime_objects(src: Path, cc: str):
 
 def _link(modname, objects, tmp: Path, cxx=False) -> Path:
     """cc -shared: the model library from its objects."""
+    return link_library(objects, tmp / (modname + _LIB_SUFFIX), cxx=cxx)
+
+
+def link_library(objects, out: Path, cxx=False) -> Path:
+    """cc -shared objects -lm -o out."""
     cc = _cxx_compiler() if cxx else _compiler()
-    out = tmp / (modname + _LIB_SUFFIX)
     cmd = [cc, "-shared", *[str(o) for o in objects], "-lm", "-o", str(out)]
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True)
@@ -509,37 +524,33 @@ def _link(modname, objects, tmp: Path, cxx=False) -> Path:
     return out
 
 
-def _c_objects(src: Path, objdir: Path, own, name):
-    """Compile the model's own C files (own: [(file, extra flags)], the
-    largest first) and, unless cached, the runtime, two at a time; return
-    the object files to link (own first, in order, then the runtime)."""
+def compile_objects(src: Path, objdir: Path, own, name):
+    """Compile a model's own C files (own: [(file, flags)], the largest
+    first) and, unless cached, the runtime, two at a time; return the object
+    files to link (own first, in order, then the runtime's). gen.build's
+    model libraries and gen.fmu's binaries both come through here."""
     from concurrent.futures import ThreadPoolExecutor
     cc = _compiler()
     runtime, rt_folder = _runtime_objects(src, cc)
-    # the derivative kernels at -O1 (C_LIN_FLAGS after C_FLAGS): gcc's time on
-    # their straight-line code is the largest cost of a build, and -O1 takes a
-    # quarter less (n = 20 cart: 8.8 -> 6.6 s) for a linearize 4-12% slower;
-    # IEEE semantics are the same at every level (no -ffast-math), so the
-    # numbers are too (tests/golden/seed_numbers.json, bit for bit)
-    jobs = [(src / f, objdir / (Path(f).stem + ".o"), tuple(extra)) for f, extra in own]
+    jobs = [(f, objdir / (Path(f).stem + ".o"), list(flags)) for f, flags in own]
     n_own = len(jobs)
     if runtime is None:
         rt_tmp = objdir.parent / "runtime"
         rt_tmp.mkdir()
-        jobs += [(src / s, rt_tmp / (Path(s).stem + ".o"), ()) for s in RUNTIME_SOURCES]
+        jobs += [(s, rt_tmp / (Path(s).stem + ".o"), RUNTIME_FLAGS) for s in RUNTIME_SOURCES]
     with ThreadPoolExecutor(max_workers=max(1, min(len(jobs), os.cpu_count() or 1))) as ex:
-        futures = [ex.submit(_cc_object, cc, s, o, src, (), [*C_FLAGS, *e])
-                   for s, o, e in jobs]
+        futures = [ex.submit(_cc_object, cc, src, f, o, fl) for f, o, fl in jobs]
         try:
             results = [f.result() for f in futures]
         except BuildError as err:
-            ok, log = _compile_log(src, [f for f, _ in own] + RUNTIME_SOURCES)
+            ok, log = _compile_log(src, [f for f, _ in own if f.startswith(name)]
+                                   + RUNTIME_SOURCES)
             raise BuildError(f"compiling the model '{name}' failed", log or err.log) from None
     if runtime is None:
         # publish the runtime objects for the next model (atomic rename; a
         # concurrent builder that got there first wins, both are identical)
-        rt_folder.parent.mkdir(parents=True, exist_ok=True)
         try:
+            rt_folder.parent.mkdir(parents=True, exist_ok=True)
             os.rename(rt_tmp, rt_folder)
             runtime = [rt_folder / Path(o).name for o in results[n_own:]]
         except OSError:
@@ -549,16 +560,21 @@ def _c_objects(src: Path, objdir: Path, own, name):
     return [*results[:n_own], *runtime]
 
 
+def _own(files_flags):
+    """[(file, C_FLAGS + -fPIC + extra)] for the model library's own files."""
+    return [(f, [*C_FLAGS, "-fPIC", *extra]) for f, extra in files_flags]
+
+
 def _eigen_objects(src: Path, objdir: Path, own, name, eigen_dir):
     """The Eigen backend's objects: its C++ sources (the extern "C" layer
     over the typed API) and the plugin table, in parallel."""
     from concurrent.futures import ThreadPoolExecutor
     cxx, cc = _cxx_compiler(), _compiler()
-    jobs = [(cxx, src / f, objdir / (Path(f).stem + ".o"),
-             [*CXX_FLAGS, "-isystem", str(eigen_dir)]) for f in own]
-    jobs.append((cc, src / f"{name}_api.c", objdir / f"{name}_api.o", list(C_FLAGS)))
+    jobs = [(cxx, f, objdir / (Path(f).stem + ".o"),
+             [*CXX_FLAGS, "-fPIC", "-isystem", str(eigen_dir)]) for f in own]
+    jobs.append((cc, f"{name}_api.c", objdir / f"{name}_api.o", [*C_FLAGS, "-fPIC"]))
     with ThreadPoolExecutor(max_workers=max(1, min(len(jobs), os.cpu_count() or 1))) as ex:
-        futures = [ex.submit(_cc_object, c, s, o, src, (), fl) for c, s, o, fl in jobs]
+        futures = [ex.submit(_cc_object, c, src, f, o, fl) for c, f, o, fl in jobs]
         try:
             return [f.result() for f in futures]
         except BuildError as err:
@@ -642,23 +658,18 @@ def compile(model, backend="c", real="double", verbose=False, sources=None,  # n
     t0 = time.perf_counter()
     host, api = load(built)
     timings["load"] = time.perf_counter() - t0
-    derive = None
-    if not built.derivatives:
-        def derive():
-            tm = {}
-            lin = derivatives_source(plan, real=real, timings=tm)
-            full = build_derivatives(built, lin, timings=tm)
-            return open_model_api(full, host), full, tm
-    sim = Simulator(host, api, built.interface, derivatives=derive)
+    def derive():
+        tm = {}
+        lin = derivatives_source(plan, real=real, timings=tm)
+        full = build_derivatives(built, lin, timings=tm)
+        return load(full)[1], full, tm
+
+    sim = Simulator(host, api, built.interface,
+                    derivatives=None if built.derivatives else derive)
     sim.build_info = {"module": str(built.path), "derivatives": built.derivatives, **timings}
     if backend != "c":
         sim.build_info["backend"] = backend
     return sim
-
-
-def open_model_api(built, host):
-    from .host import open_model
-    return open_model(built.path, built.interface.name, host)
 
 
 def _read_sources(folder, expected, name, backend="c"):

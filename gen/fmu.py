@@ -37,11 +37,8 @@ import importlib.util
 import os
 import platform
 import re
-import shutil
-import subprocess
 import tempfile
 import zipfile
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -49,7 +46,7 @@ import jinja2
 
 from ._version import __version__
 from .dependencies import dependencies
-from .errors import BuildError, EomgenError, MissingDependencyError, ModelError
+from .errors import BuildError, MissingDependencyError, ModelError
 from .resources import csrc_dir, templates_dir
 
 __all__ = ["export_fmu", "describe", "fmi_headers", "platform_folder", "FmuDescription",
@@ -519,38 +516,10 @@ C_FLAGS = ["-std=c99", "-O2", "-fno-strict-aliasing", "-fPIC", "-fvisibility=hid
 C_LIN_FLAGS = ["-O1"]     # the derivative kernels, as gen.compile builds them
 
 
-def _compiler():
-    cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
-    if not cc:
-        raise BuildError("no C compiler found for the FMU's binary: install gcc (or set CC), "
-                         "or export with binary=False (a source FMU)")
-    return cc.split()[0]
-
-
-def _runtime_cache(src, cc):
-    """(folder of cached runtime objects or None, its key): the runtime
-    (gen_rt_*.c) is the same for every model of a scalar type, so its
-    objects are kept in eomgen's build cache (eomgen cache clear removes
-    them), keyed by every runtime file, the flags and the compiler."""
-    from .build import cache_dir
-    h = hashlib.sha256()
-    h.update(f"fmu {__version__} {cc} {' '.join(C_FLAGS)}".encode())
-    try:
-        h.update(subprocess.run([cc, "--version"], capture_output=True, text=True).stdout.encode())
-    except OSError as e:
-        raise BuildError(f"the C compiler {cc!r} cannot be run: {e}") from None
-    for f in sorted(p.name for p in src.iterdir() if p.name.startswith("gen_rt")):
-        h.update(f.encode() + b"\0" + (src / f).read_bytes() + b"\0")
-    try:
-        return cache_dir(), f"runtime_{h.hexdigest()[:16]}"
-    except EomgenError:
-        return None, None
-
-
 def _compile(files, headers, name, out):
-    """Compile the sources/ of files into the shared library out (the
-    runtime's objects from the cache when they are there)."""
-    cc = _compiler()
+    """Compile the sources/ of files into the shared library out, through
+    gen.build's compile path (the runtime's objects from the build cache)."""
+    from .build import compile_objects, link_library
     suffix = {"Windows": ".dll", "Darwin": ".dylib"}.get(platform.system(), ".so")
     if suffix == ".dll":
         raise BuildError("building the FMU's binary on Windows is not supported: export with "
@@ -562,54 +531,19 @@ def _compile(files, headers, name, out):
         for path, text in files.items():
             if path.startswith("sources/"):
                 (src / path[len("sources/"):]).write_text(text)
-        sources = sorted(p.name for p in src.glob("*.c"))
-        runtime = [f for f in sources if f.startswith("gen_rt_")]
-        root, key = _runtime_cache(src, cc)
-        cached = root / key if root is not None else None
+        own = [p.name for p in src.glob("*.c") if not p.name.startswith("gen_rt_")]
+        # the largest files first: the derivative kernels, the model
+        own.sort(key=lambda f: (-(src / f).stat().st_size, f))
         objdir = tmp / "obj"
         objdir.mkdir()
-        if cached is not None and all((cached / f"{f}.o").is_file() for f in runtime):
-            todo, rt_objs = [f for f in sources if f not in runtime], \
-                [cached / f"{f}.o" for f in runtime]
-        else:
-            todo, rt_objs = sources, None
-
-        def one(c_file):
-            extra = C_LIN_FLAGS if c_file == f"{name}_lin.c" else []
-            # relative names, run in the sources: no path of this machine in the binary
-            cmd = [cc, *C_FLAGS, *extra, "-I", ".", "-isystem", str(headers), "-c", c_file,
-                   "-o", str(objdir / f"{c_file}.o")]
-            return cmd, subprocess.run(cmd, cwd=src, capture_output=True, text=True)
-
-        # the largest files first: the derivative kernels, the model
-        todo.sort(key=lambda f: -(src / f).stat().st_size)
-        with ThreadPoolExecutor(max_workers=max(1, min(len(todo), os.cpu_count() or 1))) as ex:
-            results = list(ex.map(one, todo))
-        for cmd, r in results:
-            if r.returncode != 0:
-                raise BuildError(f"compiling the FMU's binary failed: $ {' '.join(cmd)}",
-                                 r.stdout + r.stderr)
-        if rt_objs is None:
-            rt_objs = [objdir / f"{f}.o" for f in runtime]
-            if cached is not None:      # publish for the next FMU (atomic rename)
-                try:
-                    root.mkdir(parents=True, exist_ok=True)
-                    part = Path(tempfile.mkdtemp(prefix=f".{key}.{os.getpid()}.", dir=root))
-                    for o in rt_objs:
-                        shutil.copy2(o, part / o.name)
-                    try:
-                        os.rename(part, cached)
-                    except OSError:
-                        shutil.rmtree(part, ignore_errors=True)   # another build won
-                except OSError:
-                    pass                                          # no cache: fine
-        objs = [objdir / f"{f}.o" for f in sources if f not in runtime] + list(rt_objs)
-        lib = tmp / f"{name}{suffix}"
-        cmd = [cc, "-shared", "-o", str(lib), *[str(o) for o in objs], "-lm"]
-        r = subprocess.run(cmd, capture_output=True, text=True)
-        if r.returncode != 0:
-            raise BuildError(f"linking the FMU's binary failed: $ {' '.join(cmd)}",
-                             r.stdout + r.stderr)
+        flags = [(f, [*C_FLAGS, *(C_LIN_FLAGS if f == f"{name}_lin.c" else []),
+                      "-isystem", str(headers)]) for f in own]
+        try:
+            objects = compile_objects(src, objdir, flags, name)
+        except BuildError as e:
+            raise BuildError(f"compiling the FMU's binary failed: {e}") from None
+        lib = link_library(sorted(objects[:len(own)]) + objects[len(own):],
+                           tmp / f"{name}{suffix}")
         Path(out).write_bytes(lib.read_bytes())
     return f"{name}{suffix}"
 
