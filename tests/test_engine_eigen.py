@@ -30,9 +30,6 @@ import gen
 import seed_pendulum as sp
 import stiff_double_pendulum as sdp
 from conftest import require_eigen
-from gen.build import build
-from gen.ir import plan
-from gen.render import render
 from helpers import pendulum_state
 
 pytestmark = [pytest.mark.eigen, pytest.mark.slow]
@@ -50,7 +47,7 @@ TOL_STATE = 1e-12
 
 def _build(job):
     model, backend = job
-    build(render(plan(model), backend=backend))
+    gen.compile(model, backend=backend)              # into the cache the fixture reads
 
 
 @pytest.fixture(scope="module")
@@ -180,11 +177,11 @@ def test_rodas4_stiff(sims):
 
 def _advance(sim, x, t0, t1, method, h_next=0.0, rtol=1e-8, atol=1e-8):
     """The C API's advance (accumulating stats) through cffi."""
-    opts = sim._ffi.new(f"{sim._p}_sim_options *")
+    opts = sim._new("sim_options")
     sim._fn("sim_options_default")(opts)
     opts.method = gen.abi.METHODS[method]
     opts.rtol, opts.atol = rtol, atol
-    stats = sim._ffi.new(f"{sim._p}_sim_stats *")
+    stats = sim._new("sim_stats")
     stats.h_next = h_next
     x = np.array(x, dtype=float)
     p = sim._params(None)
