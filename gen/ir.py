@@ -90,14 +90,28 @@ def _flatten(mat):
     return [mat[i, j] for i in range(mat.shape[0]) for j in range(mat.shape[1])], mat.shape
 
 
-def make_kernel(name, args, outputs, cse=True):
-    """outputs: list of (name, Matrix). One joint CSE over all of them."""
+def make_kernel(name, args, outputs, cse=True, jvps=()):
+    """outputs: list of (name, Matrix). One joint CSE over all of them.
+
+    jvps: [(name, column Matrix F, seeds {symbol: expression})]: outputs that
+    are the directional derivatives of F along the seeds (dF = sum_s dF/ds
+    seed_s), differentiated on the CSE'd graph (jvp_graph) that F and the
+    seed expressions share with the plain outputs, then CSE'd again: a graph
+    a few times the size of F's, where a symbolic Jacobian of F swells (the
+    acceleration-constraint term d(A u + b)/dq q' + d(A u + b)/dt)."""
     flat, shapes = [], []
     for oname, mat in outputs:
         f, shp = _flatten(mat)
         flat.extend(f)
         shapes.append((oname, shp))
-    if cse and flat:
+    spans = []
+    for oname, F, seeds in jvps:
+        f, _ = _flatten(F)
+        keys = list(seeds)
+        spans.append((oname, len(flat), len(f), len(flat) + len(f), keys))
+        flat.extend(f)
+        flat.extend(sm.sympify(seeds[k]) for k in keys)
+    if (cse or jvps) and flat:
         assignments, reduced = sm.cse(flat, symbols=_Namer("w"), order="none")
     else:
         assignments, reduced = [], flat
@@ -105,7 +119,37 @@ def make_kernel(name, args, outputs, cse=True):
     for oname, (rows, cols) in shapes:
         outs.append(Output(oname, rows, cols, list(reduced[k:k + rows * cols])))
         k += rows * cols
-    return prune(Kernel(name, list(args), outs, list(assignments)))
+    extra = []
+    for i, (oname, start, n, seed_at, keys) in enumerate(spans):
+        fr = reduced[start:start + n]
+        seeds = dict(zip(keys, reduced[seed_at:seed_at + len(keys)]))
+        # only the temporaries F needs are differentiated
+        need = _closure(assignments, fr)
+        new, tang = jvp_graph([a for a in assignments if a[0] in need], fr, seeds,
+                              prefix=f"j{i}_")
+        if new or tang:
+            tsyms = [t for t, _ in new]
+            a2, r2 = sm.cse([e for _, e in new] + list(tang), symbols=_Namer(f"v{i}_"),
+                            order="none")
+            extra += _toposort(list(a2) + list(zip(tsyms, r2[:len(tsyms)])),
+                               set(a for a, _ in assignments) | set(t for t, _ in extra))
+            tang = r2[len(tsyms):]
+        outs.append(Output(oname, n, 1, list(tang)))
+    return prune(Kernel(name, list(args), outs, list(assignments) + extra))
+
+
+def _closure(assignments, exprs):
+    """The temporaries of assignments that exprs need, directly or through
+    other temporaries."""
+    defs = dict(assignments)
+    need, stack = set(), [s for e in exprs for s in e.free_symbols if s in defs]
+    while stack:
+        s = stack.pop()
+        if s in need:
+            continue
+        need.add(s)
+        stack.extend(x for x in defs[s].free_symbols if x in defs and x not in need)
+    return need
 
 
 _NONSMOOTH = (sm.Abs, sm.sign, sm.Heaviside, sm.floor, sm.ceiling, sm.Min, sm.Max,
@@ -629,14 +673,24 @@ def core_kernels(inputs):
     # everything the right-hand side needs, jointly CSE'd
     rhs_out = list(kin_out) + [("M", inputs.M), ("f", inputs.f)]
     qd_model = list(getattr(m, "qd", []) or [])
+    jvps = []
     if m.mv:
-        # with implicit kinematics a holds q' (m.qd): rhs_terms writes it at
+        # a = d(A u + b)/dq q' + d(A u + b)/dt: the directional derivative of
+        # A u + b along (q', 1) on the kernel's graph. With implicit
+        # kinematics q' is the run time's (m.qd): rhs_terms writes a at
         # q' = 0, and accel_terms at the q' the runtime solved for
-        rhs_out += [("A", m.A), ("a", m.a.xreplace({s: 0 for s in qd_model}))]
-        if qd_model:
+        fv = m.A * U + m.b
+        if m.qdot is not None:
+            seeds = dict(zip(m.q, m.qdot))
+        else:
+            seeds = {}
             kernels["accel_terms"] = make_kernel(
-                "accel_terms", [Aq, Au, Arg("qd", tuple(qd_model)), Ap, At], [("a", m.a)])
-    kernels["rhs_terms"] = make_kernel("rhs_terms", [Aq, Au, Ar, Ap, At], rhs_out)
+                "accel_terms", [Aq, Au, Arg("qd", tuple(qd_model)), Ap, At], [],
+                jvps=[("a", fv, {**dict(zip(m.q, qd_model)), m.t: 1})])
+        seeds[m.t] = 1
+        rhs_out += [("A", m.A)]
+        jvps.append(("a", fv, seeds))
+    kernels["rhs_terms"] = make_kernel("rhs_terms", [Aq, Au, Ar, Ap, At], rhs_out, jvps=jvps)
     if m.mc:
         kernels["constraints"] = make_kernel("constraints", [Aq, Ap, At], [("fc", m.fc)])
         kernels["constraint_jacobian"] = make_jacobian_kernel(

@@ -34,6 +34,7 @@ import re
 from dataclasses import dataclass, field
 
 import sympy as sm
+from sympy.core.basic import _args_sortkey
 from sympy.physics import mechanics as me
 
 from .errors import ModelError
@@ -259,7 +260,6 @@ class Model:
     f: sm.Matrix
     A: sm.Matrix
     b: sm.Matrix
-    a: sm.Matrix
     fc: sm.Matrix
     qdot: sm.Matrix | None           # explicit q' (when Kqd is diagonal), else None
     energy: sm.Expr | None = None    # total energy, if known
@@ -291,6 +291,24 @@ class Model:
     output_labels: list = field(default_factory=list)   # as the user named them
 
     # ------------------------------------------------------------------ sizes
+    @property
+    def a(self):
+        """The acceleration-constraint term a = d(A u + b)/dq q' + d(A u +
+        b)/dt (A u' + a = 0), in q' = qdot(q, u) with explicit kinematics, else
+        in the symbols qd. Formed on first use (a symbolic Jacobian: seconds
+        for a bicycle); the generated code computes it as a directional
+        derivative of A u + b instead (gen.ir.core_kernels)."""
+        a = self.__dict__.get("_a")
+        if a is None:
+            if not self.mv:
+                a = sm.zeros(0, 1)
+            else:
+                fv = self.A * sm.Matrix(self.u) + self.b
+                qdot = self.qdot if self.qdot is not None else sm.Matrix(self.qd)
+                a = fv.jacobian(self.q) * qdot + fv.diff(self.t)
+            self.__dict__["_a"] = a
+        return a
+
     @property
     def nq(self):
         return len(self.q)
@@ -351,8 +369,8 @@ class Model:
         sub.update({s: sm.Symbol(f"_p{i}") for i, s in enumerate(self.p)})
         sub[self.t] = sm.Symbol("_t")
         sub.update({s: sm.Symbol(f"_qd{i}") for i, s in enumerate(self.qd)})
-        for mat in (self.Kqd, self.Ku, self.kf, self.M, self.f, self.A, self.b,
-                    self.a, self.fc):
+        # (a follows from A, b and the kinematics)
+        for mat in (self.Kqd, self.Ku, self.kf, self.M, self.f, self.A, self.b, self.fc):
             parts.append(sm.srepr(mat.xreplace(sub)))
         if self.energy is not None:
             parts.append(sm.srepr(self.energy.xreplace(sub)))
@@ -747,17 +765,12 @@ class Model:
         # stays the symbols QD, which the runtime fills with the q' it solved
         # from Kqd q' = kr (never sympy's symbolic solve of the kinematics,
         # 0/0 at regular configurations such as ZYX Euler angles at hover)
+        # (Model.a, formed on first use: the kernels take it as a directional
+        # derivative of the CSE'd graph of A u + b instead, gen.ir)
         QD = []
         mv = A_.shape[0]
-        if mv:
-            fv = A_ * sm.Matrix(U) + b_
-            if qdot is not None:
-                a_ = fv.jacobian(Q) * qdot + fv.diff(T)
-            else:
-                QD = [sm.Dummy(f"qd{i}") for i in range(nq)]
-                a_ = fv.jacobian(Q) * sm.Matrix(QD) + fv.diff(T)
-        else:
-            a_ = sm.zeros(0, 1)
+        if mv and qdot is None:
+            QD = [sm.Dummy(f"qd{i}") for i in range(nq)]
 
         state_labels = [_sym_name(s) for s in q] + list(speed_names)
         input_labels = [_sym_name(s) for s in inputs]
@@ -783,7 +796,7 @@ class Model:
             name=name, method=method, q_orig=list(q), u_orig=list(u), r_orig=inputs,
             p_orig=list(constants), p_values=values, q=Q, u=U, r=R, p=P, t=T,
             q_ind=list(q_ind), q_dep=list(q_dep), u_ind=list(u_ind), u_dep=list(u_dep),
-            Kqd=Kqd_, Ku=Ku_, kf=kf_, M=M_, f=f_, A=A_, b=b_, a=a_, fc=fc_, qdot=qdot,
+            Kqd=Kqd_, Ku=Ku_, kf=kf_, M=M_, f=f_, A=A_, b=b_, fc=fc_, qdot=qdot,
             energy=E_, state_names=state_names, input_names=input_names,
             constant_names=constant_names, state_labels=state_labels,
             input_labels=input_labels, constant_labels=constant_labels,
@@ -1012,9 +1025,26 @@ def _eliminate_reactions(M, f, aux, udots, coords):
 def _xreplace_shared(mat, rule, memo):
     """mat.xreplace(rule), each distinct subexpression rebuilt once (memo,
     shared between calls): sympy's xreplace rebuilds a subexpression every
-    time it appears, and Kane's M and f repeat theirs many times."""
+    time it appears, and Kane's M and f repeat theirs many times.
+
+    When rule maps atoms and functions of time one to one onto new symbols
+    (atomic), a sum or product cannot combine terms that were apart (distinct
+    terms stay distinct), so it is rebuilt from its new arguments in sympy's
+    canonical order (numbers first, then sorted as Add and Mul sort them)
+    without re-running their flatten: the same objects, most of the cost
+    gone (tests/test_model_conversion.py)."""
     if not rule or not mat.shape[0] * mat.shape[1]:
         return mat
+    atomic = (len(set(rule.values())) == len(rule)
+              and all(v.is_Symbol for v in rule.values()))
+
+    def rebuild(e, args):
+        if atomic and (e.is_Add or e.is_Mul) and e.is_commutative:
+            nums = [a for a in args if a.is_Number]
+            rest = [a for a in args if not a.is_Number]
+            rest.sort(key=_args_sortkey)
+            return e.func._from_args(nums + rest, True)
+        return e.func(*args)
 
     def walk(e):
         hit = memo.get(e)
@@ -1025,8 +1055,8 @@ def _xreplace_shared(mat, rule, memo):
         elif not e.args:
             out = e
         else:
-            args = tuple(walk(a) if isinstance(a, sm.Basic) else a for a in e.args)
-            out = e.func(*args) if any(a is not b for a, b in zip(args, e.args)) else e
+            args = [walk(a) if isinstance(a, sm.Basic) else a for a in e.args]
+            out = rebuild(e, args) if any(a is not b for a, b in zip(args, e.args)) else e
         memo[e] = out
         return out
 

@@ -46,7 +46,7 @@ static void pendulum_kane_k_kinematics(const pendulum_kane_real *q, const pendul
     out_kr[1] = u[0];
 }
 
-/* the acceleration-constraint term a at the q' solved at run time (13 temporaries) */
+/* the acceleration-constraint term a at the q' solved at run time (9 temporaries) */
 static void pendulum_kane_k_accel_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_a)
 {
     (void)q;
@@ -55,22 +55,18 @@ static void pendulum_kane_k_accel_terms(const pendulum_kane_real *q, const pendu
     (void)p;
     (void)t;
     const double w0 = (q[1]*q[1]);
-    const double w1 = (q[0]*q[0]);
-    const double w2 = w0 + w1;
-    const double w3 = sqrt(w2/w0);
-    const double w4 = (1.0/(w2));
-    const double w5 = (1.0/(w2*w2));
-    const double w6 = u[0]*w3;
-    const double w7 = w5*w6;
-    const double w8 = q[0]*w0;
-    const double w9 = u[1]*w3;
-    const double w10 = w5*w9;
-    const double w11 = (q[1]*q[1]*q[1]);
-    const double w12 = -w2/w11 + (1.0/(q[1]));
-    out_a[0] = qd[0]*(q[1]*u[0]*w3*w4 - q[1]*w1*w7 - w10*w8) + qd[1]*(q[0]*w11*w12*w7 + q[0]*w4*w6 + (q[1]*q[1]*q[1]*q[1])*w10*w12 + 2*q[1]*w4*w9 - 2*w10*w11 - 2*w7*w8);
+    const double w1 = (q[0]*q[0]) + w0;
+    const double w2 = sqrt(w1/w0)/w1;
+    const double v0_0 = (1.0/(w0));
+    const double v0_1 = (1.0/2.0)*sqrt(v0_0*w1);
+    const double v0_2 = q[0]*u[0];
+    const double j0_0 = 2*q[1]*qd[1];
+    const double j0_1 = 2*q[0]*qd[0] + j0_0;
+    const double j0_2 = -j0_0*v0_0*v0_1/w1 - j0_1*v0_1/(w1*w1);
+    out_a[0] = q[1]*qd[0]*u[0]*w2 + qd[1]*v0_2*w2 + u[1]*j0_0*w2 + j0_2*(q[1]*v0_2 + u[1]*w0);
 }
 
-/* everything the right-hand side needs (3 temporaries) */
+/* everything the right-hand side needs (5 temporaries) */
 static void pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_kr, pendulum_kane_real *out_M, pendulum_kane_real *out_f, pendulum_kane_real *out_A, pendulum_kane_real *out_a)
 {
     (void)q;
@@ -81,6 +77,8 @@ static void pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulu
     const double w0 = (q[1]*q[1]);
     const double w1 = (q[0]*q[0]) + w0;
     const double w2 = sqrt(w1/w0)/w1;
+    const double w3 = q[0]*q[1]*w2;
+    const double w4 = w0*w2;
     out_Kqd[0] = 0;
     out_Kqd[1] = 1;
     out_Kqd[2] = 1;
@@ -93,8 +91,8 @@ static void pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulu
     out_M[3] = p[1];
     out_f[0] = 0;
     out_f[1] = p[1]*p[2];
-    out_A[0] = q[0]*q[1]*w2;
-    out_A[1] = w0*w2;
+    out_A[0] = w3;
+    out_A[1] = w4;
     out_a[0] = 0;
 }
 

@@ -202,7 +202,7 @@ inline void k_kinematics(const Scalar *q, const Scalar *u, const Scalar *p, Scal
     out_kr[1] = u[0];
 }
 
-/* the acceleration-constraint term a at the q' solved at run time (13 temporaries) */
+/* the acceleration-constraint term a at the q' solved at run time (9 temporaries) */
 template <typename Scalar>
 inline void k_accel_terms(const Scalar *q, const Scalar *u, const Scalar *qd, const Scalar *p, Scalar t, Scalar *out_a) noexcept
 {
@@ -212,22 +212,18 @@ inline void k_accel_terms(const Scalar *q, const Scalar *u, const Scalar *qd, co
     (void)p;
     (void)t;
     const Scalar w0 = (q[1]*q[1]);
-    const Scalar w1 = (q[0]*q[0]);
-    const Scalar w2 = w0 + w1;
-    const Scalar w3 = std::sqrt(w2/w0);
-    const Scalar w4 = (Scalar(1.0)/(w2));
-    const Scalar w5 = (Scalar(1.0)/(w2*w2));
-    const Scalar w6 = u[0]*w3;
-    const Scalar w7 = w5*w6;
-    const Scalar w8 = q[0]*w0;
-    const Scalar w9 = u[1]*w3;
-    const Scalar w10 = w5*w9;
-    const Scalar w11 = (q[1]*q[1]*q[1]);
-    const Scalar w12 = -w2/w11 + (Scalar(1.0)/(q[1]));
-    out_a[0] = qd[0]*(q[1]*u[0]*w3*w4 - q[1]*w1*w7 - w10*w8) + qd[1]*(q[0]*w11*w12*w7 + q[0]*w4*w6 + (q[1]*q[1]*q[1]*q[1])*w10*w12 + 2*q[1]*w4*w9 - 2*w10*w11 - 2*w7*w8);
+    const Scalar w1 = (q[0]*q[0]) + w0;
+    const Scalar w2 = std::sqrt(w1/w0)/w1;
+    const Scalar v0_0 = (Scalar(1.0)/(w0));
+    const Scalar v0_1 = (Scalar(1)/Scalar(2))*std::sqrt(v0_0*w1);
+    const Scalar v0_2 = q[0]*u[0];
+    const Scalar j0_0 = 2*q[1]*qd[1];
+    const Scalar j0_1 = 2*q[0]*qd[0] + j0_0;
+    const Scalar j0_2 = -j0_0*v0_0*v0_1/w1 - j0_1*v0_1/(w1*w1);
+    out_a[0] = q[1]*qd[0]*u[0]*w2 + qd[1]*v0_2*w2 + u[1]*j0_0*w2 + j0_2*(q[1]*v0_2 + u[1]*w0);
 }
 
-/* everything the right-hand side needs (3 temporaries) */
+/* everything the right-hand side needs (5 temporaries) */
 template <typename Scalar>
 inline void k_rhs_terms(const Scalar *q, const Scalar *u, const Scalar *r, const Scalar *p, Scalar t, Scalar *out_Kqd, Scalar *out_kr, Scalar *out_M, Scalar *out_f, Scalar *out_A, Scalar *out_a) noexcept
 {
@@ -239,6 +235,8 @@ inline void k_rhs_terms(const Scalar *q, const Scalar *u, const Scalar *r, const
     const Scalar w0 = (q[1]*q[1]);
     const Scalar w1 = (q[0]*q[0]) + w0;
     const Scalar w2 = std::sqrt(w1/w0)/w1;
+    const Scalar w3 = q[0]*q[1]*w2;
+    const Scalar w4 = w0*w2;
     out_Kqd[0] = 0;
     out_Kqd[1] = 1;
     out_Kqd[2] = 1;
@@ -251,8 +249,8 @@ inline void k_rhs_terms(const Scalar *q, const Scalar *u, const Scalar *r, const
     out_M[3] = p[1];
     out_f[0] = 0;
     out_f[1] = p[1]*p[2];
-    out_A[0] = q[0]*q[1]*w2;
-    out_A[1] = w0*w2;
+    out_A[0] = w3;
+    out_A[1] = w4;
     out_a[0] = 0;
 }
 
