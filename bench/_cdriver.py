@@ -170,7 +170,8 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
     drv = eom_dir / "bench_driver.c"
     drv.write_text(src)
     exe = eom_dir / "bench_driver"
-    srcs = [str(drv), str(eom_dir / f"{prefix}.c"), str(eom_dir / f"{prefix}_lin.c")] + sorted(
+    from gen.render import model_sources
+    srcs = [str(drv)] + [str(eom_dir / f) for f in model_sources(prefix)] + sorted(
         str(f) for f in eom_dir.glob("gen_rt_*.c"))
     incs = ["-I", str(eom_dir)]
     if cas_c:

@@ -512,8 +512,9 @@ def platform_folder(fmi_version):
 
 # the binary's flags: those of gen.compile, position independent, and only
 # the FMI functions exported (two FMUs in one process cannot clash)
-C_FLAGS = ["-std=c99", "-O2", "-fno-strict-aliasing", "-fPIC", "-fvisibility=hidden"]
-C_LIN_FLAGS = ["-O1"]     # the derivative kernels, as gen.compile builds them
+def _flags():
+    from .build import C_FLAGS, C_LIN_FLAGS
+    return [*C_FLAGS, "-fPIC", "-fvisibility=hidden"], C_LIN_FLAGS
 
 
 def _compile(files, headers, name, out):
@@ -536,8 +537,9 @@ def _compile(files, headers, name, out):
         own.sort(key=lambda f: (-(src / f).stat().st_size, f))
         objdir = tmp / "obj"
         objdir.mkdir()
-        flags = [(f, [*C_FLAGS, *(C_LIN_FLAGS if f == f"{name}_lin.c" else []),
-                      "-isystem", str(headers)]) for f in own]
+        base, lin = _flags()
+        flags = [(f, [*base, *(lin if f == f"{name}_lin.c" else []), "-isystem", str(headers)])
+                 for f in own]
         try:
             objects = compile_objects(src, objdir, flags, name)
         except BuildError as e:

@@ -30,7 +30,7 @@ from .resources import csrc_dir, templates_dir
 from .solvers import ldlt_program
 
 __all__ = ["Rendered", "render", "render_files", "generate", "write_atomic", "template_env",
-           "RUNTIME_SOURCES", "RUNTIME_HEADERS", "BACKENDS"]
+           "model_sources", "RUNTIME_SOURCES", "RUNTIME_HEADERS", "BACKENDS"]
 
 # the C runtime every C-backend model links (csrc/)
 RUNTIME_SOURCES = ["gen_rt_status.c", "gen_rt_linalg.c", "gen_rt_dynamics.c",
@@ -50,6 +50,7 @@ EIGEN_RUNTIME_HEADERS = ["eigen/gen_rt_eigen.hpp", "eigen/gen_rt_expm.hpp", "gen
 C_TEMPLATES = [
     ("{name}.h", "c/model.h.j2", "model"),
     ("{name}.c", "c/model.c.j2", "model"),
+    ("{name}_kernels.c", "c/model_kern.c.j2", "model"),    # the kernels, compiled apart
     ("{name}_lin.c", "c/model_lin.c.j2", "lin"),          # the derivative kernels
     ("{name}_lin_stub.c", "c/model_lin_stub.c.j2", "stub"),  # ... until they are built
     ("{name}_kernels.h", "c/model_kernels.h.j2", "model"),   # the functions of _lin.c
@@ -78,6 +79,14 @@ EIGEN_SOURCES = ["{name}.cpp"]
 BACKENDS = {"c": C_TEMPLATES, "eigen": EIGEN_TEMPLATES}
 # the kernels of <name>_lin.c (C backend)
 LIN_KERNELS = DERIVATIVE_KERNELS
+
+
+def model_sources(name):
+    """The model's own C files in a generated C project (with the runtime's
+    RUNTIME_SOURCES, what a program linking the model compiles; the plugin
+    table <name>_api.c is extra)."""
+    return [f.format(name=name) for f, _, role in C_TEMPLATES
+            if role in ("model", "lin") and f.endswith(".c") and f != "{name}_api.c"]
 
 # the model prefix is also the C++ namespace of the Eigen backend
 CXX_RESERVED = frozenset("""

@@ -33,7 +33,7 @@ import gen
 import n_link_cart as nl
 import rolling_disc as rd
 import seed_pendulum as sp
-from gen.render import RUNTIME_SOURCES
+from gen.render import model_sources, RUNTIME_SOURCES
 from conftest import require_eigen
 from helpers import pendulum_state, rel_err
 
@@ -83,7 +83,7 @@ def _cmake_project(work):
     gen.generate(model_e, work / "pend_e", backend="eigen")
     gen.generate(model_c, work / "pend_c")
     bld = work / "build"
-    c_sources = ";".join(["pend_c.c", "pend_c_lin.c"] + RUNTIME_SOURCES)
+    c_sources = ";".join(model_sources("pend_c") + RUNTIME_SOURCES)
     log = []
     for cmd in (["cmake", "-S", str(ROOT / "tests" / "cpp"), "-B", str(bld),
                  "-DCMAKE_BUILD_TYPE=Release", f"-DEIGEN_PROJECT={work / 'pend_e'}",

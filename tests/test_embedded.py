@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 import gen.footprint as fp
+from gen.render import model_sources
 from conftest import require_tool
 from helpers import pendulum_state
 
@@ -168,7 +169,7 @@ def _build_drivers(model, out):
         src = out / f"src_{real}"
         gen.generate(model, src, real=real)
         exe = out / f"driver_{model.name}_{real}"
-        sources = [str(src / f"{model.name}.c"), str(src / f"{model.name}_lin.c")] + sorted(
+        sources = [str(src / f) for f in model_sources(model.name)] + sorted(
             str(s) for s in src.glob("gen_rt_*.c"))
         cmd = ["arm-linux-gnueabihf-gcc", "-static", "-O2", *STRICT,
                f"-DFW_MODEL={model.name}", f"-DFW_MODEL_UPPER={model.name.upper()}",

@@ -14,6 +14,7 @@ import pytest
 
 import four_bar
 import gen
+from gen.render import model_sources
 import rolling_disc
 import seed_pendulum as sp
 from conftest import require_eigen, require_tool
@@ -39,7 +40,7 @@ MODELS = {"kane": sp.kane_model, "lagrange": sp.lagrange_model,
 def _build(model, out, cc, flags, extra=()):
     gen.generate(model, out)
     p = model.name
-    srcs = [str(HARNESS), str(out / f"{p}.c"), str(out / f"{p}_lin.c")] + sorted(
+    srcs = [str(HARNESS)] + [str(out / f) for f in model_sources(p)] + sorted(
         str(f) for f in out.glob("gen_rt_*.c"))
     exe = out / "harness"
     cmd = [cc, "-std=c99", "-g", "-O1", "-I", str(out), f'-DMODEL_H="{p}.h"',

@@ -24,7 +24,7 @@ def test_verify_catches_a_tampered_source(tmp_path, kane_model):
     out = tmp_path / "pend"
     gen.generate(kane_model, out)
     assert verify(kane_model, samples=4, sources=out).ok
-    src = out / f"{kane_model.name}.c"
+    src = out / f"{kane_model.name}_kernels.c"
     text = src.read_text()
     assert "sqrt(" in text
     src.write_text(text.replace("sqrt(", "fabs(", 1))     # compiles, computes something else

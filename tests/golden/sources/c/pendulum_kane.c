@@ -5,9 +5,10 @@
  * Do not edit: regenerate instead.
  */
 /*
- * The model's kernels, wired into a gen_rt_model, and the public API: each
- * function checks its arguments, puts its work arrays on the stack and
- * calls the runtime (gen_rt_model.c), which holds every algorithm.
+ * The model's kernels (pendulum_kane_kernels.c, pendulum_kane_lin.c) wired into a
+ * gen_rt_model, its mass-matrix solve, and the public API: each function
+ * checks its arguments, puts its work arrays on the stack and calls the
+ * runtime (gen_rt_model.c), which holds every algorithm.
  */
 #include <math.h>
 #include <stddef.h>
@@ -27,135 +28,6 @@ static const pendulum_kane_real pendulum_kane_p_default[3] = { 1.0, 1.0, 9.81 };
 static const pendulum_kane_real pendulum_kane_r_zero[1] = { 0 };
 static const pendulum_kane_real pendulum_kane_u_zero[2] = { 0 };
 
-/* ------------------------------------------------------------------ */
-/* Kernels: straight-line code from one CSE per kernel family.        */
-/* ------------------------------------------------------------------ */
-
-/* q' (or Kqd and its right-hand side) (0 temporaries) */
-static void pendulum_kane_k_kinematics(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_kr)
-{
-    (void)q;
-    (void)u;
-    (void)p;
-    (void)t;
-    out_Kqd[0] = 0;
-    out_Kqd[1] = 1;
-    out_Kqd[2] = 1;
-    out_Kqd[3] = 0;
-    out_kr[0] = u[1];
-    out_kr[1] = u[0];
-}
-
-/* the acceleration-constraint term a at the q' solved at run time (9 temporaries) */
-static void pendulum_kane_k_accel_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_a)
-{
-    (void)q;
-    (void)u;
-    (void)qd;
-    (void)p;
-    (void)t;
-    const double w0 = (q[1]*q[1]);
-    const double w1 = (q[0]*q[0]) + w0;
-    const double w2 = sqrt(w1/w0)/w1;
-    const double v0_0 = (1.0/(w0));
-    const double v0_1 = (1.0/2.0)*sqrt(v0_0*w1);
-    const double v0_2 = q[0]*u[0];
-    const double j0_0 = 2*q[1]*qd[1];
-    const double j0_1 = 2*q[0]*qd[0] + j0_0;
-    const double j0_2 = -j0_0*v0_0*v0_1/w1 - j0_1*v0_1/(w1*w1);
-    out_a[0] = q[1]*qd[0]*u[0]*w2 + qd[1]*v0_2*w2 + u[1]*j0_0*w2 + j0_2*(q[1]*v0_2 + u[1]*w0);
-}
-
-/* everything the right-hand side needs (5 temporaries) */
-static void pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_kr, pendulum_kane_real *out_M, pendulum_kane_real *out_f, pendulum_kane_real *out_A, pendulum_kane_real *out_a)
-{
-    (void)q;
-    (void)u;
-    (void)r;
-    (void)p;
-    (void)t;
-    const double w0 = (q[1]*q[1]);
-    const double w1 = (q[0]*q[0]) + w0;
-    const double w2 = sqrt(w1/w0)/w1;
-    const double w3 = q[0]*q[1]*w2;
-    const double w4 = w0*w2;
-    out_Kqd[0] = 0;
-    out_Kqd[1] = 1;
-    out_Kqd[2] = 1;
-    out_Kqd[3] = 0;
-    out_kr[0] = u[1];
-    out_kr[1] = u[0];
-    out_M[0] = p[1];
-    out_M[1] = 0;
-    out_M[2] = 0;
-    out_M[3] = p[1];
-    out_f[0] = 0;
-    out_f[1] = p[1]*p[2];
-    out_A[0] = w3;
-    out_A[1] = w4;
-    out_a[0] = 0;
-}
-
-/* f_c(q) (0 temporaries) */
-static void pendulum_kane_k_constraints(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_fc)
-{
-    (void)q;
-    (void)p;
-    (void)t;
-    out_fc[0] = -p[0] + sqrt((q[0]*q[0]) + (q[1]*q[1]));
-}
-
-/* f_c(q) and d f_c/dq (4 temporaries) */
-static void pendulum_kane_k_constraint_jacobian(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_fc, pendulum_kane_real *out_Jc)
-{
-    (void)q;
-    (void)p;
-    (void)t;
-    const double w0 = -p[0] + sqrt((q[0]*q[0]) + (q[1]*q[1]));
-    const double v0 = (1.0/sqrt((q[0]*q[0]) + (q[1]*q[1])));
-    const double d0 = q[0]*v0;
-    const double d1 = q[1]*v0;
-    out_fc[0] = w0;
-    out_Jc[0] = d0;
-    out_Jc[1] = d1;
-}
-
-/* A(q), b(q, t) (3 temporaries) */
-static void pendulum_kane_k_velocity_constraint_matrix(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_A, pendulum_kane_real *out_b)
-{
-    (void)q;
-    (void)p;
-    (void)t;
-    const double w0 = (q[1]*q[1]);
-    const double w1 = (q[0]*q[0]) + w0;
-    const double w2 = sqrt(w1/w0)/w1;
-    out_A[0] = q[0]*q[1]*w2;
-    out_A[1] = w0*w2;
-    out_b[0] = 0;
-}
-
-/* A(q) u + b (3 temporaries) */
-static void pendulum_kane_k_velocity_constraints(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_fv)
-{
-    (void)q;
-    (void)u;
-    (void)p;
-    (void)t;
-    const double w0 = (q[1]*q[1]);
-    const double w1 = (q[0]*q[0]) + w0;
-    const double w2 = sqrt(w1/w0)/w1;
-    out_fv[0] = q[0]*q[1]*u[0]*w2 + u[1]*w0*w2;
-}
-
-/* total energy (0 temporaries) */
-static void pendulum_kane_k_energy(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_E)
-{
-    (void)q;
-    (void)u;
-    (void)p;
-    (void)t;
-    out_E[0] = -p[1]*p[2]*q[1] + (1.0/2.0)*p[1]*((u[0]*u[0]) + (u[1]*u[1]));
-}
 
 /* ------------------------------------------------------------------ */
 /* The model for the runtime: kernels under the runtime's signatures  */
