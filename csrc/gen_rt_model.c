@@ -13,7 +13,7 @@
 
 static int finite_n(int n, const gen_rt_real *v)
 {
-    return n <= 0 || gen_rt_all_finite(n, v);
+    return gen_rt_finite_n(n, v);
 }
 
 static void copy_n(int n, const gen_rt_real *src, gen_rt_real *dst)

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import sympy as sm
 
 __all__ = ["Arg", "Output", "Kernel", "Plan", "plan", "with_derivatives", "lin_mode",
-           "make_kernel", "differentiate_graph", "jvp_graph", "make_jvp_kernel",
+           "make_kernel", "differentiate_graph", "jvp_graph", "make_jvp_kernel", "gradient",
            "JVP_MIN_VARIABLES", "DERIVATIVE_KERNELS", "partial", "build_kernels",
            "mass_structure", "float_values", "core_kernels", "derivative_kernels",
            "kernel_inputs", "KernelInputs"]
@@ -224,6 +224,65 @@ def partial(expr, s):
     return d(expr)
 
 
+def gradient(e, symbols):
+    """{s: d e / d s} for the symbols s of ``symbols`` that e holds, by one
+    reverse sweep over e's expression graph (each distinct subexpression
+    once): linear in e's size, where a derivative per symbol walks all of e
+    again (a CSE'd assignment can be a long sum). Holds the rules of
+    ``partial``: an expression with a non-smooth function goes to it, symbol
+    by symbol."""
+    symbols = set(symbols)
+    if e.has(*_NONSMOOTH):
+        return {x: partial(e, x) for x in symbols if e.has(x)}
+    dep, order, stack = {}, [], [(e, False)]
+    while stack:                          # post-order: children before parents
+        x, done = stack.pop()
+        if done:
+            dep[x] = x in symbols or any(dep.get(c, False) for c in x.args)
+            order.append(x)
+            continue
+        if x in dep:
+            continue
+        dep[x] = False                    # visiting
+        stack.append((x, True))
+        if not x.is_Atom:
+            stack.extend((c, False) for c in x.args if c not in dep)
+    if not dep.get(e):
+        return {}
+    adj = {e: [sm.S.One]}
+    out = {}
+    for x in reversed(order):             # parents before children
+        terms = adj.pop(x, None)
+        if not terms or not dep[x]:
+            continue
+        a = sm.Add(*terms)
+        if x in symbols:
+            out[x] = a
+            continue
+        args = x.args
+        if x.is_Add:
+            for c in args:
+                if dep[c]:
+                    adj.setdefault(c, []).append(a)
+        elif x.is_Mul:
+            for i, c in enumerate(args):
+                if dep[c]:
+                    adj.setdefault(c, []).append(a * sm.Mul(*(args[:i] + args[i + 1:])))
+        elif x.is_Pow:
+            b, k = args
+            if dep[b]:
+                adj.setdefault(b, []).append(a * k * b ** (k - 1))
+            if dep[k]:
+                adj.setdefault(k, []).append(a * x * sm.log(b))
+        elif isinstance(x, sm.Function):
+            for i, c in enumerate(args):
+                if dep[c]:
+                    adj.setdefault(c, []).append(a * x.fdiff(i + 1))
+        else:                             # anything else: sympy's rules
+            return {s_: partial(e, s_) for s_ in symbols if e.has(s_)}
+    return out
+
+
 def differentiate_graph(assignments, exprs, wrt, prefix="d"):
     """Forward-mode derivatives of ``exprs`` (written over the temporaries
     of ``assignments``) with respect to the symbols ``wrt``.
@@ -243,23 +302,26 @@ def differentiate_graph(assignments, exprs, wrt, prefix="d"):
 
     def dexpr(e):
         """{j: d e / d wrt[j]} for an expression over wrt and temps."""
-        out = {}
-        for s in sorted(e.free_symbols, key=sm.default_sort_key):
-            if s in widx:
-                pd = partial(e, s)
-                j = widx[s]
-                out[j] = out.get(j, 0) + pd
-            elif s in deriv and deriv[s]:
-                pd = partial(e, s)
-                if pd == 0:
-                    continue
-                for j, ds in deriv[s].items():
-                    out[j] = out.get(j, 0) + pd * ds
+        syms = sorted((x for x in e.free_symbols if x in widx or deriv.get(x)),
+                      key=sm.default_sort_key)
+        if not syms:
+            return {}
+        grad = gradient(e, syms)
+        terms = {}
+        for x in syms:
+            pd = grad.get(x, sm.S.Zero)
+            if pd == 0:
+                continue
+            if x in widx:
+                terms.setdefault(widx[x], []).append(pd)
+            else:
+                for j, dx in deriv[x].items():
+                    terms.setdefault(j, []).append(pd * dx)
         res = {}
-        for j, v in out.items():
+        for j in sorted(terms):
+            v = sm.Add(*terms[j])
             if v != 0:
-                v = v.xreplace(reverse) if reverse else v
-                res[j] = v
+                res[j] = v.xreplace(reverse) if reverse else v
         return res
 
     for s, e in assignments:
@@ -296,14 +358,17 @@ def jvp_graph(assignments, exprs, seeds, prefix="t"):
     new = []
 
     def dexpr(e):
-        out = sm.S.Zero
-        for a in sorted(e.free_symbols, key=sm.default_sort_key):
-            da = seeds.get(a, tangent.get(a))
-            if da is None:
-                continue
-            pd = partial(e, a)
+        syms = sorted((a for a in e.free_symbols if a in seeds or a in tangent),
+                      key=sm.default_sort_key)
+        if not syms:
+            return sm.S.Zero
+        grad = gradient(e, syms)
+        terms = []
+        for a in syms:
+            pd = grad.get(a, sm.S.Zero)
             if pd != 0:
-                out = out + pd * da
+                terms.append(pd * seeds.get(a, tangent.get(a)))
+        out = sm.Add(*terms)
         return out.xreplace(reverse) if reverse and out != 0 else out
 
     for s, e in assignments:

@@ -295,17 +295,25 @@ class Model:
     def a(self):
         """The acceleration-constraint term a = d(A u + b)/dq q' + d(A u +
         b)/dt (A u' + a = 0), in q' = qdot(q, u) with explicit kinematics, else
-        in the symbols qd. Formed on first use (a symbolic Jacobian: seconds
-        for a bicycle); the generated code computes it as a directional
-        derivative of A u + b instead (gen.ir.core_kernels)."""
+        in the symbols qd. Formed on first use (the derivative kernels, the
+        symbolic references); the right-hand side's code computes it as a
+        directional derivative on its own graph (gen.ir.core_kernels)."""
         a = self.__dict__.get("_a")
         if a is None:
+            from .ir import gradient
             if not self.mv:
                 a = sm.zeros(0, 1)
             else:
                 fv = self.A * sm.Matrix(self.u) + self.b
-                qdot = self.qdot if self.qdot is not None else sm.Matrix(self.qd)
-                a = fv.jacobian(self.q) * qdot + fv.diff(self.t)
+                qdot = list(self.qdot) if self.qdot is not None else list(self.qd)
+                rows = []
+                for e in fv:
+                    # one reverse sweep per row (a symbolic Jacobian of A u + b
+                    # walks each row once per coordinate)
+                    g = gradient(e, set(self.q) | {self.t})
+                    rows.append(sm.Add(*[g[x] * v for x, v in zip(self.q, qdot) if x in g])
+                                + g.get(self.t, sm.S.Zero))
+                a = sm.Matrix(rows)
             self.__dict__["_a"] = a
         return a
 

@@ -29,7 +29,7 @@ void pendulum_kane_k_kinematics(const pendulum_kane_real *q, const pendulum_kane
     out_kr[1] = u[0];
 }
 
-/* the acceleration-constraint term a at the q' solved at run time (9 temporaries) */
+/* the acceleration-constraint term a at the q' solved at run time (10 temporaries) */
 void pendulum_kane_k_accel_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_a)
 {
     (void)q;
@@ -41,12 +41,13 @@ void pendulum_kane_k_accel_terms(const pendulum_kane_real *q, const pendulum_kan
     const double w1 = (q[0]*q[0]) + w0;
     const double w2 = sqrt(w1/w0)/w1;
     const double v0_0 = (1.0/(w0));
-    const double v0_1 = (1.0/2.0)*sqrt(v0_0*w1);
-    const double v0_2 = q[0]*u[0];
+    const double v0_1 = sqrt(v0_0*w1);
+    const double v0_2 = (1.0/(v0_1));
+    const double v0_3 = q[0]*u[0];
     const double j0_0 = 2*q[1]*qd[1];
     const double j0_1 = 2*q[0]*qd[0] + j0_0;
-    const double j0_2 = -j0_0*v0_0*v0_1/w1 - j0_1*v0_1/(w1*w1);
-    out_a[0] = q[1]*qd[0]*u[0]*w2 + qd[1]*v0_2*w2 + u[1]*j0_0*w2 + j0_2*(q[1]*v0_2 + u[1]*w0);
+    const double j0_2 = -1.0/2.0*j0_0*v0_2/(w0*w0) + j0_1*((1.0/2.0)*v0_0*v0_2/w1 - v0_1/(w1*w1));
+    out_a[0] = q[1]*qd[0]*u[0]*w2 + qd[1]*v0_3*w2 + u[1]*j0_0*w2 + j0_2*(q[1]*v0_3 + u[1]*w0);
 }
 
 /* everything the right-hand side needs (5 temporaries) */

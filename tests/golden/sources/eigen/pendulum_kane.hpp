@@ -202,7 +202,7 @@ inline void k_kinematics(const Scalar *q, const Scalar *u, const Scalar *p, Scal
     out_kr[1] = u[0];
 }
 
-/* the acceleration-constraint term a at the q' solved at run time (9 temporaries) */
+/* the acceleration-constraint term a at the q' solved at run time (10 temporaries) */
 template <typename Scalar>
 inline void k_accel_terms(const Scalar *q, const Scalar *u, const Scalar *qd, const Scalar *p, Scalar t, Scalar *out_a) noexcept
 {
@@ -215,12 +215,13 @@ inline void k_accel_terms(const Scalar *q, const Scalar *u, const Scalar *qd, co
     const Scalar w1 = (q[0]*q[0]) + w0;
     const Scalar w2 = std::sqrt(w1/w0)/w1;
     const Scalar v0_0 = (Scalar(1.0)/(w0));
-    const Scalar v0_1 = (Scalar(1)/Scalar(2))*std::sqrt(v0_0*w1);
-    const Scalar v0_2 = q[0]*u[0];
+    const Scalar v0_1 = std::sqrt(v0_0*w1);
+    const Scalar v0_2 = (Scalar(1.0)/(v0_1));
+    const Scalar v0_3 = q[0]*u[0];
     const Scalar j0_0 = 2*q[1]*qd[1];
     const Scalar j0_1 = 2*q[0]*qd[0] + j0_0;
-    const Scalar j0_2 = -j0_0*v0_0*v0_1/w1 - j0_1*v0_1/(w1*w1);
-    out_a[0] = q[1]*qd[0]*u[0]*w2 + qd[1]*v0_2*w2 + u[1]*j0_0*w2 + j0_2*(q[1]*v0_2 + u[1]*w0);
+    const Scalar j0_2 = -Scalar(1)/Scalar(2)*j0_0*v0_2/(w0*w0) + j0_1*((Scalar(1)/Scalar(2))*v0_0*v0_2/w1 - v0_1/(w1*w1));
+    out_a[0] = q[1]*qd[0]*u[0]*w2 + qd[1]*v0_3*w2 + u[1]*j0_0*w2 + j0_2*(q[1]*v0_3 + u[1]*w0);
 }
 
 /* everything the right-hand side needs (5 temporaries) */
@@ -320,7 +321,7 @@ inline void k_energy(const Scalar *q, const Scalar *u, const Scalar *p, Scalar t
     out_E[0] = -p[1]*p[2]*q[1] + (Scalar(1)/Scalar(2))*p[1]*((u[0]*u[0]) + (u[1]*u[1]));
 }
 
-/* Jacobian blocks of the linearization (79 temporaries) */
+/* Jacobian blocks of the linearization (83 temporaries) */
 template <typename Scalar>
 inline void k_lin_terms(const Scalar *q, const Scalar *u, const Scalar *qd, const Scalar *ud, const Scalar *lam, const Scalar *r, const Scalar *p, Scalar t, Scalar *out_Kqd, Scalar *out_Ku, Scalar *out_M, Scalar *out_A, Scalar *out_Kq, Scalar *out_Rq, Scalar *out_Ru, Scalar *out_Sq, Scalar *out_Su, Scalar *out_Vq, Scalar *out_Jc, Scalar *out_Sqd) noexcept
 {
@@ -333,84 +334,88 @@ inline void k_lin_terms(const Scalar *q, const Scalar *u, const Scalar *qd, cons
     (void)p;
     (void)t;
     const Scalar w0 = (q[1]*q[1]);
-    const Scalar w1 = (q[0]*q[0]);
-    const Scalar w2 = w0 + w1;
-    const Scalar w3 = std::sqrt(w2/w0);
+    const Scalar w1 = (Scalar(1.0)/(w0));
+    const Scalar w2 = (q[0]*q[0]) + w0;
+    const Scalar w3 = std::sqrt(w1*w2);
     const Scalar w4 = (Scalar(1.0)/(w2));
     const Scalar w5 = w3*w4;
-    const Scalar w6 = q[1]*w5;
-    const Scalar w7 = q[0]*w6;
-    const Scalar w8 = w0*w5;
-    const Scalar w11 = w3/(w2*w2);
-    const Scalar w12 = u[1]*w11;
-    const Scalar w13 = q[0]*u[0];
-    const Scalar w14 = (q[1]*q[1]*q[1]);
-    const Scalar w15 = -w2/w14 + (Scalar(1.0)/(q[1]));
-    const Scalar w16 = w11*w13;
-    const Scalar v0 = w3*w4;
-    const Scalar v2 = (Scalar(1.0)/(w2*w2));
-    const Scalar v7 = 2*w3/(w2*w2*w2);
-    const Scalar v8 = (Scalar(1.0)/(w14));
-    const Scalar v9 = u[0]*w11;
-    const Scalar v10 = 2*w14;
-    const Scalar v11 = (q[1]*q[1]*q[1]*q[1]);
-    const Scalar v12 = v11*w15;
-    const Scalar v13 = qd[0]*w0;
-    const Scalar v14 = -q[0]*v13 + qd[1]*(-v10 + v12);
-    const Scalar v15 = w14*w16;
-    const Scalar v16 = qd[1]*(v11*w12 + v15);
-    const Scalar v17 = 2*w0;
-    const Scalar v18 = qd[1]*(-v17 + w14*w15);
-    const Scalar v19 = qd[1]*w13;
-    const Scalar v20 = qd[1]*w5;
-    const Scalar v21 = 2*qd[1];
-    const Scalar v22 = u[1]*v21;
-    const Scalar v23 = q[1]*qd[0];
-    const Scalar v24 = u[0]*v23;
-    const Scalar v25 = q[1]*w1;
-    const Scalar v26 = qd[0]*u[0]*v25;
-    const Scalar v27 = q[0]*w12;
-    const Scalar v28 = v9*w1;
-    const Scalar v29 = (Scalar(1)/Scalar(2))/std::sqrt(w2);
-    const Scalar d0 = 2*q[1];
-    const Scalar d1 = 2*q[0];
-    const Scalar d3 = (Scalar(1)/Scalar(2))*d1*v0;
-    const Scalar d4 = -d0*v2;
-    const Scalar d5 = -d1*v2;
-    const Scalar d19 = -d1*v7 + d3*v2;
-    const Scalar d21 = u[1]*d19;
-    const Scalar d22 = 3*w0;
-    const Scalar d23 = -d0*v8 + d22*w2/(w14*w14) - 1/(q[1]*q[1]);
-    const Scalar d24 = -d1*v8;
-    const Scalar d26 = d19*w13 + v9;
-    const Scalar d27 = q[0]*w11;
-    const Scalar d30 = q[1]*u[0]*w3*w4 - q[1]*v28 - v27*w0;
-    const Scalar d31 = 2*u[1]*w6 - v10*w12 + v12*w12 + v15*w15 - v17*w16 + w13*w5;
-    const Scalar d32 = q[0]*v20 + qd[0]*(q[1]*w3*w4 - v25*w11) + d27*v18;
-    const Scalar d33 = v14*w11 + v21*w6;
-    const Scalar v1 = (Scalar(1)/Scalar(2))*d0;
-    const Scalar v4 = d4*w3;
-    const Scalar v5 = d3*w4;
-    const Scalar v6 = d5*w3;
-    const Scalar d2 = v0*v1 - v1*w3/w0;
-    const Scalar d7 = v5 + v6;
-    const Scalar d9 = q[1]*d7;
-    const Scalar d10 = q[0]*d9 + w6;
-    const Scalar d13 = d7*w0;
-    const Scalar d14 = -lam[0]*d10;
+    const Scalar w6 = q[0]*q[1];
+    const Scalar w7 = w5*w6;
+    const Scalar w8 = w0*w3;
+    const Scalar w9 = w4*w8;
+    const Scalar w12 = u[0]*w6;
+    const Scalar w13 = (Scalar(1)/Scalar(2))*w4;
+    const Scalar w14 = 2*(u[1]*w0*w13 + w12*w13)/w3;
+    const Scalar w15 = w1*w14 + 2*(-u[1]*w8 - w12*w3)/(w2*w2);
+    const Scalar w16 = u[0]*w5;
+    const Scalar v0 = 2*q[1];
+    const Scalar v1 = (Scalar(1)/Scalar(2))/std::sqrt(w1*w2);
+    const Scalar v2 = v1*w1;
+    const Scalar v3 = (Scalar(1.0)/(w2*w2));
+    const Scalar v4 = (Scalar(1.0)/(w3));
+    const Scalar v5 = 2*w12;
+    const Scalar v6 = 2*u[1];
+    const Scalar v7 = v6*w0;
+    const Scalar v8 = v4*v5 + v4*v7;
+    const Scalar v9 = (-v5*w13 - v7*w13)/(w3*w3);
+    const Scalar v10 = v4*w13;
+    const Scalar v11 = 2*v10;
+    const Scalar v12 = (Scalar(1.0)/(w2*w2*w2));
+    const Scalar v13 = 4*u[1]*w8 + 4*w12*w3;
+    const Scalar v14 = 2*v3;
+    const Scalar v15 = u[1]*v14;
+    const Scalar v16 = v14*w3;
+    const Scalar v17 = v3*v5;
+    const Scalar v18 = q[0]*qd[0] + q[1]*qd[1];
+    const Scalar v19 = q[0]*qd[1] + q[1]*qd[0];
+    const Scalar v20 = (Scalar(1.0)/(q[1]*q[1]*q[1]));
+    const Scalar v21 = v20*w14;
+    const Scalar v22 = qd[1]*v21;
+    const Scalar v23 = qd[1]*w2;
+    const Scalar v24 = v20*v23;
+    const Scalar v25 = qd[1]*v0;
+    const Scalar v26 = u[1]*v25;
+    const Scalar v27 = v6*w5 + w15;
+    const Scalar v28 = (Scalar(1)/Scalar(2))/std::sqrt(w2);
+    const Scalar d0 = v0;
+    const Scalar d1 = -d0/(w0*w0);
+    const Scalar d2 = 2*q[0];
+    const Scalar d3 = d2*v2;
+    const Scalar d4 = d0*v2 + d1*v1*w2;
+    const Scalar d5 = -d2*v3;
+    const Scalar d6 = -d0*v3;
+    const Scalar d7 = d3*w4 + d5*w3;
+    const Scalar d8 = d4*w4 + d6*w3;
+    const Scalar d9 = q[1]*w5 + d7*w6;
+    const Scalar d10 = q[0]*w5 + d8*w6;
+    const Scalar d11 = d3*w0;
+    const Scalar d12 = d0*w3 + d4*w0;
+    const Scalar d13 = d11*w4 + d5*w8;
+    const Scalar d14 = d12*w4 + d6*w8;
+    const Scalar d15 = -lam[0]*d9;
+    const Scalar d16 = -lam[0]*d10;
     const Scalar d17 = -lam[0]*d13;
-    const Scalar d18 = -d0*v7 + d2*v2;
-    const Scalar d20 = u[1]*d18;
-    const Scalar d25 = d18*w13;
-    const Scalar d28 = u[0]*v20 + ud[0]*d10 + ud[1]*d13 - d1*v23*v9 - d19*v26 + d21*v14 + d24*v16 + d26*v18 + d7*v19 + d9*v22 - v13*w12 + v24*v5 + v24*v6;
-    const Scalar v3 = d2*w4;
-    const Scalar d6 = v3 + v4;
-    const Scalar d8 = q[1]*d6 + w5;
-    const Scalar d11 = q[0]*d8;
-    const Scalar d12 = d0*w5 + d6*w0;
-    const Scalar d15 = -lam[0]*d11;
-    const Scalar d16 = -lam[0]*d12;
-    const Scalar d29 = qd[0]*(u[0]*w3*w4 - v28) + qd[1]*d22*(-2*w12 + w15*w16) + 4*qd[1]*w12*w14*w15 + ud[0]*d11 + ud[1]*d12 + d0*(-qd[0]*v27 - v21*w16) - d18*v26 + d20*v14 + d23*v16 + d25*v18 + d6*v19 + d8*v22 + v24*v3 + v24*v4;
+    const Scalar d18 = -lam[0]*d14;
+    const Scalar d19 = q[1]*u[0];
+    const Scalar d20 = q[0]*u[0];
+    const Scalar d21 = (Scalar(1)/Scalar(2))*d5;
+    const Scalar d22 = (Scalar(1)/Scalar(2))*d6;
+    const Scalar d23 = d19*v11 + d21*v8 + d3*v9;
+    const Scalar d24 = d0*v10*v6 + d20*v11 + d22*v8 + d4*v9;
+    const Scalar d25 = v11*w6;
+    const Scalar d26 = v11*w0;
+    const Scalar d27 = -d11*v15 - d19*v16 + d2*v12*v13 + d23*w1 - d3*v17;
+    const Scalar d28 = d0*v12*v13 + d1*w14 - d12*v15 - d20*v16 + d24*w1 - d4*v17;
+    const Scalar d29 = d25*w1 - v16*w6;
+    const Scalar d30 = d26*w1 - v14*w8;
+    const Scalar d31 = u[0]*d7;
+    const Scalar d32 = u[0]*d8;
+    const Scalar d33 = qd[0]*w15 + qd[1]*w16 + ud[0]*d9 + ud[1]*d13 - d2*v22 - d23*v24 + d27*v18 + d31*v19 + d7*v26;
+    const Scalar d34 = qd[0]*w16 + qd[1]*v27 + ud[0]*d10 + ud[1]*d14 - d0*v22 - d24*v24 + d28*v18 + d32*v19 + d8*v26 + 3*v23*w14/(q[1]*q[1]*q[1]*q[1]);
+    const Scalar d35 = -d25*v24 + d29*v18 + v19*w5;
+    const Scalar d36 = -d26*v24 + d30*v18 + v25*w5;
+    const Scalar d37 = q[0]*w15 + q[1]*w16;
+    const Scalar d38 = q[0]*w16 + q[1]*v27 - v21*w2;
     out_Kqd[0] = 0;
     out_Kqd[1] = 1;
     out_Kqd[2] = 1;
@@ -424,29 +429,29 @@ inline void k_lin_terms(const Scalar *q, const Scalar *u, const Scalar *qd, cons
     out_M[2] = 0;
     out_M[3] = p[1];
     out_A[0] = w7;
-    out_A[1] = w8;
+    out_A[1] = w9;
     out_Kq[0] = 0;
     out_Kq[1] = 0;
     out_Kq[2] = 0;
     out_Kq[3] = 0;
-    out_Rq[0] = d14;
-    out_Rq[1] = d15;
+    out_Rq[0] = d15;
+    out_Rq[1] = d16;
     out_Rq[2] = d17;
-    out_Rq[3] = d16;
+    out_Rq[3] = d18;
     out_Ru[0] = 0;
     out_Ru[1] = 0;
     out_Ru[2] = 0;
     out_Ru[3] = 0;
-    out_Sq[0] = d28;
-    out_Sq[1] = d29;
-    out_Su[0] = d32;
-    out_Su[1] = d33;
-    out_Vq[0] = u[0]*d10 + u[1]*d13;
-    out_Vq[1] = u[0]*d11 + u[1]*d12;
-    out_Jc[0] = d1*v29;
-    out_Jc[1] = d0*v29;
-    out_Sqd[0] = d30;
-    out_Sqd[1] = d31;
+    out_Sq[0] = d33;
+    out_Sq[1] = d34;
+    out_Su[0] = d35;
+    out_Su[1] = d36;
+    out_Vq[0] = u[0]*d9 + u[1]*d13;
+    out_Vq[1] = u[0]*d10 + u[1]*d14;
+    out_Jc[0] = d2*v28;
+    out_Jc[1] = d0*v28;
+    out_Sqd[0] = d37;
+    out_Sqd[1] = d38;
 }
 
 // ------------------------------------------------------------ the traits
