@@ -452,13 +452,15 @@ class Interface:
 
     def checks(self, fn):
         """The argument checks of a function in parameter order, as
-        (kind, name, n): kind in default_p, default_r, in, real, out, null."""
+        (kind, name, n): kind in default_p, default_r (NULL takes the
+        default, which is finite by construction; a given array is checked
+        like in), in, real, out, null."""
         out = []
         for a in fn.params:
             n = self.size(a.size)
             if a.role == "in?":
                 out.append(("default_" + a.default, a.name, n))
-            if a.role in ("in", "in?", "inout"):
+            elif a.role in ("in", "inout"):
                 out.append(("in", a.name, n))
             elif a.role == "scalar":
                 out.append(("real", a.name, 0))

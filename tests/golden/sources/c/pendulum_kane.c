@@ -112,7 +112,7 @@ int pendulum_kane_eval_mass_matrix(const pendulum_kane_real *q, const pendulum_k
 {
     PENDULUM_KANE_CHECK_IN(q, 2);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(M);
     return gen_rt_model_eval_mass_matrix(&pendulum_kane_model, q, p, t, M);
@@ -123,9 +123,9 @@ int pendulum_kane_eval_forcing(const pendulum_kane_real *q, const pendulum_kane_
     PENDULUM_KANE_CHECK_IN(q, 2);
     PENDULUM_KANE_CHECK_IN(u, 2);
     if (!r) r = pendulum_kane_r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(f);
     return gen_rt_model_eval_forcing(&pendulum_kane_model, q, u, r, p, t, f);
@@ -138,7 +138,7 @@ int pendulum_kane_eval_kinematics(const pendulum_kane_real *q, const pendulum_ka
     PENDULUM_KANE_CHECK_IN(q, 2);
     PENDULUM_KANE_CHECK_IN(u, 2);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(qdot);
     return gen_rt_model_eval_kinematics(&pendulum_kane_model, q, u, p, t, work, iwork, qdot);
@@ -148,7 +148,7 @@ int pendulum_kane_eval_constraints(const pendulum_kane_real *q, const pendulum_k
 {
     PENDULUM_KANE_CHECK_IN(q, 2);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(fc);
     return gen_rt_model_eval_constraints(&pendulum_kane_model, q, p, t, fc);
@@ -159,7 +159,7 @@ int pendulum_kane_eval_constraint_jacobian(const pendulum_kane_real *q, const pe
     pendulum_kane_real work[GEN_RT_MODEL_JAC_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_IN(q, 2);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(Jc);
     return gen_rt_model_eval_constraint_jacobian(&pendulum_kane_model, q, p, t, work, Jc);
@@ -170,7 +170,7 @@ int pendulum_kane_eval_velocity_constraints(const pendulum_kane_real *q, const p
     PENDULUM_KANE_CHECK_IN(q, 2);
     PENDULUM_KANE_CHECK_IN(u, 2);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(fv);
     return gen_rt_model_eval_velocity_constraints(&pendulum_kane_model, q, u, p, t, fv);
@@ -180,7 +180,7 @@ int pendulum_kane_eval_velocity_constraint_matrix(const pendulum_kane_real *q, c
 {
     PENDULUM_KANE_CHECK_IN(q, 2);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(A);
     PENDULUM_KANE_CHECK_OUT(b);
@@ -192,7 +192,7 @@ int pendulum_kane_eval_energy(const pendulum_kane_real *q, const pendulum_kane_r
     PENDULUM_KANE_CHECK_IN(q, 2);
     PENDULUM_KANE_CHECK_IN(u, 2);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(E);
     return gen_rt_model_eval_energy(&pendulum_kane_model, q, u, p, t, E);
@@ -205,9 +205,9 @@ int pendulum_kane_eval_rhs(pendulum_kane_real t, const pendulum_kane_real *x, co
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_IN(x, 4);
     if (!r) r = pendulum_kane_r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_OUT(dxdt);
     return gen_rt_model_eval_rhs(&pendulum_kane_model, t, x, r, p, work, iwork, dxdt, lam);
 }
@@ -219,9 +219,9 @@ int pendulum_kane_eval_auxiliary_forces(pendulum_kane_real t, const pendulum_kan
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_IN(x, 4);
     if (!r) r = pendulum_kane_r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     return gen_rt_model_eval_auxiliary_forces(&pendulum_kane_model, t, x, r, p, work, iwork, F);
 }
 
@@ -230,7 +230,7 @@ int pendulum_kane_project(pendulum_kane_real t, const pendulum_kane_real *p, pen
     pendulum_kane_real work[GEN_RT_MODEL_PROJECT_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_REAL(t);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_IN(x, 4);
     return gen_rt_model_project(&pendulum_kane_model, t, p, tol, max_iter, work, x);
 }
@@ -241,7 +241,7 @@ int pendulum_kane_consistent_state(pendulum_kane_real t, const pendulum_kane_rea
     int iwork[GEN_RT_MODEL_CONSISTENT_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_REAL(t);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_IN(x, 4);
     return gen_rt_model_consistent_state(&pendulum_kane_model, t, p, tol, max_iter, work, iwork, x);
 }
@@ -270,9 +270,9 @@ int pendulum_kane_step_rk4(pendulum_kane_real t, pendulum_kane_real h, const pen
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_REAL(h);
     if (!r) r = pendulum_kane_r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_IN(x, 4);
     return gen_rt_model_step_rk4(&pendulum_kane_model, t, h, r, p, project, work, iwork, x);
 }
@@ -288,9 +288,9 @@ int pendulum_kane_advance(pendulum_kane_real t0, pendulum_kane_real t1, const pe
     PENDULUM_KANE_CHECK_REAL(t0);
     PENDULUM_KANE_CHECK_REAL(t1);
     if (!r) r = pendulum_kane_r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_OUT(opts);
     PENDULUM_KANE_CHECK_OUT(stats);
     PENDULUM_KANE_CHECK_IN(x, 4);
@@ -345,9 +345,9 @@ int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, 
     int st;
     PENDULUM_KANE_CHECK_IN(x0, 4);
     if (!r) r = pendulum_kane_r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_OUT(t_out);
     PENDULUM_KANE_CHECK_OUT(x_out);
     PENDULUM_KANE_CHECK_OUT(stats);
@@ -400,7 +400,7 @@ int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_rea
     PENDULUM_KANE_CHECK_IN(x0, 4);
     PENDULUM_KANE_CHECK_OUT(in);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_OUT(t_out);
     PENDULUM_KANE_CHECK_OUT(x_out);
     PENDULUM_KANE_CHECK_OUT(stats);
@@ -465,7 +465,7 @@ int pendulum_kane_simulate_events(const pendulum_kane_real *x0, pendulum_kane_re
     PENDULUM_KANE_CHECK_OUT(in);
     PENDULUM_KANE_CHECK_OUT(ev);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_OUT(t_out);
     PENDULUM_KANE_CHECK_OUT(x_out);
     PENDULUM_KANE_CHECK_OUT(stats);
@@ -531,9 +531,9 @@ int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_
     int iwork[GEN_RT_MODEL_LINEARIZE_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_IN(x_op, 4);
     if (!r_op) r_op = pendulum_kane_r_zero;
-    PENDULUM_KANE_CHECK_IN(r_op, 0);
+    else PENDULUM_KANE_CHECK_IN(r_op, 0);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(A);
     return gen_rt_model_linearize(&pendulum_kane_model, x_op, r_op, p, t, work, iwork, A, B);
@@ -546,9 +546,9 @@ int pendulum_kane_jacobian(pendulum_kane_real t, const pendulum_kane_real *x, co
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_IN(x, 4);
     if (!r) r = pendulum_kane_r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_OUT(Jx);
     return gen_rt_model_jacobian(&pendulum_kane_model, t, x, r, p, work, iwork, Jx, Jr);
 }
@@ -560,9 +560,9 @@ int pendulum_kane_step_sensitivity(pendulum_kane_real t, pendulum_kane_real h, c
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_REAL(h);
     if (!r) r = pendulum_kane_r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_IN(x, 4);
     PENDULUM_KANE_CHECK_OUT(Fx);
     return gen_rt_model_step_sensitivity(&pendulum_kane_model, t, h, r, p, work, iwork, x, Fx, Fr);
@@ -573,9 +573,9 @@ int pendulum_kane_eval_outputs(pendulum_kane_real t, const pendulum_kane_real *x
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_IN(x, 4);
     if (!r) r = pendulum_kane_r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     return gen_rt_model_eval_outputs(&pendulum_kane_model, t, x, r, p, y);
 }
 
@@ -585,9 +585,9 @@ int pendulum_kane_linearize_outputs(const pendulum_kane_real *x_op, const pendul
     int iwork[GEN_RT_MODEL_LINEARIZE_OUTPUTS_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED, 0)];
     PENDULUM_KANE_CHECK_IN(x_op, 4);
     if (!r_op) r_op = pendulum_kane_r_zero;
-    PENDULUM_KANE_CHECK_IN(r_op, 0);
+    else PENDULUM_KANE_CHECK_IN(r_op, 0);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(A);
     return gen_rt_model_linearize_outputs(&pendulum_kane_model, x_op, r_op, p, t, work, iwork, A, B, C, D);
@@ -599,9 +599,9 @@ int pendulum_kane_linearize_discrete(const pendulum_kane_real *x_op, const pendu
     int iwork[GEN_RT_MODEL_LINEARIZE_DISCRETE_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_IN(x_op, 4);
     if (!r_op) r_op = pendulum_kane_r_zero;
-    PENDULUM_KANE_CHECK_IN(r_op, 0);
+    else PENDULUM_KANE_CHECK_IN(r_op, 0);
     if (!p) p = pendulum_kane_p_default;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_REAL(dt);
     PENDULUM_KANE_CHECK_OUT(Ad);

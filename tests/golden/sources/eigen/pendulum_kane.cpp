@@ -112,7 +112,7 @@ int pendulum_kane_eval_mass_matrix(const pendulum_kane_real *q, const pendulum_k
 {
     PENDULUM_KANE_CHECK_IN(q, 2);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(M);
     mdl::MassMatrix<S> Mo;
@@ -127,9 +127,9 @@ int pendulum_kane_eval_forcing(const pendulum_kane_real *q, const pendulum_kane_
     PENDULUM_KANE_CHECK_IN(q, 2);
     PENDULUM_KANE_CHECK_IN(u, 2);
     if (!r) r = r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(f);
     mdl::Speeds<S> fo;
@@ -145,7 +145,7 @@ int pendulum_kane_eval_kinematics(const pendulum_kane_real *q, const pendulum_ka
     PENDULUM_KANE_CHECK_IN(q, 2);
     PENDULUM_KANE_CHECK_IN(u, 2);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(qdot);
     mdl::Coords<S> qo;
@@ -160,7 +160,7 @@ int pendulum_kane_eval_constraints(const pendulum_kane_real *q, const pendulum_k
 {
     PENDULUM_KANE_CHECK_IN(q, 2);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(fc);
     mdl::ConfigResiduals<S> fo;
@@ -174,7 +174,7 @@ int pendulum_kane_eval_constraint_jacobian(const pendulum_kane_real *q, const pe
 {
     PENDULUM_KANE_CHECK_IN(q, 2);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(Jc);
     mdl::ConstraintJacobian<S> Jo;
@@ -189,7 +189,7 @@ int pendulum_kane_eval_velocity_constraints(const pendulum_kane_real *q, const p
     PENDULUM_KANE_CHECK_IN(q, 2);
     PENDULUM_KANE_CHECK_IN(u, 2);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(fv);
     mdl::Multipliers<S> fo;
@@ -204,7 +204,7 @@ int pendulum_kane_eval_velocity_constraint_matrix(const pendulum_kane_real *q, c
 {
     PENDULUM_KANE_CHECK_IN(q, 2);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(A);
     PENDULUM_KANE_CHECK_OUT(b);
@@ -223,7 +223,7 @@ int pendulum_kane_eval_energy(const pendulum_kane_real *q, const pendulum_kane_r
     PENDULUM_KANE_CHECK_IN(q, 2);
     PENDULUM_KANE_CHECK_IN(u, 2);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(E);
     return mdl::eval_energy<S>(In<mdl::NQ, 1>(q), In<mdl::NU, 1>(u), In<mdl::NP, 1>(p), t, *E);
@@ -234,9 +234,9 @@ int pendulum_kane_eval_rhs(pendulum_kane_real t, const pendulum_kane_real *x, co
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_IN(x, 4);
     if (!r) r = r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_OUT(dxdt);
     mdl::State<S> dx;
     int st;
@@ -258,9 +258,9 @@ int pendulum_kane_eval_auxiliary_forces(pendulum_kane_real t, const pendulum_kan
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_IN(x, 4);
     if (!r) r = r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     (void)t;
     (void)x;
     (void)r;
@@ -274,9 +274,9 @@ int pendulum_kane_jacobian(pendulum_kane_real t, const pendulum_kane_real *x, co
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_IN(x, 4);
     if (!r) r = r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_OUT(Jx);
     mdl::Mat<S, mdl::NX, mdl::NX> J;
     mdl::Mat<S, mdl::NX, mdl::NR> Jrr;
@@ -293,9 +293,9 @@ int pendulum_kane_step_sensitivity(pendulum_kane_real t, pendulum_kane_real h, c
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_REAL(h);
     if (!r) r = r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_IN(x, 4);
     PENDULUM_KANE_CHECK_OUT(Fx);
     mdl::State<S> xs = In<mdl::NX, 1>(x);
@@ -314,9 +314,9 @@ int pendulum_kane_eval_outputs(pendulum_kane_real t, const pendulum_kane_real *x
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_IN(x, 4);
     if (!r) r = r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     (void)t;
     (void)x;
     (void)r;
@@ -329,9 +329,9 @@ int pendulum_kane_linearize_outputs(const pendulum_kane_real *x_op, const pendul
 {
     PENDULUM_KANE_CHECK_IN(x_op, 4);
     if (!r_op) r_op = r_zero;
-    PENDULUM_KANE_CHECK_IN(r_op, 0);
+    else PENDULUM_KANE_CHECK_IN(r_op, 0);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(A);
     mdl::StateMatrix<S> Al;
@@ -352,7 +352,7 @@ int pendulum_kane_project(pendulum_kane_real t, const pendulum_kane_real *p, pen
 {
     PENDULUM_KANE_CHECK_REAL(t);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_IN(x, 4);
     mdl::State<S> xs = In<mdl::NX, 1>(x);
     const int st = mdl::project<S>(t, In<mdl::NP, 1>(p), tol, max_iter, xs);
@@ -365,7 +365,7 @@ int pendulum_kane_consistent_state(pendulum_kane_real t, const pendulum_kane_rea
 {
     PENDULUM_KANE_CHECK_REAL(t);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_IN(x, 4);
     mdl::State<S> xs = In<mdl::NX, 1>(x);
     const int st = mdl::consistent_state<S>(t, In<mdl::NP, 1>(p), tol, max_iter, xs);
@@ -397,9 +397,9 @@ int pendulum_kane_step_rk4(pendulum_kane_real t, pendulum_kane_real h, const pen
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_REAL(h);
     if (!r) r = r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_IN(x, 4);
     mdl::State<S> xs = In<mdl::NX, 1>(x);
     const int st = mdl::step_rk4<S>(t, h, In<mdl::NR, 1>(r), In<mdl::NP, 1>(p), project != 0, xs);
@@ -413,9 +413,9 @@ int pendulum_kane_advance(pendulum_kane_real t0, pendulum_kane_real t1, const pe
     PENDULUM_KANE_CHECK_REAL(t0);
     PENDULUM_KANE_CHECK_REAL(t1);
     if (!r) r = r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_OUT(opts);
     PENDULUM_KANE_CHECK_OUT(stats);
     PENDULUM_KANE_CHECK_IN(x, 4);
@@ -438,9 +438,9 @@ int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, 
 {
     PENDULUM_KANE_CHECK_IN(x0, 4);
     if (!r) r = r_zero;
-    PENDULUM_KANE_CHECK_IN(r, 0);
+    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_OUT(t_out);
     PENDULUM_KANE_CHECK_OUT(x_out);
     PENDULUM_KANE_CHECK_OUT(stats);
@@ -458,7 +458,7 @@ int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_rea
     PENDULUM_KANE_CHECK_IN(x0, 4);
     PENDULUM_KANE_CHECK_OUT(in);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_OUT(t_out);
     PENDULUM_KANE_CHECK_OUT(x_out);
     PENDULUM_KANE_CHECK_OUT(stats);
@@ -488,7 +488,7 @@ int pendulum_kane_simulate_events(const pendulum_kane_real *x0, pendulum_kane_re
     PENDULUM_KANE_CHECK_OUT(in);
     PENDULUM_KANE_CHECK_OUT(ev);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_OUT(t_out);
     PENDULUM_KANE_CHECK_OUT(x_out);
     PENDULUM_KANE_CHECK_OUT(stats);
@@ -527,9 +527,9 @@ int pendulum_kane_linearize_discrete(const pendulum_kane_real *x_op, const pendu
 {
     PENDULUM_KANE_CHECK_IN(x_op, 4);
     if (!r_op) r_op = r_zero;
-    PENDULUM_KANE_CHECK_IN(r_op, 0);
+    else PENDULUM_KANE_CHECK_IN(r_op, 0);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_REAL(dt);
     PENDULUM_KANE_CHECK_OUT(Ad);
@@ -547,9 +547,9 @@ int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_
 {
     PENDULUM_KANE_CHECK_IN(x_op, 4);
     if (!r_op) r_op = r_zero;
-    PENDULUM_KANE_CHECK_IN(r_op, 0);
+    else PENDULUM_KANE_CHECK_IN(r_op, 0);
     if (!p) p = mdl::p_default<S>;
-    PENDULUM_KANE_CHECK_IN(p, 3);
+    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_OUT(A);
     (void)B;
