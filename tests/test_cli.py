@@ -94,7 +94,7 @@ def test_verify_passes_then_catches_tampering(tmp_path):
     assert "all functions agree" in p.stdout and "eval_rhs" in p.stdout
     out = tmp_path / "pend"
     eomgen("generate", SEED, "-o", str(out), check_rc=0)
-    src = out / "pendulum_kane.c"
+    src = out / "pendulum_kane_kernels.c"
     src.write_text(src.read_text().replace("sqrt(", "fabs(", 1))
     p = eomgen("verify", SEED, "--samples", "5", "--sources", str(out), check_rc=1)
     assert "MISMATCH" in p.stdout and "FAIL" in p.stdout
