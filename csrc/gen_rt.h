@@ -63,17 +63,22 @@ const char *gen_rt_status_message(int status);
 /* 1 if all n values are finite. */
 int gen_rt_all_finite(int n, const gen_rt_real *v);
 
-/* The same, inline: for the argument checks of the generated functions,
- * where n is a constant the compiler unrolls (no call per array). */
+/* The same, inline and branch-free: for the argument checks of the
+ * generated functions, where n is often a constant the compiler unrolls.
+ * x * 0 is 0 for a finite x and NaN for NaN and inf, so the sums are NaN
+ * iff one value is not finite (two sums: half the dependency chain; no
+ * libm). */
 static inline int gen_rt_finite_n(int n, const gen_rt_real *v)
 {
+    gen_rt_real a0 = 0, a1 = 0;
     int i;
-    for (i = 0; i < n; ++i) {
-        /* x - x is NaN for NaN and inf, 0 otherwise; no libm needed */
-        gen_rt_real d = v[i] - v[i];
-        if (d != d) return 0;
+    for (i = 0; i + 1 < n; i += 2) {
+        a0 += v[i] * 0;
+        a1 += v[i + 1] * 0;
     }
-    return 1;
+    if (i < n) a0 += v[i] * 0;
+    a0 += a1;
+    return a0 == a0;
 }
 
 /* ---- dense linear algebra (gen_rt_linalg.c) --------------------------- */
@@ -324,6 +329,14 @@ typedef struct gen_rt_model {
     void (*output_jacobian)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
                             const gen_rt_real *p, gen_rt_real t, gen_rt_real *Yq,
                             gen_rt_real *Yu, gen_rt_real *Yr);
+    /* the unconstrained right-hand side in one function (explicit kinematics
+     * and GEN_RT_ACCEL_LDLT): q' (qd), M, f and u' (ud) by the model's
+     * unrolled LDL^T, M and f kept in registers between the two; a status
+     * (GEN_RT_ERR_SINGULAR on a failed pivot); NULL when the model has none
+     * (then the runtime calls rhs_terms and mass_solve) */
+    int (*rhs_solve)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
+                     const gen_rt_real *p, gen_rt_real t, gen_rt_real *qd, gen_rt_real *M,
+                     gen_rt_real *f, gen_rt_real *ud);
 } gen_rt_model;
 
 /* integration methods (gen_rt_sim_options.method) */

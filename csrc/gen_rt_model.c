@@ -122,17 +122,22 @@ static int rhs_(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
                 const gen_rt_real *r, const gen_rt_real *p, gen_rt_real *work, int *iwork,
                 gen_rt_real *dxdt, gen_rt_real *lam);
 
+/* a failure at a state that has run away (beyond GEN_RT_DIVERGED_ABS, or
+ * an integrator stage that overflowed) is divergence, not a singular
+ * configuration of the model */
+static int failure_at_(const gen_rt_model *m, const gen_rt_real *x, int st)
+{
+    if (!gen_rt_all_finite(NX_(m), x) || gen_rt_max_abs(NX_(m), x) > GEN_RT_DIVERGED_ABS)
+        return GEN_RT_ERR_DIVERGED;
+    return st;
+}
+
 int gen_rt_model_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
                      const gen_rt_real *r, const gen_rt_real *p, gen_rt_real *work,
                      int *iwork, gen_rt_real *dxdt, gen_rt_real *lam)
 {
     int st = rhs_(m, t, x, r, p, work, iwork, dxdt, lam);
-    /* a failure at a state that has run away (beyond GEN_RT_DIVERGED_ABS, or
-     * an integrator stage that overflowed) is divergence, not a singular
-     * configuration of the model */
-    if (st && (!gen_rt_all_finite(NX_(m), x) || gen_rt_max_abs(NX_(m), x) > GEN_RT_DIVERGED_ABS))
-        return GEN_RT_ERR_DIVERGED;
-    return st;
+    return st ? failure_at_(m, x, st) : GEN_RT_OK;
 }
 
 static int rhs_(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
@@ -143,6 +148,19 @@ static int rhs_(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
     const gen_rt_real *q = x, *u = x + nq;
     gen_rt_real *M = work, *f = M + nu * nu, *A = f + nu, *a = A + mv * nu,
                 *Kqd = a + mv;
+    if (m->accel == GEN_RT_ACCEL_LDLT && m->explicit_kinematics) {
+        /* the common unconstrained case in one pass (no constraints with
+         * LDL^T): q' and u' from the model's fused right-hand side (or its
+         * kernel and its solve), one check of the whole x'; a failure goes
+         * through the general path below, which names it */
+        if (m->rhs_solve) {
+            st = m->rhs_solve(q, u, r, p, t, dxdt, M, f, dxdt + nq);
+        } else {
+            m->rhs_terms(q, u, r, p, t, NULL, dxdt, M, f, NULL, NULL);
+            st = m->mass_solve(M, f, dxdt + nq);
+        }
+        if (!st && gen_rt_finite_n(nq + nu, dxdt)) return GEN_RT_OK;
+    }
     gen_rt_real *w = Kqd + (m->explicit_kinematics ? 0 : nq * nq);
     int *kpiv = iwork, *iw = iwork + nq;
     m->rhs_terms(q, u, r, p, t, m->explicit_kinematics ? NULL : Kqd, dxdt, M, f,
@@ -180,8 +198,19 @@ int gen_rt_model_eval_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_rea
                           const gen_rt_real *r, const gen_rt_real *p, gen_rt_real *work,
                           int *iwork, gen_rt_real *dxdt, gen_rt_real *lam)
 {
-    int st = gen_rt_model_rhs(m, t, x, r, p, work + NX_(m), iwork, work, lam);
-    if (st) return st;
+    int st;
+    if (m->rhs_solve) {
+        /* the fused right-hand side, straight (rhs_ below names a failure) */
+        const int nq = m->nq, nu = m->nu;
+        gen_rt_real *M = work + nq + nu;
+        st = m->rhs_solve(x, x + nq, r, p, t, work, M, M + nu * nu, work + nq);
+        if (!st && gen_rt_finite_n(nq + nu, work)) {
+            copy_n(nq + nu, work, dxdt);
+            return GEN_RT_OK;
+        }
+    }
+    st = rhs_(m, t, x, r, p, work + NX_(m), iwork, work, lam);
+    if (st) return failure_at_(m, x, st);
     copy_n(NX_(m), work, dxdt);
     return GEN_RT_OK;
 }

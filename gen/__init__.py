@@ -3,8 +3,9 @@ verified C simulators.
 
     model = gen.Model.from_kanes(km, constants={...}, name="pend")
     gen.generate(model, "out/")            # C sources + CMake project
-    sim = gen.compile(model)               # cffi module, numpy in and out
+    sim = gen.compile(model)               # a model library, numpy in and out
     A, B = sim.linearize(x_op)
+    res = sim.ensemble(x0, 5.0, 1e-3, p=gen.Sampler(1).draw(10**5, m=("uniform", 0.8, 1.2)))
     A, B = gen.linearize_symbolic(model, {q1: L, q2: 0})   # sympy matrices
     gen.export_fmu(model, "pend.fmu", fmi_version="3.0")   # FMI 2.0/3.0, ME and CS
 """
@@ -19,7 +20,9 @@ from .symbolic import linearize_symbolic  # noqa: E402
 from .verify import VerifyReport, verify  # noqa: E402
 from .control import LinearFeedback  # noqa: E402
 from .fmu import export_fmu  # noqa: E402
+from .ensemble import At, EnsembleResult, Final, Max, Mean, Min, Sampler  # noqa: E402
 
 __all__ = ["Model", "generate", "compile", "EomgenError", "ModelError", "BuildError",
            "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
-           "export_fmu", "__version__"]
+           "export_fmu", "Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult",
+           "__version__"]

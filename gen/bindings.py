@@ -757,6 +757,41 @@ class Simulator:
         return (t, np.stack([res[1] for res in results]),
                 *([np.stack([res[k] for res in results]) for k in range(2, len(results[0]))]))
 
+    def ensemble(self, x0, t_end, dt, p=None, r=None, controller=None, reduce="final",
+                 client=None, chunk=None, method="rk4", rtol=1e-8, atol=1e-10, project=True,
+                 t0=0.0, max_steps=100000, consistent=False, workers=None, progress=None,
+                 input_period=None, input_hold="zoh"):
+        """N simulations in C, in chunks on every core (threads, the GIL
+        released) or on a Dask cluster (client=), reduced as they finish.
+        Returns a gen.EnsembleResult (res.final, res[key], res.status,
+        res.failures, res.runs_per_second).
+
+        x0, p: one value for every run, an (N, nx) / (N, np) array, or a dict
+        {name: number or (N,) array} (x0's other states 0, p's other
+        constants their defaults); gen.Sampler draws such dicts. r: constant
+        inputs (one row, (N, nr) or a dict), or a table (t_grid, R) shared
+        by every run; controller: a gen.LinearFeedback (shared). A Python
+        function r(t, x) is refused (it would hold the GIL at every step).
+
+        reduce: "final" (the state at t_end, (N, nx)), gen.At(times, names),
+        gen.Min/Max/Mean(names) (over the output rows), a function f(t, X)
+        called per chunk on its full trajectories, or a dict {key: reducer};
+        failed runs give NaN rows and are listed in res.failures with their
+        status and last state. consistent=True solves each run's dependent
+        states first (sim.consistent_state). chunk: runs per C call (default:
+        a few chunks per worker); workers: threads (default every core);
+        progress: a tqdm bar (None: on a terminal). method, rtol, atol,
+        project, t0, max_steps, input_period, input_hold: as simulate().
+
+        Each run is exactly sim.simulate of its own x0, p, r (the same C
+        path), so the results do not depend on chunk, workers or client."""
+        from .ensemble import run_ensemble
+        return run_ensemble(self, x0, t_end, dt, p=p, r=r, controller=controller,
+                            reduce=reduce, client=client, chunk=chunk, method=method, rtol=rtol,
+                            atol=atol, project=project, t0=t0, max_steps=max_steps,
+                            consistent=consistent, workers=workers, progress=progress,
+                            input_period=input_period, input_hold=input_hold)
+
     def __repr__(self):
         return (f"<eomgen Simulator '{self.name}' ({self.method}, {self.real}): "
                 f"nq={self.nq} nu={self.nu} nr={self.nr} np={self.np} mc={self.mc} mv={self.mv}>")

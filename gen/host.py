@@ -41,15 +41,28 @@ _modules = {}          # real -> loaded module
 _libraries = {}        # path -> ctypes handle (kept open for the process)
 
 
-def host_sources(real="double"):
-    """(cdef, C source) of the host module for a scalar type."""
+# hand-written parts of the host (csrc/host): declarations, definitions
+HOST_PARTS = [("gen_host_ensemble.h", "gen_host_ensemble.c")]
+
+
+def host_sources(real="double", hand_written=True):
+    """(cdef, C source) of the host module for a scalar type: the
+    forwarders rendered from the interface description, then (unless
+    hand_written=False) the hand-written parts (csrc/host: the ensemble
+    loop)."""
     from .render import template_env
+    from .resources import csrc_dir
     env = template_env()
     iface = host_interface(real)
     decl = env.get_template("cffi/host.h.j2").render(iface=iface, real=real)
+    extra_decl, extra_src = [], []
+    for h, c in HOST_PARTS if hand_written else ():
+        extra_decl.append((csrc_dir() / "host" / h).read_text())
+        extra_src.append((csrc_dir() / "host" / c).read_text())
+    decl = decl + "\n" + "\n".join(extra_decl)
     source = env.get_template("cffi/host.c.j2").render(iface=iface, real=real,
                                                        declarations=decl)
-    return decl, source
+    return decl, source + "\n" + "\n".join(extra_src)
 
 
 def _key(real, cdef, source):

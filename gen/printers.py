@@ -156,13 +156,13 @@ class ModelCPrinter(C99CodePrinter):
         return "0"
 
 
-def print_kernel_body(kernel, printer, indent="    "):
+def print_kernel_body(kernel, printer, indent="    ", bind=None):
     """Lines of C for a kernel: temporaries then output stores. Each
     expression goes to the printer's _print directly: what doprint adds
     (assignment targets, a walk for UnevaluatedExpr, code formatting,
     collecting unsupported nodes) does nothing for a kernel's single-line
     expressions, and strict printers raise on an unsupported node in _print
-    itself."""
+    itself. bind: {output: prefix}: those outputs also as locals prefix<k>."""
     lines = []
     rt = printer.real_type
     printer._not_supported = set()
@@ -170,9 +170,16 @@ def print_kernel_body(kernel, printer, indent="    "):
     pr = printer._print
     for s, e in kernel.assignments:
         lines.append(f"{indent}const {rt} {s.name} = {pr(e)};")
+    bind = bind or {}
     for o in kernel.outputs:
         for k, e in enumerate(o.exprs):
-            lines.append(f"{indent}out_{o.name}[{k}] = {pr(e)};")
+            if o.name in bind:
+                # a named local first (read again by what follows the kernel)
+                v = f"{bind[o.name]}{k}"
+                lines.append(f"{indent}const {rt} {v} = {pr(e)};")
+                lines.append(f"{indent}out_{o.name}[{k}] = {v};")
+            else:
+                lines.append(f"{indent}out_{o.name}[{k}] = {pr(e)};")
     return lines
 
 

@@ -175,15 +175,17 @@ def template_env():
     return _env(str(templates_dir()))
 
 
-def _kernel_context(kernels, printer):
-    """Kernels as data: names, arguments, outputs and the printed body."""
+def _kernel_context(kernels, printer, bind=None):
+    """Kernels as data: names, arguments, outputs and the printed body
+    (bind: {kernel: {output: local prefix}}, print_kernel_body)."""
     out = []
+    bind = bind or {}
     for k in kernels.values():
         out.append({
             "name": k.name,
             "args": [{"name": a.name, "scalar": a.scalar} for a in k.args],
             "outputs": [o.name for o in k.outputs],
-            "body": print_kernel_body(k, printer),
+            "body": print_kernel_body(k, printer, bind=bind.get(k.name)),
             "doc": _KERNEL_DOCS.get(k.name, k.name),
             "n_assign": len(k.assignments),
         })
@@ -249,7 +251,13 @@ def build_context(plan, iface, timings=None, backend="c"):
     else:
         printer = ModelCPrinter(_symbol_map(m, kernels), real)
     p = m.name
-    kctx = _kernel_context(kernels, printer)
+    # the fused right-hand side (C backend, unconstrained, explicit
+    # kinematics, the unrolled LDL^T): rhs_terms also solves for u', its M
+    # and f bound to locals the solve reads (gen_rt_model.rhs_solve)
+    fused = (backend == "c" and plan.accel == "ldlt" and m.qdot is not None
+             and "rhs_terms" in kernels)
+    kctx = _kernel_context(kernels, printer,
+                           bind={"rhs_terms": {"M": "m_", "f": "f_"}} if fused else None)
     t2 = time.perf_counter()
     mx = lambda n: max(1, n)  # noqa: E731  C99 has no zero-length arrays
     nq, nu, nr, mc, mv = m.nq, m.nu, m.nr, m.mc, m.mv
@@ -304,6 +312,7 @@ def build_context(plan, iface, timings=None, backend="c"):
         # the arguments of the runtime's work-size macros
         "accel_c": iface.accel_macro,
         "mass_solve": (ldlt_program(m.nu, plan.mass_nonzero) if plan.accel == "ldlt" else None),
+        "fused_rhs": fused,
         # array sizes (C99 and C++ have no zero-length arrays)
         "sz": {"nqi": mx(nq - mc), "nui": mx(nu - mv), "mc": mx(mc), "mv": mx(mv),
                "np": mx(m.np), "nr": mx(nr)},

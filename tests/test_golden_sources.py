@@ -48,7 +48,8 @@ def render(model, backend, real="double"):
         core = gen.ir.plan(model, derivatives=False)
         files.update(gen.render.render(core, real=real, backend=backend, project=False,
                                        only={"stub"}).files)
-        files["host/host.h"], files["host/host.c"] = gen.host.host_sources(real)
+        files["host/host.h"], files["host/host.c"] = gen.host.host_sources(real,
+                                                                            hand_written=False)
     return files
 
 

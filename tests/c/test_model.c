@@ -130,7 +130,7 @@ static gen_rt_model pend_model(int accel)
     m.rhs_terms = p_rhs_terms; m.constraints = p_constraints; m.constraint_jacobian = p_jac;
     m.velocity_constraints = p_vc; m.velocity_constraint_matrix = p_vcm;
     m.energy = p_energy; m.lin_terms = p_lin; m.mass_solve = NULL;
-    m.na = 0; m.auxiliary = NULL; m.accel_terms = NULL;
+    m.na = 0; m.auxiliary = NULL; m.accel_terms = NULL; m.rhs_solve = NULL;
     m.ny = 0; m.outputs = NULL; m.output_jacobian = NULL;
     return m;
 }
@@ -183,6 +183,15 @@ static int o_solve(const gen_rt_real *M, const gen_rt_real *f, gen_rt_real *x)
     return GEN_RT_OK;
 }
 
+/* the fused right-hand side (rhs_solve) of a generated LDL^T model */
+static int o_rhs_solve(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
+                       const gen_rt_real *p, gen_rt_real t, gen_rt_real *qd, gen_rt_real *M,
+                       gen_rt_real *f, gen_rt_real *ud)
+{
+    o_rhs_terms(q, u, r, p, t, NULL, qd, M, f, NULL, NULL);
+    return o_solve(M, f, ud);
+}
+
 /* two made-up reactions R of the oscillator: F R + g = 0 with g = [m x'', x]
  * and the constant F = [[2, 1], [1, 3]] (the singular [[1, 2], [2, 4]] when
  * x > 100) */
@@ -214,6 +223,7 @@ static gen_rt_model osc_model(int accel)
     m.energy = NULL; m.lin_terms = o_lin;
     m.mass_solve = accel == GEN_RT_ACCEL_LDLT ? o_solve : NULL;
     m.na = 0; m.auxiliary = NULL; m.accel_terms = NULL;
+    m.rhs_solve = accel == GEN_RT_ACCEL_LDLT ? o_rhs_solve : NULL;
     m.ny = 0; m.outputs = NULL; m.output_jacobian = NULL;
     return m;
 }

@@ -78,7 +78,8 @@ static const gen_rt_model pendulum_kane_model = {
     NULL,
     0, NULL,
     pendulum_kane_k_accel_terms,
-    0, NULL, NULL
+    0, NULL, NULL,
+    NULL
 };
 
 /* ------------------------------------------------------------------ */

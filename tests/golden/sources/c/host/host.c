@@ -115,6 +115,7 @@ int eomgen_mass_matrix_batch(const eomgen_api *api, int n, const eomgen_real *q,
 int eomgen_linearize_batch(const eomgen_api *api, int n, const eomgen_real *x, const eomgen_real *r, int r_stride, const eomgen_real *p, int p_stride, eomgen_real t, eomgen_real *A, eomgen_real *B, int *status);
 
 
+
 const char * eomgen_status_message(const eomgen_api *api, int status)
 {
     return api->status_message(status);
@@ -292,3 +293,4 @@ int eomgen_linearize_batch(const eomgen_api *api, int n, const eomgen_real *x,
     }
     return -1;
 }
+

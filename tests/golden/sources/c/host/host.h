@@ -111,3 +111,4 @@ int eomgen_linearize_discrete(const eomgen_api *api, const eomgen_real *x_op, co
 int eomgen_rhs_batch(const eomgen_api *api, int n, const eomgen_real *t, int t_stride, const eomgen_real *x, const eomgen_real *r, int r_stride, const eomgen_real *p, int p_stride, eomgen_real *dxdt, int *status);
 int eomgen_mass_matrix_batch(const eomgen_api *api, int n, const eomgen_real *q, int q_stride, const eomgen_real *p, int p_stride, eomgen_real *M, int *status);
 int eomgen_linearize_batch(const eomgen_api *api, int n, const eomgen_real *x, const eomgen_real *r, int r_stride, const eomgen_real *p, int p_stride, eomgen_real t, eomgen_real *A, eomgen_real *B, int *status);
+
