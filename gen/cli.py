@@ -27,6 +27,7 @@ EXAMPLES = """examples:
   eomgen build examples/seed_pendulum.py:lagrange_model -o out/pend_lagrange
   eomgen simulate examples/seed_pendulum.py --t-end 5 --x0 q2=0.5 --csv run.csv --plot run.png
   eomgen simulate examples/seed_pendulum.py --t-end 5 --x0 q2=0.5 --method dopri5 --event q2:-1:terminal
+  eomgen ensemble examples/seed_pendulum.py --samples 10000 --param L=uniform:0.8:1.2 --x0 q2=normal:0:0.3 --t-end 5 -o res.npz
   eomgen linearize examples/seed_pendulum.py --at q1=1 --at q2=0
   eomgen verify examples/seed_pendulum.py --samples 20
   eomgen generate examples/seed_pendulum.py -o out/pend_f --real float
@@ -412,6 +413,121 @@ def _read_input_table(sim, path):
     return data[:, 0], R
 
 
+def _reducers_arg(items):
+    """--reduce final | min:NAMES | max:NAMES | mean:NAMES | at:T1,T2[:NAMES]
+    (repeat) -> {key: reducer} of sim.ensemble."""
+    from .ensemble import At, Max, Mean, Min
+    out = {}
+    for it in items or ["final"]:
+        kind, _, rest = it.partition(":")
+        if kind == "final" and not rest:
+            out["final"] = "final"
+            continue
+        if kind in ("min", "max", "mean"):
+            if not rest:
+                raise UsageError(f"--reduce {it!r}: give the names, {kind}:NAME[,NAME...]")
+            out[f"{kind}"] = {"min": Min, "max": Max, "mean": Mean}[kind](rest.split(","))
+            continue
+        if kind == "at":
+            times, _, names = rest.partition(":")
+            if not times:
+                raise UsageError(f"--reduce {it!r}: at:T1[,T2...][:NAME[,NAME...]]")
+            ts = [_number(v, f"--reduce {it!r}: a time") for v in times.split(",")]
+            out["at"] = At(ts, names.split(",") if names else None)
+            continue
+        raise UsageError(f"--reduce {it!r}: final, min:NAMES, max:NAMES, mean:NAMES or "
+                         "at:TIMES[:NAMES]")
+    return out
+
+
+def _sampled(items, names, labels, what, sampler, n):
+    """--param/--x0 NAME=SPEC (a number, uniform:LOW:HIGH, normal:MEAN:STD)
+    -> {C name: (n,) values}, drawn in the order given."""
+    from .ensemble import Sampler
+    specs = {}
+    for it in items or []:
+        if "=" not in it:
+            raise UsageError(f"--{what} must be NAME=VALUE or NAME=uniform:LOW:HIGH or "
+                             f"NAME=normal:MEAN:STD, got {it!r}")
+        k, v = (x.strip() for x in it.split("=", 1))
+        if k in labels and k not in names:
+            k = names[list(labels).index(k)]
+        if k not in names:
+            raise UsageError(f"unknown {what} name {k!r}; known: {', '.join(names) or 'none'}")
+        try:
+            specs[k] = Sampler.parse(v)
+        except ValueError as e:
+            raise UsageError(f"--{what} {it!r}: {e}") from None
+    try:
+        return sampler.draw(n, **specs) if specs else {}
+    except ValueError as e:
+        raise UsageError(f"--{what}: {e}") from None
+
+
+def cmd_ensemble(a, progress):
+    import numpy as np
+
+    from .ensemble import Sampler
+    m = load_model(a.file, progress)
+    sim = _compile(m, a, progress)
+    if a.samples < 1:
+        raise UsageError(f"--samples must be at least 1, got {a.samples}")
+    if not a.t_end > 0 or not a.dt > 0:
+        raise UsageError("--t-end and --dt must be positive")
+    sampler = Sampler(a.seed)
+    x0 = _sampled(a.x0, sim.state_names, sim.state_labels, "x0", sampler, a.samples)
+    p = _sampled(a.param, sim.constant_names, sim.constant_labels, "param", sampler, a.samples)
+    r = _sampled(a.input, sim.input_names, sim.input_labels, "input", sampler, a.samples)
+    reduce = _reducers_arg(a.reduce)
+    client = None
+    if a.scheduler:
+        try:
+            from distributed import Client
+        except ImportError:
+            raise UsageError("--scheduler needs dask.distributed: pip install "
+                                    "'eomgen[dask]'") from None
+        client = Client(a.scheduler)
+    out = Path(a.output)
+    if out.suffix not in (".npz", ".parquet"):
+        raise UsageError(f"-o {a.output}: write .npz or .parquet")
+    n = a.samples
+    with progress.stage(f"{n} runs of {a.t_end:g} s ({a.method})"):
+        res = sim.ensemble(x0 or np.zeros((n, sim.nx)), a.t_end, a.dt, p=p or None, r=r or None,
+                           reduce=reduce, client=client, chunk=a.chunk, method=a.method,
+                           rtol=a.rtol, atol=a.atol, workers=a.workers,
+                           consistent=not a.no_consistent and bool(sim.mc or sim.mv),
+                           progress=None if not a.quiet else False)
+    cols = {f"x0.{k}": v for k, v in x0.items()}
+    cols.update({f"param.{k}": v for k, v in p.items()})
+    cols.update({f"input.{k}": v for k, v in r.items()})
+    cols["status"] = res.status
+    with progress.stage(f"write {out}"):
+        out.parent.mkdir(parents=True, exist_ok=True)
+        if out.suffix == ".npz":
+            np.savez(out, t=res.t, **cols, **{k: np.asarray(v) for k, v in res.values.items()})
+        else:
+            try:
+                import pandas as pd
+            except ImportError:
+                raise UsageError("-o .parquet needs pandas and pyarrow: pip install "
+                                        "pandas pyarrow (or write .npz)") from None
+            for k, v in res.values.items():
+                v = np.asarray(v).reshape(res.n, -1)
+                for j in range(v.shape[1]):
+                    cols[f"{k}.{j}" if v.shape[1] > 1 else k] = v[:, j]
+            try:
+                pd.DataFrame(cols).to_parquet(out)
+            except ImportError as e:
+                raise UsageError(f"-o .parquet: {e}") from None
+    fails = res.failures
+    print(f"{res.n} runs, {len(fails)} failed, {res.runs_per_second:.0f} runs/s -> {out}")
+    for i, name, t, _x in fails[:10]:
+        print(f"  run {i}: {name} at t = {t:.6g}", file=sys.stderr)
+    if len(fails) > 10:
+        print(f"  ... and {len(fails) - 10} more (status in {out})", file=sys.stderr)
+    return 0
+
+
 def cmd_verify(a, progress):
     from .verify import verify
     m = load_model(a.file, progress)
@@ -518,7 +634,8 @@ def build_parser():
                              "models.", epilog=EXAMPLES, parents=[_common(defaults=True)])
     ap.add_argument("--version", action="version", version=f"eomgen {__version__}")
     sub = ap.add_subparsers(dest="cmd", required=True, parser_class=_Parser,
-                            metavar="{generate,build,simulate,linearize,verify,report,fmu,cache}")
+                            metavar="{generate,build,simulate,ensemble,linearize,verify,report,fmu,"
+                                    "cache}")
 
     g = _sub(sub, "generate", "write the model's C (or C++/Eigen) sources and a CMake project",
              "eomgen generate examples/seed_pendulum.py -o out/pend --real float", common)
@@ -644,6 +761,41 @@ def build_parser():
     _add_real(fm)
     fm.set_defaults(fn=cmd_fmu)
 
+    en = _sub(sub, "ensemble", "many runs of the compiled model over sampled parameters and "
+              "initial states, in C on every core or on a Dask cluster; write the reduced "
+              "results (.npz or .parquet)",
+              "eomgen ensemble examples/seed_pendulum.py --samples 100000 --param "
+              "L=uniform:0.8:1.2 --x0 q2=normal:0:0.05 --t-end 5 --reduce final -o res.npz",
+              common)
+    en.add_argument("file", help="model file (FILE.py or FILE.py:function)")
+    en.add_argument("--samples", type=int, required=True, help="number of runs")
+    en.add_argument("--param", action="append", metavar="NAME=SPEC",
+                    help="a constant: a number, uniform:LOW:HIGH or normal:MEAN:STD (repeat)")
+    en.add_argument("--x0", action="append", metavar="NAME=SPEC",
+                    help="an initial-state entry, as --param (others 0; dependent entries "
+                         "solved unless --no-consistent)")
+    en.add_argument("--input", action="append", metavar="NAME=SPEC",
+                    help="a constant input, as --param")
+    en.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    en.add_argument("--t-end", type=float, required=True, help="end time [s]")
+    en.add_argument("--dt", type=float, default=1e-3, help="RK4 step or output interval "
+                    "(default 1e-3)")
+    en.add_argument("--method", default="rk4", choices=["rk4", "dopri5", "rodas4", "rodas"])
+    en.add_argument("--rtol", type=float, default=1e-8)
+    en.add_argument("--atol", type=float, default=1e-10)
+    en.add_argument("--reduce", action="append",
+                    metavar="final|min:NAMES|max:NAMES|mean:NAMES|at:TIMES[:NAMES]",
+                    help="what to keep of each run (repeat; default final)")
+    en.add_argument("--no-consistent", action="store_true",
+                    help="take the sampled states as they are")
+    en.add_argument("--chunk", type=int, help="runs per C call (default: a few per worker)")
+    en.add_argument("--workers", type=int, help="threads (default: every core)")
+    en.add_argument("--scheduler", metavar="ADDRESS",
+                    help="run the chunks on a Dask cluster (tcp://host:8786)")
+    en.add_argument("-o", "--output", required=True, help="results file (.npz or .parquet)")
+    _add_real(en)
+    en.set_defaults(fn=cmd_ensemble, backend="c")
+
     ca = _sub(sub, "cache", "show where eomgen's build cache is, its entries and size; "
               "'clear' deletes eomgen's entries from it",
               "eomgen cache clear", common)
@@ -657,7 +809,7 @@ def main(argv=None):
     ap = build_parser()
     a = ap.parse_args(argv)
     if getattr(a, "samples", 1) is not None and getattr(a, "samples", 1) < 1:
-        print("eomgen verify: --samples must be at least 1", file=sys.stderr)
+        print(f"eomgen {a.cmd}: --samples must be at least 1", file=sys.stderr)
         return 2
     progress = Progress(quiet=a.quiet, verbose=a.verbose)
     try:
