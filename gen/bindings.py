@@ -9,6 +9,7 @@ library's plugin table and the model's interface description
 first use (gen.compile's lazy build)."""
 from __future__ import annotations
 
+import ctypes
 import functools
 import threading
 
@@ -35,6 +36,21 @@ EXCEPTIONS = {
     "ERR_DIVERGED": DivergenceError,
     "ERR_CONTROLLER": SolverError,
 }
+
+
+def _fast_rhs(host, api):
+    """The host module's CPython fast path of rhs, bound to the table api
+    (csrc/host/gen_host_fast.c); None where the host has none."""
+    make = getattr(host.lib, "eomgen_fast_rhs_new", None)
+    if make is None:
+        return None
+    ptr = make(api)
+    if ptr == host.ffi.NULL:
+        return None
+    addr = int(host.ffi.cast("uintptr_t", ptr))
+    fn = ctypes.cast(ctypes.c_void_p(addr), ctypes.py_object).value
+    ctypes.pythonapi.Py_DecRef(ctypes.py_object(fn))     # the new reference made in C
+    return fn
 
 
 class Simulator:
@@ -92,6 +108,7 @@ class Simulator:
         self._fb = self._ffi.from_buffer
         self._null = self._ffi.NULL
         self._rhs_c = self._lib.eomgen_eval_rhs    # the fast path passes the table itself
+        self._rhs_fast = _fast_rhs(host, api)
         for k, n in (("nq", self.nq), ("nu", self.nu), ("nr", self.nr), ("np", self.np),
                      ("mc", self.mc), ("mv", self.mv), ("ns", self.ns), ("ny", self.ny),
                      ("na", self.na)):
@@ -140,6 +157,7 @@ class Simulator:
                 return
             api, built, timings = self._derive()
             self._api = api
+            self._rhs_fast = _fast_rhs(self._mod, api)
             self._fns.clear()
             self.build_info.update(timings, module=str(built.path), derivatives=True)
             self._derive = None
@@ -300,6 +318,13 @@ class Simulator:
         """x' (shape (nx,)), usable as solve_ivp's fun: rhs(t, x). An
         (N, nx) array of states gives an (N, nx) array in one C call
         (see rhs_batch). out: a preallocated C-contiguous result array."""
+        if p is None and out is None and self._rhs_fast is not None:
+            # the host's CPython function (csrc/host/gen_host_fast.c): x' for
+            # an exact array of the right type and size, None otherwise or
+            # on a nonzero status (the paths below convert, check, raise)
+            res = self._rhs_fast(t, x, r)
+            if res is not None:
+                return res
         if (p is None and out is None and type(x) is np.ndarray and x.dtype is self._dt
                 and x.shape == self._xshape and (r is None or (
                     type(r) is np.ndarray and r.dtype is self._dt and r.shape == self._rshape))):

@@ -41,22 +41,28 @@ _modules = {}          # real -> loaded module
 _libraries = {}        # path -> ctypes handle (kept open for the process)
 
 
-# hand-written parts of the host (csrc/host): declarations, definitions
-HOST_PARTS = [("gen_host_ensemble.h", "gen_host_ensemble.c")]
+# hand-written parts of the host (csrc/host): declarations, definitions, and
+# whether the definitions use Python's and numpy's C API (the fast path of
+# Simulator.rhs) rather than plain C
+HOST_PARTS = [("gen_host_ensemble.h", "gen_host_ensemble.c", False),
+              ("gen_host_fast.h", "gen_host_fast.c", True)]
 
 
-def host_sources(real="double", hand_written=True):
+def host_sources(real="double", hand_written=True, python=True):
     """(cdef, C source) of the host module for a scalar type: the
     forwarders rendered from the interface description, then (unless
     hand_written=False) the hand-written parts (csrc/host: the ensemble
-    loop)."""
+    loop, and unless python=False the fast path of Simulator.rhs, which
+    needs Python's and numpy's headers)."""
     from .render import template_env
     from .resources import csrc_dir
     env = template_env()
     iface = host_interface(real)
     decl = env.get_template("cffi/host.h.j2").render(iface=iface, real=real)
     extra_decl, extra_src = [], []
-    for h, c in HOST_PARTS if hand_written else ():
+    for h, c, uses_python in HOST_PARTS if hand_written else ():
+        if uses_python and not python:
+            continue
         extra_decl.append((csrc_dir() / "host" / h).read_text())
         extra_src.append((csrc_dir() / "host" / c).read_text())
     decl = decl + "\n" + "\n".join(extra_decl)
@@ -65,11 +71,21 @@ def host_sources(real="double", hand_written=True):
     return decl, source + "\n" + "\n".join(extra_src)
 
 
+def _numpy_include():
+    import numpy
+    return numpy.get_include()
+
+
+def _numpy_version():
+    import numpy
+    return numpy.__version__
+
+
 def _key(real, cdef, source):
     h = hashlib.sha256()
     for part in (__version__, ABI_TAG, real, sys.version, sysconfig.get_config_var("EXT_SUFFIX")
                  or "", sysconfig.get_config_var("CC") or "", os.environ.get("CC", ""),
-                 " ".join(HOST_FLAGS), cdef, source):
+                 " ".join(HOST_FLAGS), _numpy_include(), _numpy_version(), "full-api", cdef, source):
         h.update(str(part).encode() + b"\0")
     return h.hexdigest()[:16]
 
@@ -105,7 +121,12 @@ def _build_and_load(real):
             import cffi
             ffi = cffi.FFI()
             ffi.cdef(cdef)
-            ffi.set_source(modname, source, extra_compile_args=list(HOST_FLAGS))
+            ffi.set_source(modname, source, extra_compile_args=list(HOST_FLAGS),
+                           include_dirs=[_numpy_include()],
+                           # the fast path is a METH_FASTCALL function with
+                           # numpy's C API: the full API of this Python
+                           py_limited_api=False,
+                           define_macros=[("_CFFI_NO_LIMITED_API", None)])
             try:
                 with contextlib.redirect_stdout(io.StringIO()):
                     built = ffi.compile(tmpdir=str(tmp / "build"))

@@ -50,3 +50,46 @@ def test_fast_path_still_refuses_bad_values(cart):
         cart.rhs(0.0, np.array([0.1, np.inf, 0.3, 0.4]), np.array([0.5]))
     with pytest.raises(ValueError, match="inputs r"):
         cart.rhs(0.0, xc, np.array([0.5, 0.5]))
+
+
+def test_host_fast_path_is_taken_and_exact(kane_sim, cart):
+    """The host module's CPython function (csrc/host/gen_host_fast.c) is
+    bound to the model, gives the general path's numbers for the usual
+    arguments (a numpy float t, as solve_ivp passes, a read-only x), and
+    declines (None) whatever it does not take: a subclass of ndarray, the
+    wrong size or dtype, a failing status; Simulator.rhs then answers."""
+    fast = kane_sim._rhs_fast
+    assert fast is not None
+    x = pendulum_state(0.3, 0.1, 1.0, "kane")
+    ref = np.empty(4)
+    kane_sim.rhs(0.0, x, out=ref)
+    assert np.array_equal(fast(0.0, x, None), ref)
+    assert np.array_equal(fast(np.float64(0.0), x, None), ref)
+    xr = x.copy()
+    xr.flags.writeable = False
+    assert np.array_equal(fast(0, xr, None), ref)
+    assert fast(0.0, x.view(np.recarray), None) is None
+    assert fast(0.0, x[:3], None) is None
+    assert fast(0.0, x.astype(np.float32), None) is None
+    assert fast(0.0, x * np.nan, None) is None
+    assert fast("0", x, None) is None
+    with pytest.raises(TypeError):
+        fast(0.0)
+    xc, r = np.array([0.1, 0.2, 0.3, 0.4]), np.array([0.5])
+    refc = np.empty(4)
+    cart.rhs(0.0, xc, r, out=refc)
+    assert np.array_equal(cart._rhs_fast(0.0, xc, r), refc)
+    assert cart._rhs_fast(0.0, xc, np.array([0.5, 0.5])) is None
+
+
+def test_host_fast_path_float_model():
+    """A float model's fast path takes float32 arrays, and matches its
+    general path; a float64 state takes the general path (converted)."""
+    sim = gen.compile(cart_pole.model(), real="float")
+    xc, r = np.array([0.1, 0.2, 0.3, 0.4], dtype=np.float32), np.array([0.5], np.float32)
+    ref = np.empty(4, dtype=np.float32)
+    sim.rhs(0.0, xc, r, out=ref)
+    out = sim._rhs_fast(0.0, xc, r)
+    assert out.dtype == np.float32 and np.array_equal(out, ref)
+    assert sim._rhs_fast(0.0, xc.astype(float), r) is None
+    np.testing.assert_array_equal(sim.rhs(0.0, xc.astype(float), r), ref)

@@ -155,14 +155,26 @@ def test_bad_arguments_name_the_problem(kane_sim):
         kane_sim.ensemble(np.array([x0, x0 * np.nan]), 1.0, 1e-3)
 
 
-def test_host_ensemble_source_compiles_strict(tmp_path):
-    """The hand-written loop, with the host's declarations, under the
-    project's strict flags (the host module itself is compiled by cffi)."""
-    cdef, source = gen.host.host_sources("double")
+def test_host_hand_written_sources_compile_strict(tmp_path):
+    """The hand-written host parts, with the host's declarations, under the
+    project's strict flags (the host module itself is compiled by cffi):
+    the plain-C ensemble loop with -pedantic; the fast path of
+    Simulator.rhs with Python's and numpy's headers, whose own macros are
+    not -pedantic clean, with the rest."""
+    import sysconfig
+    cdef, source = gen.host.host_sources("double", python=False)
+    assert "eomgen_fast_rhs" not in source
     src = tmp_path / "host.c"
     src.write_text(source)
-    r = subprocess.run(["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-c",
-                        str(src), "-o", os.devnull], capture_output=True, text=True)
+    strict = ["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror"]
+    r = subprocess.run(strict + ["-pedantic", "-c", str(src), "-o", os.devnull],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    cdef, source = gen.host.host_sources("double")
+    assert "eomgen_fast_rhs_new" in cdef
+    src.write_text("#define _CFFI_NO_LIMITED_API\n#include <Python.h>\n" + source)
+    r = subprocess.run(strict + ["-I" + np.get_include(), "-I" + sysconfig.get_paths()["include"],
+                                 "-c", str(src), "-o", os.devnull], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
 
 

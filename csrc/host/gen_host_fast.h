@@ -1,0 +1,14 @@
+/*
+ * gen_host_fast.h - the Python fast path of Simulator.rhs (gen/bindings.py):
+ * a CPython function, made once per model table, that takes (t, x, r) and
+ * returns x' as a new numpy array, or None where it does not apply (x or r
+ * not an exact, aligned, C-contiguous array of the model's scalar type and
+ * size) or where the model returns a nonzero status: the caller then takes
+ * its general path, which converts, checks and raises in the user's names.
+ * Hand-written; part of eomgen's Python host module (gen/host.py). Also
+ * the module's cffi declarations: plain C.
+ */
+
+/* a new reference to the function (a PyObject *), bound to api; NULL if
+ * it cannot be made (numpy's C API not importable): the general path then */
+void *eomgen_fast_rhs_new(const eomgen_api *api);
