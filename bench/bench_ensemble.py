@@ -52,14 +52,27 @@ def setup(model, n, seed=0):
     return sim, X0, P
 
 
-def rss_worker(model, n):
-    """Peak RSS (kB) of one process: compile (cached), draw, run N, reduce final."""
+def rss_worker(model, n, save=None):
+    """One fresh process: compile (cached), draw, run N on every core with
+    reduce="final"; its peak RSS (kB) before and after, its runs/s; the
+    final states saved to save (.npy) if given."""
     import resource
+    import numpy as np
     sim, X0, P = setup(model, n)
     base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    res = sim.ensemble(X0, T_END, DT, p=P)
+    res = sim.ensemble(X0, T_END, DT, p=P, progress=False)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    return {"n": n, "base_kb": base, "peak_kb": peak, "failed": len(res.failures)}
+    if save:
+        np.save(save, res.final)
+    return {"n": n, "base_kb": base, "peak_kb": peak, "failed": len(res.failures),
+            "seconds": res.seconds, "runs_per_s": res.runs_per_second, "chunks": res.chunks}
+
+
+def fresh(model, n, save=None):
+    """rss_worker in a fresh process."""
+    cmd = [sys.executable, __file__, "--rss-worker", model, str(n)] + ([save] if save else [])
+    p = subprocess.run(cmd, capture_output=True, text=True, check=True)
+    return json.loads(p.stdout.strip().splitlines()[-1])
 
 
 def main():
@@ -67,10 +80,11 @@ def main():
     ap.add_argument("--n", type=int, default=100000, help="runs of the ensemble (default 1e5)")
     ap.add_argument("--model", default="kane", choices=["kane", "lagrange"])
     ap.add_argument("--json", default=None)
-    ap.add_argument("--rss-worker", nargs=2, help=argparse.SUPPRESS)
+    ap.add_argument("--rss-worker", nargs="+", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.rss_worker:
-        print(json.dumps(rss_worker(args.rss_worker[0], int(args.rss_worker[1]))))
+        w = args.rss_worker
+        print(json.dumps(rss_worker(w[0], int(w[1]), w[2] if len(w) > 2 else None)))
         return
     import numpy as np
     out = {"n": args.n, "model": args.model, "cores": os.cpu_count()}
@@ -78,13 +92,20 @@ def main():
     print(f"# seed pendulum ({args.model}), {args.n} runs of {T_END} s at RK4 h = {DT} s, "
           f"final state; {os.cpu_count()} cores", flush=True)
 
-    # 1. the ensemble, every core and one
-    res = sim.ensemble(X0, T_END, DT, p=P, progress=False)
-    out["ensemble"] = {"seconds": res.seconds, "runs_per_s": res.runs_per_second,
-                       "failed": len(res.failures), "chunks": res.chunks}
-    print(f"ensemble, {os.cpu_count()} threads: {res.seconds:.1f} s, "
-          f"{res.runs_per_second:.0f} runs/s ({len(res.failures)} failed)", flush=True)
-    k1 = min(args.n, 20000)
+    # 1. the ensemble, every core (in a fresh process: its peak RSS is
+    # part 5's largest N), and one
+    import tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        big = fresh(args.model, args.n, save=os.path.join(tmp, "final.npy"))
+        final = np.load(os.path.join(tmp, "final.npy"))
+    out["ensemble"] = big
+    print(f"ensemble, {os.cpu_count()} threads: {big['seconds']:.1f} s, "
+          f"{big['runs_per_s']:.0f} runs/s ({big['failed']} failed)", flush=True)
+
+    class res:                  # the big run's numbers, as the parts below read them
+        runs_per_second = big["runs_per_s"]
+    res.final = final
+    k1 = min(args.n, 5000)
     one = sim.ensemble(X0[:k1], T_END, DT, p=P[:k1], workers=1, progress=False)
     out["ensemble_1"] = {"n": k1, "runs_per_s": one.runs_per_second}
     assert np.array_equal(one.final, res.final[:k1])
@@ -130,12 +151,10 @@ def main():
           f"{res.runs_per_second / batch:.1f}x, / solve_ivp {res.runs_per_second / scipy_rate:.0f}x",
           flush=True)
 
-    # 5. memory in fresh processes
+    # 5. memory in fresh processes (the largest N: part 1's run)
     rows = []
-    for n in sorted({min(args.n, v) for v in (1000, 10000, 100000)}):
-        p = subprocess.run([sys.executable, __file__, "--model", args.model, "--rss-worker",
-                            args.model, str(n)], capture_output=True, text=True, check=True)
-        r = json.loads(p.stdout.strip().splitlines()[-1])
+    for n in sorted({min(args.n, v) for v in (1000, 10000)} | {args.n}):
+        r = big if n == args.n else fresh(args.model, n)
         rows.append(r)
         print(f"peak RSS, N = {n}: {r['peak_kb'] / 1e3:.0f} MB (before the ensemble "
               f"{r['base_kb'] / 1e3:.0f} MB: +{(r['peak_kb'] - r['base_kb']) / 1e3:.1f} MB; "

@@ -13,11 +13,15 @@ brings the pole back: |theta| < 0.01 rad and |x| < 0.05 m at t = 5 s, and
     python examples/cart_pole_robustness.py --n 20000 --plot docs/cart_pole_robustness.png
 
 Prints the success rate and where the failures are; the plot shows the
-success fraction over (pole length, initial angle) and over (pole mass,
-cart mass).
+success fraction over (pole length, initial angle) and over (cart mass,
+pole length): at this sample time the design loses the short poles on light
+carts (faster plants), whatever the initial angle, and the pole mass hardly
+matters. Those runs diverge: the simulator stops them (ERR_DIVERGED) and the
+others complete.
 """
 import argparse
 import time
+from collections import Counter
 
 import numpy as np
 
@@ -25,7 +29,8 @@ import gen
 
 import cart_pole
 
-PERIOD = 0.06            # s: the digital controller's sample time
+PERIOD = 0.12            # s: the digital controller's sample time (8.3 Hz: slow
+                         # enough that the +-20 % plants do not all recover)
 SPREAD = 0.2             # +-20 % on the masses and the length
 THETA0 = 0.2             # rad: the initial angles
 
@@ -57,10 +62,11 @@ def plot(draws, ok, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(1, 2, figsize=(10, 4.2))
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4.2), layout="constrained")
     for a, (kx, ky, lx, ly) in zip(ax, [("l", "theta", "pole half-length l [m]",
                                           "initial angle [rad]"),
-                                         ("m_p", "m_c", "pole mass [kg]", "cart mass [kg]")]):
+                                         ("m_c", "l", "cart mass m_c [kg]",
+                                          "pole half-length l [m]")]):
         h_ok, xe, ye = np.histogram2d(draws[kx], draws[ky], bins=30, weights=ok.astype(float))
         h_all, _, _ = np.histogram2d(draws[kx], draws[ky], bins=[xe, ye])
         with np.errstate(invalid="ignore"):
@@ -69,7 +75,7 @@ def plot(draws, ok, path):
         a.set_xlabel(lx)
         a.set_ylabel(ly)
     fig.colorbar(im, ax=ax, label="success fraction")
-    fig.suptitle(f"cart-pole LQR at {1 / PERIOD:.0f} Hz, +-20 % masses and length: "
+    fig.suptitle(f"cart-pole LQR at {1 / PERIOD:.1f} Hz, +-20 % masses and length: "
                  f"{ok.mean():.1%} of {len(ok)} runs recover")
     fig.savefig(path, dpi=110)
     print("wrote", path)
@@ -88,8 +94,10 @@ def main(argv=None):
         client = Client(a.scheduler)
     t0 = time.perf_counter()
     sim, draws, res, ok = run(a.n, a.seed, client=client)
+    stops = Counter(status for _, status, _, _ in res.failures)
     print(f"{a.n} runs in {time.perf_counter() - t0:.1f} s ({res.runs_per_second:.0f} runs/s in "
-          f"C); {len(res.failures)} stopped on an error")
+          f"C); {len(res.failures)} stopped on an error "
+          f"({', '.join(f'{k}: {v}' for k, v in stops.most_common()) or 'none'})")
     print(f"success rate {ok.mean():.2%}")
     bad = ~ok
     if bad.any():
