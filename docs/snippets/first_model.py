@@ -2,7 +2,6 @@ import numpy as np
 import sympy as sm
 from sympy.physics import mechanics as me
 import gen
-
 # a pendulum: angle theta from the downward vertical, rate omega, torque T at the pivot
 theta, omega, T = me.dynamicsymbols("theta omega T")
 m, l, g = sm.symbols("m l g")
