@@ -54,9 +54,29 @@ def _fast_rhs(host, api):
 
 
 class Simulator:
-    """A compiled model. Attributes: nq, nu, nx, nr, np, mc, mv, ns,
-    state_names, input_names, constant_names, independent_state_names,
-    constants (default values), has_energy, interface (gen.abi.Interface)."""
+    """A compiled model: numpy arrays in, numpy arrays out, every call in the
+    generated C.
+
+    Returned by :func:`gen.compile` (not constructed directly).
+
+    Attributes
+    ----------
+    nq, nu, nx, nr, np, mc, mv, ns, na, ny : int
+        The sizes: coordinates, speeds, state, inputs, constants,
+        configuration and velocity constraints, independent state, reaction
+        forces, outputs.
+    state_names, input_names, constant_names, independent_state_names : list of str
+        C-safe names (``theta'`` -> ``theta_p``); the sympy spelling is
+        accepted wherever a name is.
+    output_names, auxiliary_names : list of str
+        The outputs and the reaction forces.
+    constants : numpy.ndarray
+        The default constants.
+    has_energy : bool
+        Whether the model was given an energy.
+    interface : gen.abi.Interface
+        The description of the C interface the model was built with.
+    """
 
     def __init__(self, host, api, interface, derivatives=None):
         iface = interface
@@ -118,14 +138,17 @@ class Simulator:
 
     @property
     def state_labels(self):
+        """The states as the user spelled them in sympy, in the order of ``state_names``."""
         return list(self._labels["state"])
 
     @property
     def input_labels(self):
+        """The inputs as the user spelled them in sympy, in the order of ``input_names``."""
         return list(self._labels["inputs"])
 
     @property
     def constant_labels(self):
+        """The constants as the user spelled them in sympy, in the order of ``constant_names``."""
         return list(self._labels["constants"])
 
     # ------------------------------------------------------------ helpers
@@ -261,52 +284,223 @@ class Simulator:
 
     # ------------------------------------------------------- evaluation
     def mass_matrix(self, q, p=None, t=0.0):
-        """M(q), shape (nu, nu): unconstrained mass matrix."""
+        """The mass matrix M(q) of the unconstrained equations.
+
+        Parameters
+        ----------
+        q : array_like, shape (nq,)
+            The coordinates.
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        t : float, optional
+            Time (default 0), for models that depend on it.
+
+        Returns
+        -------
+        numpy.ndarray, shape (nu, nu)
+
+        Raises
+        ------
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         q = self._vec(q, self.nq, "coordinates q")
         (M,) = self._call("eval_mass_matrix", q, self._params(p), t, t=t)
         return M.reshape(self.nu, self.nu)
 
     def forcing(self, q, u, r=None, p=None, t=0.0):
-        """f(q, u, r, t), shape (nu,): M u' = f + A^T lam."""
+        """The forcing f(q, u, r, t), with ``M u' = f + A^T lam``.
+
+        Parameters
+        ----------
+        q : array_like, shape (nq,)
+            The coordinates.
+        u : array_like, shape (nu,)
+            The speeds.
+        r : array_like, shape (nr,), optional
+            The inputs (None: zero).
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        t : float, optional
+            Time (default 0), for models that depend on it.
+
+        Returns
+        -------
+        numpy.ndarray, shape (nu,)
+
+        Raises
+        ------
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         q = self._vec(q, self.nq, "coordinates q")
         u = self._vec(u, self.nu, "speeds u")
         (f,) = self._call("eval_forcing", q, u, self._inputs(r), self._params(p), t, t=t)
         return f
 
     def kinematics(self, q, u, p=None, t=0.0):
-        """q' from the kinematic equations, shape (nq,)."""
+        """The coordinate rates q' from the kinematic equations.
+
+        Parameters
+        ----------
+        q : array_like, shape (nq,)
+            The coordinates.
+        u : array_like, shape (nu,)
+            The speeds.
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        t : float, optional
+            Time (default 0), for models that depend on it.
+
+        Returns
+        -------
+        numpy.ndarray, shape (nq,)
+
+        Raises
+        ------
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         q = self._vec(q, self.nq, "coordinates q")
         u = self._vec(u, self.nu, "speeds u")
         (qd,) = self._call("eval_kinematics", q, u, self._params(p), t, t=t)
         return qd
 
     def constraints(self, q, p=None, t=0.0):
-        """Configuration-constraint residuals f_c(q), shape (mc,)."""
+        """The configuration-constraint residuals f_c(q).
+
+        Parameters
+        ----------
+        q : array_like, shape (nq,)
+            The coordinates.
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        t : float, optional
+            Time (default 0), for models that depend on it.
+
+        Returns
+        -------
+        numpy.ndarray, shape (mc,)
+
+        Raises
+        ------
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         q = self._vec(q, self.nq, "coordinates q")
         (fc,) = self._call("eval_constraints", q, self._params(p), t, t=t)
         return fc.copy()
 
     def constraint_jacobian(self, q, p=None, t=0.0):
-        """d f_c / dq, shape (mc, nq)."""
+        """The configuration-constraint Jacobian d f_c / dq.
+
+        Parameters
+        ----------
+        q : array_like, shape (nq,)
+            The coordinates.
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        t : float, optional
+            Time (default 0), for models that depend on it.
+
+        Returns
+        -------
+        numpy.ndarray, shape (mc, nq)
+
+        Raises
+        ------
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         q = self._vec(q, self.nq, "coordinates q")
         (J,) = self._call("eval_constraint_jacobian", q, self._params(p), t, t=t)
         return J.reshape(self.mc, self.nq).copy()
 
     def velocity_constraints(self, q, u, p=None, t=0.0):
-        """A(q) u + b, shape (mv,)."""
+        """The velocity-constraint residuals A(q) u + b.
+
+        Parameters
+        ----------
+        q : array_like, shape (nq,)
+            The coordinates.
+        u : array_like, shape (nu,)
+            The speeds.
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        t : float, optional
+            Time (default 0), for models that depend on it.
+
+        Returns
+        -------
+        numpy.ndarray, shape (mv,)
+
+        Raises
+        ------
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         q = self._vec(q, self.nq, "coordinates q")
         u = self._vec(u, self.nu, "speeds u")
         (fv,) = self._call("eval_velocity_constraints", q, u, self._params(p), t, t=t)
         return fv.copy()
 
     def velocity_constraint_matrix(self, q, p=None, t=0.0):
-        """(A, b): A shape (mv, nu), b shape (mv,)."""
+        """The velocity constraints as A(q) u + b(q, t) = 0.
+
+        Parameters
+        ----------
+        q : array_like, shape (nq,)
+            The coordinates.
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        t : float, optional
+            Time (default 0), for models that depend on it.
+
+        Returns
+        -------
+        A : numpy.ndarray, shape (mv, nu)
+        b : numpy.ndarray, shape (mv,)
+
+        Raises
+        ------
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         q = self._vec(q, self.nq, "coordinates q")
         A, b = self._call("eval_velocity_constraint_matrix", q, self._params(p), t, t=t)
         return A.reshape(self.mv, self.nu).copy(), b.copy()
 
     def energy(self, x, p=None, t=0.0):
-        """Total energy at state x (models given an energy expression)."""
+        """The total energy at a state.
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,)
+            The state ``[q, u]`` (layout: ``state_names``).
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        t : float, optional
+            Time (default 0), for models that depend on it.
+
+        Returns
+        -------
+        float
+
+        Raises
+        ------
+        ValueError
+            When the model was given no energy expression.
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         if not self.has_energy:
             raise ValueError(f"model '{self.name}' was built without energy=...")
         x = self._vec(x, self.nx, "state x")
@@ -315,9 +509,35 @@ class Simulator:
         return float(E[0])
 
     def rhs(self, t, x, r=None, p=None, out=None):
-        """x' (shape (nx,)), usable as solve_ivp's fun: rhs(t, x). An
-        (N, nx) array of states gives an (N, nx) array in one C call
-        (see rhs_batch). out: a preallocated C-contiguous result array."""
+        """The state derivative x', usable as ``solve_ivp``'s ``fun``.
+
+        Parameters
+        ----------
+        t : float
+            Time.
+        x : array_like, shape (nx,) or (N, nx)
+            The state, or N states evaluated in one C call (:meth:`rhs_batch`).
+        r : array_like, shape (nr,), optional
+            The inputs (None: zero).
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        out : numpy.ndarray, optional
+            A preallocated C-contiguous result array.
+
+        Returns
+        -------
+        numpy.ndarray, shape (nx,) or (N, nx)
+            A fresh array per call (or ``out``).
+
+        Raises
+        ------
+        ValueError
+            On a wrong shape (the message names the expected one) or a NaN or
+            infinite input.
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         if p is None and out is None and self._rhs_fast is not None:
             # the host's CPython function (csrc/host/gen_host_fast.c): x' for
             # an exact array of the right type and size, None otherwise or
@@ -360,17 +580,60 @@ class Simulator:
         return out
 
     def multipliers(self, t, x, r=None, p=None):
-        """Multipliers lam of the velocity constraints, shape (mv,)."""
+        """The multipliers lam of the velocity constraints (:doc:`/guides/multipliers`).
+
+        Parameters
+        ----------
+        t : float
+            Time.
+        x : array_like, shape (nx,)
+            The state ``[q, u]`` (layout: ``state_names``).
+        r : array_like, shape (nr,), optional
+            The inputs (None: zero).
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+
+        Returns
+        -------
+        numpy.ndarray, shape (mv,)
+
+        Raises
+        ------
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         x = self._vec(x, self.nx, "state x")
         _, lam = self._call("eval_rhs", t, x, self._inputs(r), self._params(p), t=t, state=x)
         return lam.copy()
 
     def auxiliary_forces(self, t, x, r=None, p=None):
         """The reaction forces along the auxiliary speeds (Kane's
-        u_auxiliary) at state x, shape (na,), in the order of
-        auxiliary_names: u' from the right-hand side, then the auxiliary
-        equations F reactions + g = 0 solved. Empty for a model without
-        auxiliary speeds."""
+        ``u_auxiliary``) at a state: u' from the right-hand side, then the
+        auxiliary equations ``F reactions + g = 0`` solved.
+
+        Parameters
+        ----------
+        t : float
+            Time.
+        x : array_like, shape (nx,)
+            The state ``[q, u]`` (layout: ``state_names``).
+        r : array_like, shape (nr,), optional
+            The inputs (None: zero).
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+
+        Returns
+        -------
+        numpy.ndarray, shape (na,)
+            In the order of ``auxiliary_names``; empty without auxiliary speeds.
+
+        Raises
+        ------
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         x = self._vec(x, self.nx, "state x")
         (F,) = self._call("eval_auxiliary_forces", t, x, self._inputs(r), self._params(p),
                           t=t, state=x)
@@ -378,8 +641,30 @@ class Simulator:
 
     # ---------------------------------------------------- the manifold
     def outputs(self, t, x, r=None, p=None):
-        """The outputs y(q, u, r, t) at state x, (ny,), named by
-        sim.output_names (empty for a model without outputs)."""
+        """The outputs y(q, u, r, t) given at model creation (``outputs={...}``).
+
+        Parameters
+        ----------
+        t : float
+            Time.
+        x : array_like, shape (nx,)
+            The state ``[q, u]`` (layout: ``state_names``).
+        r : array_like, shape (nr,), optional
+            The inputs (None: zero).
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+
+        Returns
+        -------
+        numpy.ndarray, shape (ny,)
+            Named by ``output_names``; empty for a model without outputs.
+
+        Raises
+        ------
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         x = self._vec(x, self.nx, "state x")
         r = None if r is None else self._vec(r, self.nr, "inputs r")
         y = np.zeros(max(1, self.ny), dtype=self.dtype)
@@ -389,16 +674,67 @@ class Simulator:
         return y[:self.ny].copy()
 
     def project(self, x, p=None, t=0.0, tol=0.0, max_iter=0):
-        """x projected onto the configuration and velocity constraints."""
+        """Project a state onto the configuration and velocity constraints
+        (minimum-norm Gauss-Newton; independent of the partition).
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,)
+            The state ``[q, u]`` (layout: ``state_names``).
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        t : float, optional
+            Time (default 0), for models that depend on it.
+        tol : float, optional
+            Relative tolerance on the correction (0: 16 machine epsilons).
+        max_iter : int, optional
+            Newton iterations (0: the default, 10).
+
+        Returns
+        -------
+        numpy.ndarray, shape (nx,)
+
+        Raises
+        ------
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         x = self._vec(x, self.nx, "state x").copy()
         st = self._fn("project")(t, self._ptr(self._params(p)), tol, max_iter, self._ptr(x))
         self._check(st, "project", t, x)
         return x
 
     def consistent_state(self, x, p=None, t=0.0, tol=0.0, max_iter=0):
-        """Dependent coordinates and speeds solved from the independent ones
-        (the dependent entries of x are the starting guess). x may be a
-        dict {state name: value}."""
+        """Solve the dependent coordinates and speeds from the independent ones
+        (:doc:`/guides/partitions`).
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,), or dict
+            The state; its dependent entries are Newton's starting guess (they
+            pick the branch). A dict ``{state name: value}`` sets the named
+            entries, the others 0.
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        t : float, optional
+            Time (default 0), for models that depend on it.
+        tol : float, optional
+            Relative tolerance (0: 16 machine epsilons).
+        max_iter : int, optional
+            Newton iterations (0: the default).
+
+        Returns
+        -------
+        numpy.ndarray, shape (nx,)
+
+        Raises
+        ------
+        gen.SingularError
+            Where the partition does not determine the dependent entries.
+        gen.ConvergenceError
+            When Newton does not converge.
+        """
         x = self._vec(x, self.nx, "state x").copy()
         st = self._fn("consistent_state")(t, self._ptr(self._params(p)), tol, max_iter,
                                           self._ptr(x))
@@ -411,35 +747,88 @@ class Simulator:
                  return_stats=False, controller=None, input_period=None, input_hold="zoh",
                  return_inputs=False, return_outputs=False, every=1, final_only=False,
                  max_rows=None, events=None, terminal=False, return_events=False):
-        """Simulate from x0 to t_end. dt is the RK4 step, or the output
-        interval of the adaptive methods (DOPRI5, RODAS4: they step by their
-        error control alone and write the output times from their dense
-        output). Returns (t, X) with one row per output time, then, when
-        asked, the multipliers, the inputs in effect from each output time
-        on (return_inputs), the outputs Y (ny per row, return_outputs), the
-        events (return_events) and the stats.
+        """Simulate from x0 to t_end, in C, with one row per output time.
 
-        method: "rk4" (fixed step dt), "dopri5" (explicit, adaptive) or
-        "rodas4" (alias "rodas": linearly implicit, L-stable, for stiff
-        models; it uses the generated Jacobian).
+        Parameters
+        ----------
+        x0 : array_like, shape (nx,)
+            The initial state (consistent with the constraints: see
+            :meth:`consistent_state`).
+        t_end : float
+            The final time (the last interval is clipped).
+        dt : float
+            The RK4 step, or the output interval of the adaptive methods (they
+            step by their error control alone and write the output times from
+            their dense output).
+        method : {"rk4", "dopri5", "rodas4"}, optional
+            Fixed-step RK4; DOPRI5 (explicit, adaptive); RODAS4 (alias
+            ``"rodas"``: linearly implicit, L-stable, for stiff models; it uses
+            the generated Jacobian).
+        rtol, atol : float, optional
+            The adaptive methods' tolerances.
+        r : None, array_like, tuple or callable, optional
+            None or nr constant inputs; a table ``(t_grid, R)`` held or
+            interpolated in C (``input_hold``); or a callable ``r(t, x)``
+            sampled every ``input_period``.
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        project : bool, optional
+            Project onto the constraints after every step (default True).
+        t0 : float, optional
+            The initial time.
+        max_steps : int, optional
+            The adaptive methods' step budget between two output rows.
+        return_multipliers : bool, optional
+            Also return the multipliers, (rows, mv).
+        return_stats : bool, optional
+            Also return the integrator's statistics (a dict: ``n_rhs``,
+            ``n_accepted``, ``n_rejected``, ``n_jac``, ...).
+        controller : gen.LinearFeedback, optional
+            A feedback computed inside C, continuous or sampled.
+        input_period : float, optional
+            The sampling period of a callable r (default dt; 0: every stage).
+        input_hold : {"zoh", "linear"}, optional
+            How a table of inputs is held between its knots.
+        return_inputs : bool, optional
+            Also return the inputs in effect from each output time on, (rows, nr).
+        return_outputs : bool, optional
+            Also return the outputs, (rows, ny).
+        every : int, optional
+            Keep every k-th output row and the last (dropped in C; the
+            integration is unchanged).
+        final_only : bool, optional
+            Keep only the row at t_end.
+        max_rows : int, optional
+            Refuse a run that would return more rows.
+        events : dict, optional
+            ``{name: direction}`` or ``{name: (direction, level)}``: crossings of
+            a state or an output through zero (or level), upwards (+1),
+            downwards (-1) or both (0), located on the dense output.
+        terminal : bool or dict, optional
+            The first crossing of a terminal event ends the run; its state is
+            the last row.
+        return_events : bool, optional
+            Also return the list of ``(name, t, x)`` of the crossings found.
 
-        events: {name: direction} or {name: (direction, level)}: crossings
-        of a state or an output (by name) through zero (or level), upwards
-        (+1), downwards (-1) or both (0), located on the dense output.
-        terminal: True, False or {name: bool}: the first crossing of a
-        terminal event ends the run there, and its state is the last row.
-        return_events adds the list of (name, t, x) of the crossings found.
+        Returns
+        -------
+        t : numpy.ndarray, shape (rows,)
+            The output times.
+        X : numpy.ndarray, shape (rows, nx)
+            The states.
+        lam, R, Y, events, stats
+            When asked, in this order: the multipliers, the inputs, the outputs,
+            the events and the statistics.
 
-        r: None or NR constant inputs; a table (t_grid, R) held or
-        interpolated inside C (input_hold "zoh" or "linear"); or a callable
-        r(t, x) sampled every input_period (default dt; 0: every stage).
-        controller: a gen.LinearFeedback, computed inside C (README,
-        "Closed loops").
-
-        Bounded output (the integration is the same; only rows are dropped,
-        in C): every=k keeps every k-th output row and the last one,
-        final_only=True only the row at t_end; max_rows refuses (ValueError)
-        a run that would return more rows."""
+        Raises
+        ------
+        ValueError
+            On a bad argument (shape, method, dt, a run longer than max_rows).
+        gen.SolverError
+            When a step fails (:class:`gen.SingularError`,
+            :class:`gen.ConvergenceError`, :class:`gen.DivergenceError`): the
+            message names the time and the last good state.
+        """
         from .control import InputPlan, plan_inputs
         from .events import plan_events
         method = {"rodas": "rodas4"}.get(method, method)
@@ -544,7 +933,34 @@ class Simulator:
         return tuple(out)
 
     def step_rk4(self, t, x, h, r=None, p=None, project=True):
-        """One RK4 step; returns the new state."""
+        """One classic RK4 step.
+
+        Parameters
+        ----------
+        t : float
+            Time.
+        x : array_like, shape (nx,)
+            The state ``[q, u]`` (layout: ``state_names``).
+        h : float
+            The step size.
+        r : array_like, shape (nr,), optional
+            The inputs (None: zero).
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        project : bool, optional
+            Project the new state onto the constraints (default True).
+
+        Returns
+        -------
+        numpy.ndarray, shape (nx,)
+            The new state.
+
+        Raises
+        ------
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         x = self._vec(x, self.nx, "state x").copy()
         r = None if r is None else self._vec(r, self.nr, "inputs r")
         st = self._fn("step_rk4")(t, h, self._ptr(r), self._ptr(self._params(p)),
@@ -553,18 +969,52 @@ class Simulator:
         return x
 
     def step(self, t, x, h, r=None, p=None, method="rk4", sensitivities=False, project=None):
-        """One integrator step of size h from (t, x); returns the new state,
-        or with sensitivities=True (x1, Fx, Fr): the state after the step and
-        its exact derivatives by the step's variational equations (the
-        generated Jacobian kernels, not finite differences), Fx = dx1/dx and
-        Fr = dx1/dr on the independent state [q_ind, u_ind] (ns x ns, ns x nr).
+        """One integrator step of size h from (t, x), optionally with its exact
+        derivatives by the step's variational equations (the generated Jacobian
+        kernels, not finite differences).
 
-        Convention for constrained models: the dependent entries of x follow
-        the constraints to first order (perturb x_ind, complete with
-        consistent_state), the step is not projected, and x1's independent
-        entries are differentiated. For an unconstrained model Fx is the full
-        dx1/dx; as h -> 0, Fx -> I + h A. project (default: True without
-        sensitivities) projects the plain step onto the constraints."""
+        For a constrained model the dependent entries of x follow the
+        constraints to first order (perturb ``x_ind``, complete with
+        ``consistent_state``). For an unconstrained model Fx is the full dx1/dx;
+        as h -> 0, Fx -> I + h A.
+
+        Parameters
+        ----------
+        t : float
+            Time.
+        x : array_like, shape (nx,)
+            The state ``[q, u]`` (layout: ``state_names``).
+        h : float
+            The step size.
+        r : array_like, shape (nr,), optional
+            The inputs (None: zero).
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        method : {"rk4"}, optional
+            The integrator (the sensitivities are those of RK4).
+        sensitivities : bool, optional
+            Also return ``Fx = dx1_ind/dx_ind`` (ns, ns) and ``Fr = dx1_ind/dr``
+            (ns, nr) on the independent state.
+        project : bool, optional
+            Project the plain step onto the constraints (default: True without
+            sensitivities; a step with sensitivities is not projected).
+
+        Returns
+        -------
+        x1 : numpy.ndarray, shape (nx,)
+            The state after the step.
+        Fx, Fr : numpy.ndarray
+            With ``sensitivities=True``: ``(x1, Fx, Fr)``.
+
+        Raises
+        ------
+        ValueError
+            On a wrong shape (the message names the expected one) or a NaN or
+            infinite input.
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         if method != "rk4":
             raise ValueError(f"step supports method='rk4' (a fixed step); got {method!r}")
         if not sensitivities:
@@ -583,8 +1033,32 @@ class Simulator:
                 Fr[:self.ns * self.nr].reshape(self.ns, self.nr).copy())
 
     def jacobian(self, t, x, r=None, p=None):
-        """(Jx, Jr): the full-state Jacobian of the right-hand side, d x'/dx
-        (nx, nx) and d x'/dr (nx, nr), every entry of x free."""
+        """The full-state Jacobian of the right-hand side, every entry of x free.
+
+        Parameters
+        ----------
+        t : float
+            Time.
+        x : array_like, shape (nx,)
+            The state ``[q, u]`` (layout: ``state_names``).
+        r : array_like, shape (nr,), optional
+            The inputs (None: zero).
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+
+        Returns
+        -------
+        Jx : numpy.ndarray, shape (nx, nx)
+            d x'/dx.
+        Jr : numpy.ndarray, shape (nx, nr)
+            d x'/dr.
+
+        Raises
+        ------
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         x = self._vec(x, self.nx, "state x")
         r = None if r is None else self._vec(r, self.nr, "inputs r")
         Jx = np.empty(self.nx * self.nx, dtype=self.dtype)
@@ -596,15 +1070,46 @@ class Simulator:
 
     # ---------------------------------------------------- linearization
     def linearize(self, x_op, r_op=None, p=None, t=0.0, dt=None, outputs=False):
-        """(A, B) about the operating point for the independent state
-        [q_ind, u_ind] (sympy's A_and_B=True partition): A (ns, ns), B (ns, nr).
-        The operating point need not be an equilibrium.
+        """Linearize about any operating point (it need not be an equilibrium),
+        in C, on the independent state ``[q_ind, u_ind]`` (sympy's
+        ``A_and_B=True`` partition).
 
-        dt: (Ad, Bd), the zero-order-hold discretization over a step dt
-        (Ad = exp(A dt), Bd = int_0^dt exp(A s) ds B), computed in C by
-        scaling and squaring.
-        outputs=True: also C = dy/dx_ind (ny, ns) and D = dy/dr (ny, nr) of
-        the outputs: (A, B, C, D), or (Ad, Bd, C, D) with dt."""
+        Parameters
+        ----------
+        x_op : array_like, shape (nx,)
+            The operating state (consistent with the constraints).
+        r_op : array_like, shape (nr,), optional
+            The operating inputs (None: zero).
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        t : float, optional
+            Time (default 0), for models that depend on it.
+        dt : float, optional
+            Return the zero-order-hold discretization over a step dt instead:
+            ``Ad = exp(A dt)``, ``Bd = int_0^dt exp(A s) ds B`` (scaling and
+            squaring, in C).
+        outputs : bool, optional
+            Also return ``C = dy/dx_ind`` (ny, ns) and ``D = dy/dr`` (ny, nr) of
+            the model's outputs.
+
+        Returns
+        -------
+        A : numpy.ndarray, shape (ns, ns)
+            (or Ad with dt)
+        B : numpy.ndarray, shape (ns, nr)
+            (or Bd with dt)
+        C, D : numpy.ndarray
+            With ``outputs=True``: ``(A, B, C, D)``.
+
+        Raises
+        ------
+        ValueError
+            On a wrong shape (the message names the expected one) or a NaN or
+            infinite input.
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         x = self._vec(x_op, self.nx, "state x_op")
         r = None if r_op is None else self._vec(r_op, self.nr, "inputs r_op")
         A = np.empty(self.ns * self.ns, dtype=self.dtype)
@@ -639,11 +1144,33 @@ class Simulator:
                 B[:self.ns * self.nr].reshape(self.ns, self.nr).copy())
 
     def to_statespace(self, x_op, r_op=None, p=None, t=0.0, dt=None):
-        """The linearization as a python-control StateSpace (``pip install
-        eomgen[control]``): states, inputs and outputs named. Outputs are the
-        model's (C, D from linearize(outputs=True)), or the independent state
-        (C = I, D = 0) for a model without outputs. dt: the zero-order-hold
-        discretization (a discrete-time system with that sampling time)."""
+        """The linearization as a python-control ``StateSpace``, with its
+        states, inputs and outputs named (``pip install eomgen[control]``).
+
+        Parameters
+        ----------
+        x_op : array_like, shape (nx,)
+            The operating state.
+        r_op : array_like, shape (nr,), optional
+            The operating inputs.
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        t : float, optional
+            Time (default 0), for models that depend on it.
+        dt : float, optional
+            A discrete-time system with this sampling time (zero-order hold).
+
+        Returns
+        -------
+        control.StateSpace
+            Outputs are the model's (C, D of ``linearize(outputs=True)``), or the
+            independent state (C = I, D = 0) for a model without outputs.
+
+        Raises
+        ------
+        ImportError
+            When python-control is not installed.
+        """
         try:
             import control
         except ImportError:
@@ -690,8 +1217,34 @@ class Simulator:
                                  status_name=e.status_name, time=e.time, state=e.state) from None
 
     def rhs_batch(self, t, X, r=None, p=None, out=None):
-        """x' for N states in one C call: X (N, nx) -> (N, nx). t a scalar
-        or (N,); r, p one vector for all or one row per state."""
+        """x' for N states in one C call, the GIL released.
+
+        Parameters
+        ----------
+        t : float or array_like, shape (N,)
+            The time(s).
+        X : array_like, shape (N, nx)
+            The states.
+        r : array_like, shape (nr,) or (N, nr), optional
+            One input vector for all states or one row per state.
+        p : array_like, shape (np,) or (N, np), optional
+            One constant vector for all states or one row per state.
+        out : numpy.ndarray, shape (N, nx), optional
+            A preallocated C-contiguous result.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, nx)
+
+        Raises
+        ------
+        ValueError
+            On a wrong shape (the message names the expected one) or a NaN or
+            infinite input.
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         X = np.ascontiguousarray(X, dtype=self.dtype)
         if X.ndim != 2 or X.shape[1] != self.nx:
             raise ValueError(f"states must have shape (N, {self.nx}), got {X.shape}")
@@ -715,7 +1268,28 @@ class Simulator:
         return out
 
     def mass_matrix_batch(self, Q, p=None):
-        """M for N configurations: Q (N, nq) (or (N, nx) states) -> (N, nu, nu)."""
+        """M(q) for N configurations in one C call.
+
+        Parameters
+        ----------
+        Q : array_like, shape (N, nq) or (N, nx)
+            Configurations (or states).
+        p : array_like, shape (np,) or (N, np), optional
+            The constants.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, nu, nu)
+
+        Raises
+        ------
+        ValueError
+            On a wrong shape (the message names the expected one) or a NaN or
+            infinite input.
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         Q = np.ascontiguousarray(Q, dtype=self.dtype)
         if Q.ndim != 2 or Q.shape[1] not in (self.nq, self.nx):
             raise ValueError(f"coordinates must have shape (N, {self.nq}) or (N, {self.nx}), "
@@ -730,7 +1304,33 @@ class Simulator:
         return out
 
     def linearize_batch(self, X, r=None, p=None, t=0.0):
-        """(A, B) at N operating points: X (N, nx) -> A (N, ns, ns), B (N, ns, nr)."""
+        """(A, B) at N operating points in one C call.
+
+        Parameters
+        ----------
+        X : array_like, shape (N, nx)
+            The operating states.
+        r : array_like, shape (nr,) or (N, nr), optional
+            The operating inputs.
+        p : array_like, shape (np,) or (N, np), optional
+            The constants.
+        t : float, optional
+            Time (default 0), for models that depend on it.
+
+        Returns
+        -------
+        A : numpy.ndarray, shape (N, ns, ns)
+        B : numpy.ndarray, shape (N, ns, nr)
+
+        Raises
+        ------
+        ValueError
+            On a wrong shape (the message names the expected one) or a NaN or
+            infinite input.
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         X = np.ascontiguousarray(X, dtype=self.dtype)
         if X.ndim != 2 or X.shape[1] != self.nx:
             raise ValueError(f"operating points must have shape (N, {self.nx}), got {X.shape}")
@@ -747,10 +1347,41 @@ class Simulator:
         return A, B
 
     def simulate_batch(self, X0, t_end, dt, r=None, p=None, workers=None, **kw):
-        """simulate() for N initial states (X0 (N, nx)) and/or N parameter
-        sets (p (N, np)), on `workers` threads (default: every core); the C
-        integrator runs without the GIL. Returns (t, X) with X (N, rows, nx);
-        keyword arguments as for simulate()."""
+        """simulate() for N initial states and/or N parameter sets, on threads
+        (the C integrator runs without the GIL).
+
+        Parameters
+        ----------
+        X0 : array_like, shape (N, nx) or (nx,)
+            The initial states.
+        t_end : float
+            The final time.
+        dt : float
+            The RK4 step or the adaptive methods' output interval.
+        r : optional
+            As for :meth:`simulate`: constant inputs (one row or (N, nr)), a
+            table ``(t_grid, R)`` or a callable, shared by every run.
+        p : array_like, shape (np,) or (N, np), optional
+            The constants.
+        workers : int, optional
+            Threads (default: every core).
+        **kw
+            Keyword arguments of :meth:`simulate`.
+
+        Returns
+        -------
+        t : numpy.ndarray, shape (rows,)
+        X : numpy.ndarray, shape (N, rows, nx)
+
+        Raises
+        ------
+        ValueError
+            On a wrong shape (the message names the expected one) or a NaN or
+            infinite input.
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
         from concurrent.futures import ThreadPoolExecutor
         import os
         X0 = np.asarray(X0, dtype=float)
@@ -786,30 +1417,56 @@ class Simulator:
                  client=None, chunk=None, method="rk4", rtol=1e-8, atol=1e-10, project=True,
                  t0=0.0, max_steps=100000, consistent=False, workers=None, progress=None,
                  input_period=None, input_hold="zoh"):
-        """N simulations in C, in chunks on every core (threads, the GIL
-        released) or on a Dask cluster (client=), reduced as they finish.
-        Returns a gen.EnsembleResult (res.final, res[key], res.status,
-        res.failures, res.runs_per_second).
+        """N simulations in C, reduced as they finish: in chunks on every core
+        (threads, the GIL released) or on a Dask cluster (:doc:`/guides/ensembles`).
 
-        x0, p: one value for every run, an (N, nx) / (N, np) array, or a dict
-        {name: number or (N,) array} (x0's other states 0, p's other
-        constants their defaults); gen.Sampler draws such dicts. r: constant
-        inputs (one row, (N, nr) or a dict), or a table (t_grid, R) shared
-        by every run; controller: a gen.LinearFeedback (shared). A Python
-        function r(t, x) is refused (it would hold the GIL at every step).
+        Each run is exactly ``sim.simulate`` of its own x0, p, r (the same C
+        path), so the results do not depend on chunk, workers or client.
 
-        reduce: "final" (the state at t_end, (N, nx)), gen.At(times, names),
-        gen.Min/Max/Mean(names) (over the output rows), a function f(t, X)
-        called per chunk on its full trajectories, or a dict {key: reducer};
-        failed runs give NaN rows and are listed in res.failures with their
-        status and last state. consistent=True solves each run's dependent
-        states first (sim.consistent_state). chunk: runs per C call (default:
-        a few chunks per worker); workers: threads (default every core);
-        progress: a tqdm bar (None: on a terminal). method, rtol, atol,
-        project, t0, max_steps, input_period, input_hold: as simulate().
+        Parameters
+        ----------
+        x0 : array_like or dict
+            One state for every run, an (N, nx) array, or a dict ``{name: number
+            or (N,) array}`` (other states 0); :class:`gen.Sampler` draws such
+            dicts.
+        t_end : float
+            The final time.
+        dt : float
+            The RK4 step or the output interval.
+        p : array_like or dict, optional
+            One constant vector, (N, np), or a dict (other constants their
+            defaults).
+        r : optional
+            Constant inputs (one row, (N, nr) or a dict), or a table ``(t_grid,
+            R)`` shared by every run; a Python function is refused (it would
+            hold the GIL at every step).
+        controller : gen.LinearFeedback, optional
+            A feedback computed in C, shared by every run.
+        reduce : str, reducer, callable or dict, optional
+            ``"final"`` (the state at t_end, (N, nx)), :class:`gen.At`,
+            :class:`gen.Min`, :class:`gen.Max`, :class:`gen.Mean`, a function
+            ``f(t, X)`` called per chunk on its full trajectories, or a dict
+            ``{key: reducer}``.
+        client : dask.distributed.Client, optional
+            Run the chunks on the cluster's workers (each builds the model from
+            its sources into its own cache, by content).
+        chunk : int, optional
+            Runs per C call (default: a few chunks per worker).
+        method, rtol, atol, project, t0, max_steps, input_period, input_hold
+            As for :meth:`simulate`.
+        consistent : bool, optional
+            Solve each run's dependent states first.
+        workers : int, optional
+            Threads (default: every core).
+        progress : bool, optional
+            A tqdm progress bar (None: on a terminal).
 
-        Each run is exactly sim.simulate of its own x0, p, r (the same C
-        path), so the results do not depend on chunk, workers or client."""
+        Returns
+        -------
+        gen.EnsembleResult
+            ``res[key]`` per reducer, ``res.status``, ``res.failures`` (failed
+            runs: NaN rows, their status and last state), ``res.runs_per_second``.
+        """
         from .ensemble import run_ensemble
         return run_ensemble(self, x0, t_end, dt, p=p, r=r, controller=controller,
                             reduce=reduce, client=client, chunk=chunk, method=method, rtol=rtol,

@@ -639,22 +639,45 @@ def derivatives_source(plan, real="double", timings=None):
 
 def compile(model, backend="c", real="double", verbose=False, sources=None,  # noqa: A001
             timings=None, derivatives="lazy"):
-    """Generate, build (cached) and return a Simulator: the one path from a
-    model to compiled code (the CLI and gen.verify call it).
+    """Generate, build (cached by content) and load a model.
 
-    backend: "c" (C99 model + C runtime) or "eigen" (C++17 over Eigen 3.4,
-    through its extern "C" layer: the same API, the same Simulator).
-    real: "double" or "float".
-    sources: a folder written by gen.generate (possibly edited since): its
-    files are compiled instead of freshly generated ones (derivatives
-    included).
-    derivatives: "lazy" (default, C backend): the derivative kernels
-    (linearize, jacobian, step_sensitivity, RODAS4) are generated and
-    compiled on their first use, and loaded from the cache when they were
-    built before; True: now. The Eigen backend always builds them.
-    timings: a dict that receives the time of each stage (kernels, printing,
-    templates, compile; later kernels_derivatives, printing_derivatives,
-    compile_derivatives) and whether the build was cached."""
+    The one path from a model to compiled code (the command line and
+    :func:`gen.verify` call it).
+
+    Parameters
+    ----------
+    model : gen.Model
+        The model.
+    backend : {"c", "eigen"}, optional
+        C99 over the C runtime, or C++17 over Eigen 3.4 through its
+        ``extern "C"`` layer (the same API, the same Simulator).
+    real : {"double", "float"}, optional
+        The scalar type.
+    verbose : bool, optional
+        Print the compiler's commands.
+    sources : str or Path, optional
+        A folder written by :func:`gen.generate` (possibly edited since): its
+        files are compiled instead of freshly generated ones.
+    timings : dict, optional
+        Receives the time of each stage (kernels, printing, templates,
+        compile; later the derivatives') and whether the build was cached.
+    derivatives : {"lazy", True}, optional
+        ``"lazy"`` (C backend): the derivative kernels (linearize, jacobian,
+        step_sensitivity, RODAS4) are built on their first use; True: now.
+        The Eigen backend always builds them.
+
+    Returns
+    -------
+    gen.bindings.Simulator
+        The loaded model library.
+
+    Raises
+    ------
+    gen.BuildError
+        When the compiler fails (with its full log).
+    gen.ModelError
+        When ``sources`` does not hold this model's files.
+    """
     from .bindings import Simulator
     if backend not in BACKENDS:
         raise ModelError(f"unknown backend {backend!r}: choose one of {list(BACKENDS)}")

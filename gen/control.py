@@ -28,20 +28,47 @@ HOLDS = {"zoh": 0, "linear": 1}
 
 @dataclass
 class LinearFeedback:
-    """r = r_op - K (x_ind - x_op_ind), computed in the generated C.
+    """A linear state feedback ``r = r_op - K (x_ind - x_op_ind)``, computed in
+    the generated C.
 
-    K: (NR, NS) gain on the independent state [q_ind, u_ind] (the state of
-    ``sim.linearize``); x_op: the operating state, full (NX) or independent
-    (NS); r_op: the inputs at the operating point (NR, default zero);
-    period: None evaluates the law at every stage (a continuous
-    controller), Ts > 0 samples it every Ts and holds it (a digital one)."""
+    Parameters
+    ----------
+    K : array_like, shape (nr, ns)
+        The gain on the independent state [q_ind, u_ind] (the state of
+        ``sim.linearize``).
+    x_op : array_like, shape (nx,) or (ns,), optional
+        The operating state, full or independent (default zero).
+    r_op : array_like, shape (nr,), optional
+        The inputs at the operating point (default zero).
+    period : float, optional
+        None evaluates the law at every stage (a continuous controller);
+        Ts > 0 samples it at t0 + k Ts and holds it (a digital one).
+    """
     K: object
     x_op: object = None
     r_op: object = None
     period: float | None = None
 
     def arrays(self, sim):
-        """(K (NR, NS), x_op (NX), r_op (NR)) as float arrays, checked."""
+        """The gain and operating point as float arrays, checked against a model.
+
+        Parameters
+        ----------
+        sim : gen.bindings.Simulator
+            The model the feedback closes.
+
+        Returns
+        -------
+        K : numpy.ndarray, shape (nr, ns)
+        x_op : numpy.ndarray, shape (nx,)
+        r_op : numpy.ndarray, shape (nr,)
+
+        Raises
+        ------
+        ValueError
+            On a wrong shape, NaN or infinity, or a period that is not None or
+            positive.
+        """
         K = np.asarray(self.K, dtype=float)
         if K.ndim == 1 and sim.nr == 1:
             K = K[None, :]

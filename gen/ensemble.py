@@ -52,8 +52,19 @@ class Final:
 
 @dataclass(frozen=True)
 class At:
-    """States or outputs (names; None: every state) at output times (each
-    rounded to the nearest output row, t0 + k dt): (N, len(times), len(names))."""
+    """Reducer: states or outputs at given output times.
+
+    Parameters
+    ----------
+    times : float or sequence of float
+        The times, each rounded to the nearest output row (t0 + k dt).
+    names : sequence of str, optional
+        States or outputs by name (None: every state).
+
+    Notes
+    -----
+    Gives an array (N, len(times), len(names)).
+    """
     times: tuple
     names: tuple | None = None
 
@@ -110,6 +121,7 @@ class EnsembleResult:
 
     @property
     def n(self):
+        """The number of runs N."""
         return len(self.status)
 
     @property
@@ -125,6 +137,7 @@ class EnsembleResult:
 
     @property
     def runs_per_second(self):
+        """Runs per second of wall time (NaN before the runs)."""
         return self.n / self.seconds if self.seconds > 0 else float("nan")
 
 
@@ -132,14 +145,23 @@ class EnsembleResult:
 class Sampler:
     """Named random or gridded values for an ensemble's x0 and p.
 
-        s = gen.Sampler(seed=1)
-        p = s.draw(1000, m=("uniform", 0.8, 1.2), L=("normal", 1.0, 0.01))
-        g = gen.Sampler.grid(m=np.linspace(0.8, 1.2, 21), L=[0.9, 1.0, 1.1])  # 63 runs
-
     A spec is ("uniform", low, high), ("normal", mean, std), a number (the
     same for every run) or an array of N values; draw returns {name: (N,)}.
     The strings of the command line parse with Sampler.parse
-    ("uniform:0.8:1.2", "normal:0:0.05", "0.3")."""
+    ("uniform:0.8:1.2", "normal:0:0.05", "0.3").
+
+    Parameters
+    ----------
+    seed : int, optional
+        The seed of the random generator (numpy's ``default_rng``): the same
+        seed and the same specs, in the same order, give the same draws.
+
+    Examples
+    --------
+    >>> s = gen.Sampler(seed=1)
+    >>> p = s.draw(1000, m=("uniform", 0.8, 1.2), L=("normal", 1.0, 0.01))
+    >>> g = gen.Sampler.grid(m=np.linspace(0.8, 1.2, 21), L=[0.9, 1.0, 1.1])  # 63 runs
+    """
 
     KINDS = ("uniform", "normal")
 
@@ -147,6 +169,27 @@ class Sampler:
         self.rng = np.random.default_rng(seed)
 
     def draw(self, n, **specs):
+        """Draw n values of each named quantity.
+
+        Parameters
+        ----------
+        n : int
+            The number of runs.
+        **specs
+            ``name=spec``: ("uniform", low, high), ("normal", mean, std), a
+            number, an array of n values, or a command-line string (see
+            :meth:`parse`). Drawn in the order given.
+
+        Returns
+        -------
+        dict
+            ``{name: numpy.ndarray of shape (n,)}``.
+
+        Raises
+        ------
+        ValueError
+            When n < 1 or a spec is malformed.
+        """
         n = int(n)
         if n < 1:
             raise ValueError(f"the number of runs must be >= 1, got {n}")
@@ -180,7 +223,23 @@ class Sampler:
 
     @staticmethod
     def parse(text):
-        """'uniform:LOW:HIGH', 'normal:MEAN:STD' or a number."""
+        """Parse a spec of the command line.
+
+        Parameters
+        ----------
+        text : str
+            ``"uniform:LOW:HIGH"``, ``"normal:MEAN:STD"`` or a number.
+
+        Returns
+        -------
+        tuple or float
+            ``("uniform", low, high)``, ``("normal", mean, std)`` or the number.
+
+        Raises
+        ------
+        ValueError
+            On any other text.
+        """
         parts = str(text).split(":")
         if len(parts) == 1:
             try:
@@ -197,9 +256,19 @@ class Sampler:
 
     @staticmethod
     def grid(**axes):
-        """The full grid of the axes ({name: values}), flattened in C order
-        (the last name varies fastest): {name: (N,)} with N the product of
-        the lengths."""
+        """The full grid of the axes, flattened in C order (the last name varies
+        fastest).
+
+        Parameters
+        ----------
+        **axes
+            ``name=values``: the values of each axis.
+
+        Returns
+        -------
+        dict
+            ``{name: numpy.ndarray of shape (N,)}``, N the product of the lengths.
+        """
         names = list(axes)
         vals = [np.asarray(axes[k], dtype=float).ravel() for k in names]
         mesh = np.meshgrid(*vals, indexing="ij")

@@ -15,8 +15,16 @@ class ModelError(EomgenError, ValueError):
 
 
 class BuildError(EomgenError, RuntimeError):
-    """Compiling the generated code failed; ``log`` holds the full compiler
-    output."""
+    """Compiling the generated code failed.
+
+    Parameters
+    ----------
+    message : str
+        What failed.
+    log : str, optional
+        The full compiler output (kept as ``log`` and appended to the
+        message).
+    """
 
     def __init__(self, message, log=""):
         super().__init__(message if not log else f"{message}\n--- compiler log ---\n{log}")
@@ -31,8 +39,20 @@ class MissingDependencyError(EomgenError, ImportError):
 class SolverError(EomgenError, RuntimeError):
     """A generated C function returned a failure status.
 
-    Attributes: ``status`` (the negative C code), ``status_name``, ``time``
-    and ``state`` (where it happened, when known)."""
+    Parameters
+    ----------
+    message : str
+        The message: the function, the status and its text, the time and the
+        state.
+    status : int, optional
+        The negative C status code (kept as ``status``).
+    status_name : str, optional
+        Its name, ``"ERR_SINGULAR"`` (``status_name``).
+    time : float, optional
+        Where it happened, when known (``time``).
+    state : numpy.ndarray, optional
+        The last good state, when known (``state``).
+    """
 
     def __init__(self, message, status=None, status_name=None, time=None, state=None):
         super().__init__(message)

@@ -600,24 +600,51 @@ def _check_start(path, d):
 
 def export_fmu(model, path, fmi_version="2.0", kind="both", real="double", start=None,
                units=None, cs_method="dopri5", binary=True):
-    """Write the model as an FMU (a zip) to path and return its Path.
+    """Write the model as a Functional Mock-up Unit (a zip) (:doc:`/guides/fmu`).
 
-    fmi_version: "2.0" or "3.0". kind: "cs" (Co-Simulation), "me" (Model
-    Exchange) or "both". real: the model's scalar type ("double" or
-    "float"; the FMU's variables are doubles either way).
-    start: the start values of the state {name: value} (C names or the
-    sympy spelling; the others are zero). The independent entries are
-    exact; the dependent coordinates and speeds are solved from them at
-    initialization, the values given being the guess (which branch of the
-    constraints). The FMU is initialized once here: a start state that
-    cannot be made consistent is a ModelError.
-    units: {name of a state, input, constant or output: unit} in Modelica's
-    unit syntax ("m", "rad/s", "N.m"); the derivatives get unit/s.
-    cs_method: the Co-Simulation integrator, "dopri5" or "rodas4" (stiff).
-    binary: compile binaries/<platform>/<name>.so for this machine (needs
-    a C compiler); False gives a source-only FMU (not initialized here).
+    Needs FMPy for the FMI headers (``pip install eomgen[fmu]``).
 
-    Needs FMPy for the FMI headers (pip install eomgen[fmu])."""
+    Parameters
+    ----------
+    model : gen.Model
+        The model.
+    path : str or Path
+        The FMU to write.
+    fmi_version : {"2.0", "3.0"}, optional
+        The FMI version.
+    kind : {"cs", "me", "both"}, optional
+        Co-Simulation, Model Exchange or both.
+    real : {"double", "float"}, optional
+        The model's scalar type (the FMU's variables are doubles either way).
+    start : dict, optional
+        The start state ``{name: value}`` (C names or the sympy spelling; the
+        others zero). The independent entries are exact; the dependent
+        coordinates and speeds are solved from them at initialization, the
+        values given being the guess (which branch of the constraints).
+    units : dict, optional
+        ``{name of a state, input, constant or output: unit}`` in Modelica's
+        unit syntax (``"m"``, ``"rad/s"``, ``"N.m"``); derivatives get /s.
+    cs_method : {"dopri5", "rodas4"}, optional
+        The Co-Simulation integrator (``"rodas4"`` for stiff models).
+    binary : bool, optional
+        Compile ``binaries/<platform>/<name>.so`` for this machine (needs a C
+        compiler); False gives a source-only FMU (not initialized here).
+
+    Returns
+    -------
+    Path
+        The FMU written.
+
+    Raises
+    ------
+    gen.ModelError
+        On a bad option, an unknown name in start or units, or a start state
+        that cannot be made consistent (the FMU is initialized once here).
+    gen.errors.MissingDependencyError
+        When FMPy is not installed (the message names the pip command).
+    gen.BuildError
+        When the binary does not compile.
+    """
     from .model import Model
     if not isinstance(model, Model):
         raise ModelError(f"export_fmu needs a gen.Model, got {type(model).__name__}")

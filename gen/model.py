@@ -319,14 +319,17 @@ class Model:
 
     @property
     def nq(self):
+        """Number of generalized coordinates q."""
         return len(self.q)
 
     @property
     def nu(self):
+        """Number of generalized speeds u."""
         return len(self.u)
 
     @property
     def nx(self):
+        """Size of the state x = [q, u]."""
         return self.nq + self.nu
 
     @property
@@ -341,18 +344,22 @@ class Model:
 
     @property
     def nr(self):
+        """Number of inputs r."""
         return len(self.r)
 
     @property
     def np(self):
+        """Number of constants p."""
         return len(self.p)
 
     @property
     def mc(self):
+        """Number of configuration constraints f_c(q) = 0 (dependent coordinates)."""
         return self.fc.shape[0]
 
     @property
     def mv(self):
+        """Number of velocity constraints A u + b = 0 (multipliers)."""
         return self.A.shape[0]
 
     @property
@@ -362,11 +369,18 @@ class Model:
 
     @property
     def independent_state_names(self):
+        """The names of the independent state [q_ind, u_ind], the state of ``linearize``."""
         return ([self.state_names[i] for i in self.q_ind]
                 + [self.state_names[self.nq + i] for i in self.u_ind])
 
     def fingerprint(self) -> str:
-        """A hash of everything generation depends on."""
+        """A hash of everything generation depends on.
+
+        Returns
+        -------
+        str
+            Hex digest; equal models give equal fingerprints.
+        """
         h = hashlib.sha256()
         parts = [self.name, self.method, repr(self.q_ind), repr(self.q_dep),
                  repr(self.u_ind), repr(self.u_dep), repr(self.state_names),
@@ -399,17 +413,46 @@ class Model:
                    energy=None, reactions=None, outputs=None):
         """Build from a ``KanesMethod`` after ``kanes_equations``.
 
-        km may also be a sympy ``System`` or ``JointsMethod`` after
-        ``form_eoms()`` with the Kane backend, or a PyDy ``System`` (whose
-        ``constants`` and ``specifieds`` give constants and inputs when
-        these are None); see :meth:`from_system`.
+        Parameters
+        ----------
+        km : KanesMethod, sympy System, JointsMethod or PyDy System
+            The formed equations of motion. A sympy ``System`` or
+            ``JointsMethod`` after ``form_eoms()`` with the Kane backend, or a
+            PyDy ``System`` (whose ``constants`` and ``specifieds`` give
+            constants and inputs when these are None), go in too; see
+            :meth:`from_system`.
+        constants : dict, optional
+            ``{symbol: value}`` for every parameter, finite real numbers (a
+            constant that appears in no expression gives a
+            :class:`gen.UnusedConstantWarning`).
+        inputs : list, optional
+            Symbols or functions of time that are the inputs r, in this order.
+        name : str, optional
+            The model's name: the prefix of every C symbol (``[a-z][a-z0-9_]*``,
+            not a C keyword or a C library name).
+        energy : sympy expression, optional
+            The total energy, for diagnostics (``sim.energy``, the CSV).
+        reactions : list, optional
+            With ``u_auxiliary``: the unknown reaction forces (functions of time),
+            in the order wanted; by default found in ``km.auxiliary_eqs`` and
+            ordered by name.
+        outputs : dict, optional
+            ``{name: expression}`` of quantities to measure (sensor readings,
+            point positions) in the coordinates, speeds, inputs, constants and t
+            (``sim.outputs``; ``linearize(outputs=True)`` gives C and D).
 
-        constants: {symbol: value} for every parameter; inputs: symbols or
-        functions of time that are inputs r (in this order); energy: an
-        optional expression of the total energy (for diagnostics); outputs:
-        {name: expression} of quantities to measure (sensor readings, point
-        positions), in the coordinates, speeds, inputs, constants and t
-        (``sim.outputs``, ``linearize(outputs=True)`` gives C and D).
+        Returns
+        -------
+        Model
+            The canonical model, validated.
+
+        Raises
+        ------
+        gen.ModelError
+            When the model cannot be generated correctly as given: a free symbol
+            that is neither a coordinate, a speed, an input nor a constant, a
+            non-finite constant, a bad name or partition, an expression the
+            generator cannot print (the message names the culprit).
         """
         validate_name(name)
         container = km
@@ -489,14 +532,49 @@ class Model:
                       constants=None, inputs=None, name="model", energy=None, outputs=None):
         """Build from a ``LagrangesMethod`` after ``form_lagranges_equations``.
 
-        q_ind/q_dep partition the coordinates, qd_ind/qd_dep their
-        derivatives, as for sympy's ``LagrangesMethod.linearize``. The state
-        is x = [q, q'] in the method's coordinate order.
+        The state is x = [q, q'] in the method's coordinate order.
 
-        lm may also be a sympy ``System`` or ``JointsMethod`` after
-        ``form_eoms(LagrangesMethod)``; with a System and no partition given,
-        the System's own q_ind/q_dep (and u_ind/u_dep when they are the
-        coordinate derivatives, else q_ind'/q_dep') are used."""
+        Parameters
+        ----------
+        lm : LagrangesMethod, sympy System or JointsMethod
+            The formed equations of motion (a ``System`` or ``JointsMethod``
+            after ``form_eoms(LagrangesMethod)`` goes in too).
+        q_ind, q_dep : list, optional
+            The partition of the coordinates, as for sympy's
+            ``LagrangesMethod.linearize`` (:doc:`/guides/partitions`); with a
+            System and no partition, the System's own.
+        qd_ind, qd_dep : list, optional
+            Their derivatives (with a System: its u_ind/u_dep when they are the
+            coordinate derivatives, else q_ind'/q_dep').
+        constants : dict, optional
+            ``{symbol: value}`` for every parameter, finite real numbers (a
+            constant that appears in no expression gives a
+            :class:`gen.UnusedConstantWarning`).
+        inputs : list, optional
+            Symbols or functions of time that are the inputs r, in this order.
+        name : str, optional
+            The model's name: the prefix of every C symbol (``[a-z][a-z0-9_]*``,
+            not a C keyword or a C library name).
+        energy : sympy expression, optional
+            The total energy, for diagnostics (``sim.energy``, the CSV).
+        outputs : dict, optional
+            ``{name: expression}`` of quantities to measure (sensor readings,
+            point positions) in the coordinates, speeds, inputs, constants and t
+            (``sim.outputs``; ``linearize(outputs=True)`` gives C and D).
+
+        Returns
+        -------
+        Model
+            The canonical model, validated.
+
+        Raises
+        ------
+        gen.ModelError
+            When the model cannot be generated correctly as given: a free symbol
+            that is neither a coordinate, a speed, an input nor a constant, a
+            non-finite constant, a bad name or partition, an expression the
+            generator cannot print (the message names the culprit).
+        """
         validate_name(name)
         container = lm
         lm, kind = _method_of(lm, "lagrange")
@@ -582,19 +660,48 @@ class Model:
     @classmethod
     def from_system(cls, obj, constants=None, inputs=None, name="model", energy=None,
                     outputs=None, **partition):
-        """Build from whatever holds formed equations of motion: a
-        ``KanesMethod`` or ``LagrangesMethod``, a sympy ``System`` or
-        ``JointsMethod`` after ``form_eoms()`` (either backend), or a PyDy
-        ``System``. Dispatches to :meth:`from_kanes` or :meth:`from_lagrange`
-        on the formed method.
+        """Build from whatever holds formed equations of motion.
 
-        partition: the further keywords of the builder: q_ind, q_dep, qd_ind,
-        qd_dep for Lagrange models (a sympy System's own partition is the
-        default), those of from_kanes for Kane models. For a PyDy System,
-        constants=None takes its ``constants`` dict and inputs=None its
-        specified quantities. A System whose ``form_eoms()`` was not called
-        (or whose equations were reset by a later change) is refused with a
-        ModelError saying so: eomgen never forms the equations itself."""
+        Dispatches to :meth:`from_kanes` or :meth:`from_lagrange` on the formed
+        method.
+
+        Parameters
+        ----------
+        obj : KanesMethod, LagrangesMethod, sympy System, JointsMethod or PyDy System
+            After ``kanes_equations`` / ``form_lagranges_equations`` /
+            ``form_eoms()`` (either backend).
+        constants : dict, optional
+            As for :meth:`from_kanes`; for a PyDy System, None takes its
+            ``constants`` dict.
+        inputs : list, optional
+            As for :meth:`from_kanes`; for a PyDy System, None takes its specified
+            quantities.
+        name : str, optional
+            The model's name: the prefix of every C symbol (``[a-z][a-z0-9_]*``,
+            not a C keyword or a C library name).
+        energy : sympy expression, optional
+            The total energy, for diagnostics (``sim.energy``, the CSV).
+        outputs : dict, optional
+            ``{name: expression}`` of quantities to measure (sensor readings,
+            point positions) in the coordinates, speeds, inputs, constants and t
+            (``sim.outputs``; ``linearize(outputs=True)`` gives C and D).
+        **partition
+            The further keywords of the builder: q_ind, q_dep, qd_ind, qd_dep for
+            Lagrange models (a sympy System's own partition is the default), those
+            of :meth:`from_kanes` for Kane models.
+
+        Returns
+        -------
+        Model
+            The canonical model, validated.
+
+        Raises
+        ------
+        gen.ModelError
+            As :meth:`from_kanes`; also for a System whose ``form_eoms()`` was not
+            called (or whose equations were reset by a later change): eomgen never
+            forms the equations itself.
+        """
         m, desc, kind, call = _unwrap(obj)
         needs = "Model.from_system needs a KanesMethod or LagrangesMethod"
         accepted = ("(accepted: a KanesMethod or LagrangesMethod, or a sympy System, "

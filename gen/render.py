@@ -430,10 +430,28 @@ def write_atomic(files, out_dir):
 
 
 def generate(model, out_dir, backend="c", real="double", timings=None):
-    """Write the model's sources, a CMake project and a standalone simulator
-    into out_dir; return the paths written. backend="c": C99 model and the C
-    runtime; backend="eigen": a C++17 header over Eigen 3.4 (scalar type a
-    template parameter) on the C++ runtime, plus an extern "C" layer with the
-    C backend's API."""
+    """Write the model's sources, a CMake project and a standalone simulator.
+
+    Parameters
+    ----------
+    model : gen.Model
+        The model.
+    out_dir : str or Path
+        The folder to write into (created; files written atomically, the same
+        model gives the same bytes).
+    backend : {"c", "eigen"}, optional
+        ``"c"``: the C99 model over the C runtime; ``"eigen"``: a C++17 header
+        over Eigen 3.4 (the scalar type a template parameter) on the C++
+        runtime, plus an ``extern "C"`` layer with the C backend's API.
+    real : {"double", "float"}, optional
+        The scalar type (``float``: the embedded profile).
+    timings : dict, optional
+        Receives the time of each stage.
+
+    Returns
+    -------
+    list of Path
+        The paths written.
+    """
     files = render_files(model, real=real, backend=backend, timings=timings)
     return write_atomic(files, out_dir)

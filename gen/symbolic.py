@@ -56,19 +56,42 @@ def _solve(Mat, rhs, what):
 
 def linearize_symbolic(model: Model, op_point=None, r_op=None, constants=None, t=0,
                        simplify=True):
-    """A, B (sympy Matrices) about an operating point.
-
-    op_point: {coordinate or speed (the user's sympy objects, or state names
-    as strings): value}; values may be numbers or expressions in the
-    model's constants (``L``, ``g``...). States left out stay symbolic (as
-    the user's functions of time). r_op: {input: value} (may also be given
-    inside op_point); unset inputs are 0. constants: None keeps the
-    constants as symbols; ``"values"`` substitutes the model's values; a
-    dict {symbol or name: value} substitutes those given.
+    """The linearization A, B as sympy matrices, about an operating point.
 
     The operating point need not be an equilibrium: the accelerations and
-    multipliers there are solved from the model. Raises SingularError when
-    the dependent partition or the dynamics are singular at the point.
+    multipliers there are solved from the model.
+
+    Parameters
+    ----------
+    model : gen.Model
+        The model (small ones: the algebra is symbolic).
+    op_point : dict, optional
+        ``{coordinate or speed: value}`` (the user's sympy objects, or state
+        names as strings); values may be numbers or expressions in the
+        model's constants. States left out stay symbolic.
+    r_op : dict, optional
+        ``{input: value}`` (may also be given inside op_point); unset inputs
+        are 0.
+    constants : None, "values" or dict, optional
+        None keeps the constants as symbols; ``"values"`` substitutes the
+        model's values; a dict ``{symbol or name: value}`` those given.
+    t : optional
+        The time.
+    simplify : bool, optional
+        Simplify the result.
+
+    Returns
+    -------
+    A : sympy.Matrix, shape (ns, ns)
+    B : sympy.Matrix, shape (ns, nr)
+
+    Raises
+    ------
+    gen.SingularError
+        When the dependent partition or the dynamics are singular at the
+        point.
+    gen.ModelError
+        On an unknown name in op_point, r_op or constants.
     """
     if not isinstance(model, Model):
         raise ModelError(f"linearize_symbolic needs a gen.Model, got {type(model).__name__}")

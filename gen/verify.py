@@ -25,6 +25,23 @@ __all__ = ["verify", "VerifyReport"]
 
 @dataclass
 class VerifyReport:
+    """The result of :func:`gen.verify`: one row per function.
+
+    Attributes
+    ----------
+    model, backend, real : str
+        What was checked.
+    tol : float
+        The relative tolerance.
+    samples : int
+        Random states per function.
+    rows : list of (str, float, int)
+        (function, max relative error, points).
+    failures : list of str
+        Functions that failed to run.
+    seconds : float
+        How long it took.
+    """
     model: str
     backend: str
     real: str
@@ -36,9 +53,18 @@ class VerifyReport:
 
     @property
     def ok(self):
+        """True when every function agrees within the tolerance and none failed."""
         return not self.failures and all(err <= self.tol for _, err, _ in self.rows)
 
     def table(self):
+        """The report as the command line prints it.
+
+        Returns
+        -------
+        str
+            One line per function (max relative error, points, ok/FAIL) and a
+            verdict.
+        """
         w = max([len(r[0]) for r in self.rows] + [8])
         lines = [f"verify '{self.model}' ({self.backend}, {self.real}) against sympy: "
                  f"{self.samples} random states, tolerance {self.tol:.0e}",
@@ -138,12 +164,39 @@ def _rhs_reference(model, ref, x, r, p, t):
 
 def verify(model, samples=20, backend="c", real="double", sources=None, seed=0, tol=None,
            linearize_samples=3, sim=None):
-    """Compare each compiled function with sympy at random states; returns a
-    VerifyReport (``report.ok``, ``report.table()``).
+    """Compare every compiled function with sympy at random states.
 
-    sources: a folder written by ``gen.generate`` (possibly edited since):
-    its sources are compiled and checked instead of freshly generated ones.
-    sim: an already compiled Simulator to check instead."""
+    The reference never touches eomgen's kernels, CSE or printer: sympy's
+    ``lambdify`` of the canonical model, numpy for the constrained solve,
+    :func:`gen.linearize_symbolic` for A and B (:doc:`/guides/verification`).
+
+    Parameters
+    ----------
+    model : gen.Model
+        The model.
+    samples : int, optional
+        Random states per function.
+    backend : {"c", "eigen"}, optional
+        The backend to build.
+    real : {"double", "float"}, optional
+        The scalar type.
+    sources : str or Path, optional
+        A folder written by :func:`gen.generate` (possibly edited since): its
+        sources are compiled and checked instead of freshly generated ones.
+    seed : int, optional
+        The random states' seed.
+    tol : float, optional
+        The relative tolerance (default 1e-9 in double, 2e-4 in float).
+    linearize_samples : int, optional
+        Operating points for ``linearize`` (symbolic, slower).
+    sim : gen.bindings.Simulator, optional
+        An already compiled model to check instead.
+
+    Returns
+    -------
+    gen.VerifyReport
+        ``report.ok``, ``report.table()``.
+    """
     from .build import compile as compile_model
     from .symbolic import linearize_symbolic
 
