@@ -454,6 +454,7 @@ def test_constrained_model_matches_sympy_auxiliary_eqs():
     assert rel_err(got, ref) < 1e-12, rel_err(got, ref)
 
 
+@pytest.mark.slow
 def test_standalone_csv_has_one_column_per_reaction(tmp_path):
     import shutil
     import subprocess

@@ -236,6 +236,7 @@ BINARY_CASES = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("args,code,needle", BINARY_CASES, ids=[c[2] for c in BINARY_CASES])
 def test_binary_bad_arguments(binary, args, code, needle):
     import subprocess

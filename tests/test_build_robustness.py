@@ -87,6 +87,7 @@ def test_footprint_rejects_a_negative_stack_limit(kane_model):
         gen.footprint.report(kane_model, target="host", stack_limit=-1)
 
 
+@pytest.mark.slow
 def test_cli_rejects_a_negative_stack_limit(tmp_path):
     for cmd in ("build", "report"):
         args = [cmd, SEED, "--stack-limit", "-5"] + (["-o", str(tmp_path / "o")]
@@ -194,6 +195,7 @@ def _fake_temp(root, pid, age=0.0, owner=True, name="_eomgen_fake_0123456789abcd
     return d
 
 
+@pytest.mark.slow
 def test_stale_temp_dirs_are_cleaned_by_the_next_build(tmp_path, monkeypatch, kane_model):
     cache = tmp_path / "cache"
     cache.mkdir()
@@ -252,6 +254,7 @@ def test_cli_unwritable_cache_is_one_line(tmp_path):
     assert "Traceback" not in p.stderr
 
 
+@pytest.mark.slow
 def test_cache_subcommand(tmp_path):
     cache = tmp_path / "c"
     p = eomgen("cache", cache=cache)

@@ -73,6 +73,7 @@ def test_linearize_prints_labelled_A_and_eigenvalues():
     assert "B = (no inputs)" in p.stdout
 
 
+@pytest.mark.slow
 def test_simulate_csv_and_plot(tmp_path):
     csv = tmp_path / "run.csv"
     png = tmp_path / "plots" / "run.png"
@@ -126,6 +127,7 @@ def test_bad_arguments_one_line_exit_2(tmp_path, args, needle):
     assert "Traceback" not in p.stderr
 
 
+@pytest.mark.slow
 def test_failures_exit_1_without_traceback(tmp_path):
     bad = tmp_path / "bad.py"
     bad.write_text("import seed_pendulum as sp\n"
@@ -214,6 +216,7 @@ def model():
 '''
 
 
+@pytest.mark.slow
 def test_simulate_csv_has_the_reaction_forces(tmp_path):
     # the pin force of a pendulum, by hand: R1 = -m (g cos(theta) + L theta'^2), R2 = 0
     f = tmp_path / "pin_model.py"

@@ -263,6 +263,7 @@ def test_analyze_refuses_recursion_and_dynamic_frames():
         fp.analyze(frames, {"a": {"__indirect_call"}}, ["a"])
 
 
+@pytest.mark.slow
 @pytest.mark.embedded
 def test_report_cli_writes_footprint(tmp_path, monkeypatch):
     require_tool("cmake")

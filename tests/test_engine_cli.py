@@ -105,6 +105,7 @@ def bitwise(*pairs):
 
 
 # ------------------------------------------------------------- the binary
+@pytest.mark.slow
 def test_binary_events_match_python_and_the_exact_period(binary, kane_sim, x0, tmp_path):
     T4 = quarter_period()
     out, ev = tmp_path / "run.csv", tmp_path / "ev.csv"
@@ -250,6 +251,7 @@ def eomgen(*args, rc=0):
     return proc
 
 
+@pytest.mark.slow
 def test_eomgen_simulate_events_match_the_binary(binary, kane_sim, x0, tmp_path):
     """The same run from `eomgen simulate` (through sim.simulate) and from the
     binary: the same rows, the same events, the same formats."""

@@ -213,6 +213,7 @@ def test_dask_local_cluster_bit_identical_and_builds_by_content(kane_sim, tmp_pa
     assert built, list(worker_cache.iterdir())                 # built there, by content
 
 
+@pytest.mark.slow
 def test_command_line_ensemble_npz_and_parquet(kane_sim, tmp_path):
     """eomgen ensemble: the samples it draws (Sampler, seed, in the order of
     the options), the runs it makes from them (dependent states solved), the

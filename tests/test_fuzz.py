@@ -54,9 +54,9 @@ def _build(model, out, cc, flags, extra=()):
 SAN = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
 
 
-# the seed Kane pendulum in the fast tier, the other models with the slow tests
-@pytest.mark.parametrize("key", [k if k == "kane" else pytest.param(k, marks=pytest.mark.slow)
-                                 for k in sorted(MODELS)])
+# every model with the slow tests (a sanitizer build of each)
+@pytest.mark.slow
+@pytest.mark.parametrize("key", sorted(MODELS))
 def test_hostile_inputs_under_sanitizers(tmp_path, key):
     exe = _build(MODELS[key](), tmp_path, "gcc", SAN)
     r = subprocess.run([str(exe), "3000"], capture_output=True, text=True, timeout=600)

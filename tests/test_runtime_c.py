@@ -15,7 +15,8 @@ SANITIZE = pytest.param(["-DEOMGEN_SANITIZE=ON"], marks=[pytest.mark.fuzz, pytes
 
 
 @pytest.mark.parametrize("flags", [pytest.param([], id="double"), SANITIZE,
-                                   pytest.param(["-DEOMGEN_REAL_FLOAT=ON"], id="float")])
+                                   pytest.param(["-DEOMGEN_REAL_FLOAT=ON"], id="float",
+                                                marks=pytest.mark.slow)])
 def test_runtime_ctest(tmp_path, flags):
     require_tool("cmake")
     require_tool("ctest")
