@@ -399,6 +399,9 @@ def main():
                     help="sizes (default 1 2 4 8 10 + 12 16 20 32 50 in budget)")
     ap.add_argument("--max-seconds", type=float, default=300.0,
                     help="time limit of one tool's generation + compile for one model (default 300)")
+    ap.add_argument("--derive-seconds", type=float,
+                    help="the derivation's expected time at the first n (the time limit's "
+                         "allowance for sympy; later sizes scale the last measured one)")
     ap.add_argument("--tools", nargs="*", default=list(TOOLS), choices=TOOLS)
     ap.add_argument("--json", default=str(HERE / "results.json"), help="where to write all numbers")
     ap.add_argument("--keep", help="keep the generated sources in this directory")
@@ -446,6 +449,7 @@ def main():
     print(f"# {cpu} ({cores} logical cores, {mhz} MHz), {meta['date']}", flush=True)
     results = {"meta": meta, "models": {}}
     gave_up = {}                      # tool -> n where it timed out/failed (extra sizes)
+    last_derive = None                # (n, seconds) of the last derivation measured
     tmp_root = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="eomgen_bench_"))
     tmp_root.mkdir(parents=True, exist_ok=True)
     try:
@@ -468,6 +472,11 @@ def main():
             entry = results["models"][n] = {"n": n, "nx": 2 * (n + 1)}
             work = tmp_root / f"n{n}"
             derive_t = None
+            # the first tool's derivation at this n, guessed from the last n's
+            # (sympy's Kane derivation grows about as n^4 here): the budget is
+            # for generation + compile, not for sympy
+            guess = (last_derive[1] * (n / last_derive[0]) ** 4 if last_derive
+                     else args.derive_seconds or args.max_seconds)
             for tool in args.tools:
                 if tool in gave_up:
                     entry[tool] = {"status": "skipped",
@@ -475,10 +484,12 @@ def main():
                     continue
                 # the budget is for generation + compile; the derivation and the
                 # measurements come on top
-                timeout = args.max_seconds + (3 * derive_t + 60 if derive_t else args.max_seconds)
+                timeout = args.max_seconds + 3 * (derive_t or guess) + 60
                 st, res = run_worker(tool, n, work, opts, timeout)
                 if st == "ok":
                     derive_t = derive_t or res.get("derive")
+                    if derive_t:
+                        last_derive = (n, derive_t)
                     if res.get("total", 0) > args.max_seconds:
                         st = "over budget"
                     entry[tool] = {"status": st, **res}

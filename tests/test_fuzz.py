@@ -78,7 +78,7 @@ def test_eigen_backend_under_sanitizers(tmp_path, key):
     objs = []
     for src, cc, std in ((HARNESS, "gcc", "-std=c99"), (out / f"{p}.cpp", "g++", "-std=c++17")):
         obj = out / (Path(src).stem + ".o")
-        cmd = [cc, std, "-g", "-O1", "-I", str(out), "-isystem", str(inc),
+        cmd = [cc, std, "-g", "-O0", "-I", str(out), "-isystem", str(inc),
                f'-DMODEL_H="{p}.h"', f"-DP(x)={p}_##x", f"-DPU(x)={p.upper()}_##x", *SAN,
                "-c", str(src), "-o", str(obj)]
         r = subprocess.run(cmd, capture_output=True, text=True)
