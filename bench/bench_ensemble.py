@@ -56,16 +56,28 @@ def rss_worker(model, n, save=None):
     """One fresh process: compile (cached), draw, run N on every core with
     reduce="final"; its peak RSS (kB) before and after, its runs/s; the
     final states saved to save (.npy) if given."""
-    import resource
     import numpy as np
     sim, X0, P = setup(model, n)
-    base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    base = peak_rss_kb()
     res = sim.ensemble(X0, T_END, DT, p=P, progress=False)
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    peak = peak_rss_kb()
     if save:
         np.save(save, res.final)
     return {"n": n, "base_kb": base, "peak_kb": peak, "failed": len(res.failures),
             "seconds": res.seconds, "runs_per_s": res.runs_per_second, "chunks": res.chunks}
+
+
+def peak_rss_kb():
+    """This process's peak resident set (kB): VmHWM, the high-water mark of
+    its own memory. (getrusage's ru_maxrss is not: on Linux it keeps the
+    parent's resident size at the fork, so a child of a large parent
+    reports the parent's.)"""
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1])
+    import resource
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 
 
 def fresh(model, n, save=None):

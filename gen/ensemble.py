@@ -613,7 +613,12 @@ def _dask_task(bundle, job):
 def _run_dask(sim, jobs, client, bar):
     if jobs and jobs[0]["method"] == "rodas4":
         sim._need_derivatives()          # the workers get the complete library
-    bundle = client.scatter(model_bundle(sim), broadcast=True)
+    # one future for the whole bundle, under a key of this call's own: a
+    # dict given to scatter itself would be scattered value by value under
+    # the dict's keys ("files", "name", ...), shared by every model on the
+    # cluster; a content key would be shared by two calls, and the first
+    # call's release could drop the data the second one is about to use
+    (bundle,) = client.scatter([model_bundle(sim)], broadcast=True, hash=False)
     futures = client.map(_dask_task, [bundle] * len(jobs), jobs, pure=False)
     if bar is not None:
         from distributed import as_completed

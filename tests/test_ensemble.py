@@ -188,9 +188,11 @@ def _dask():
 
 
 @pytest.mark.slow
-def test_dask_local_cluster_bit_identical_and_builds_by_content(kane_sim, tmp_path):
+def test_dask_local_cluster_bit_identical_and_builds_by_content(kane_sim, lagrange_sim, tmp_path):
     """Two worker processes whose eomgen cache starts empty: they build the
-    model from the shipped sources, and give the local run's numbers."""
+    model from the shipped sources, and give the local run's numbers; again
+    on the same client, for the same model and for another one (each
+    model's sources reach the workers under a key of their own)."""
     _dask()
     from distributed import Client, LocalCluster
     X0 = np.array([pendulum_state(a, 0.1, 1.0, "kane") for a in _thetas(200, 6)])
@@ -205,7 +207,12 @@ def test_dask_local_cluster_bit_identical_and_builds_by_content(kane_sim, tmp_pa
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
                       env=env) as cluster, Client(cluster) as client:
         remote = kane_sim.ensemble(X0, 1.0, 1e-3, p=P, reduce=reduce, chunk=25, client=client)
+        again = kane_sim.ensemble(X0[:50], 1.0, 1e-3, p=P[:50], chunk=10, client=client)
+        XL = np.array([pendulum_state(a, 0.1, 1.0, "lagrange") for a in _thetas(40, 7)])
+        other = lagrange_sim.ensemble(XL, 1.0, 1e-3, chunk=10, client=client)
         info = client.run(lambda: os.environ.get("EOMGEN_CACHE"))
+    assert np.array_equal(again.final, local["final"][:50])
+    assert np.array_equal(other.final, lagrange_sim.ensemble(XL, 1.0, 1e-3, chunk=10).final)
     assert set(info.values()) == {str(worker_cache)}
     assert np.array_equal(remote["final"], local["final"])
     assert np.array_equal(remote["peak"], local["peak"])
