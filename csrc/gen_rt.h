@@ -66,19 +66,23 @@ int gen_rt_all_finite(int n, const gen_rt_real *v);
 /* The same, inline and branch-free: for the argument checks of the
  * generated functions, where n is often a constant the compiler unrolls.
  * x * 0 is 0 for a finite x and NaN for NaN and inf, so the sums are NaN
- * iff one value is not finite (two sums: half the dependency chain; no
- * libm). */
+ * iff one value is not finite (no libm). Four independent sums: a quarter
+ * of the dependency chain, and lanes a vectorizer can pack (clang does at
+ * -O2); at n = 4 links of the cart, 2 -> 4 sums made eval_rhs about 7%
+ * faster (bench/README). */
 static inline int gen_rt_finite_n(int n, const gen_rt_real *v)
 {
-    gen_rt_real a0 = 0, a1 = 0;
+    gen_rt_real a[4] = {0, 0, 0, 0};
     int i;
-    for (i = 0; i + 1 < n; i += 2) {
-        a0 += v[i] * 0;
-        a1 += v[i + 1] * 0;
+    for (i = 0; i + 3 < n; i += 4) {
+        a[0] += v[i] * 0;
+        a[1] += v[i + 1] * 0;
+        a[2] += v[i + 2] * 0;
+        a[3] += v[i + 3] * 0;
     }
-    if (i < n) a0 += v[i] * 0;
-    a0 += a1;
-    return a0 == a0;
+    for (; i < n; ++i) a[0] += v[i] * 0;
+    a[0] = (a[0] + a[1]) + (a[2] + a[3]);
+    return a[0] == a[0];
 }
 
 /* ---- dense linear algebra (gen_rt_linalg.c) --------------------------- */
