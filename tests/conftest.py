@@ -69,6 +69,39 @@ def lagrange_model():
 
 
 @pytest.fixture(scope="session")
+def kane_binary(tmp_path_factory, kane_model):
+    """The seed Kane pendulum's standalone simulator, built from its
+    generated CMake project (Release; the project's strict flags: -Wall
+    -Wextra -Werror -pedantic). The binary tests of several modules share
+    it. A build costs 6-8 s, so it is kept in the test cache keyed by the
+    generated sources' content (CI starts with an empty cache and builds)."""
+    import hashlib
+    import subprocess
+    require_tool("cmake")
+    out = tmp_path_factory.mktemp("kane_project")
+    src, bld = out / "src", out / "build"
+    gen.generate(kane_model, src)
+    h = hashlib.sha256()
+    for f in sorted(src.rglob("*")):
+        if f.is_file():
+            h.update(f.relative_to(src).as_posix().encode() + b"\0" + f.read_bytes() + b"\0")
+    name = f"{kane_model.name}_sim"
+    kept = Path(os.environ["EOMGEN_CACHE"]) / "test-binaries" / h.hexdigest()[:16] / name
+    if kept.exists():
+        return kept
+    subprocess.run(["cmake", "-S", str(src), "-B", str(bld), "-DCMAKE_BUILD_TYPE=Release"],
+                   check=True, capture_output=True)
+    subprocess.run(["cmake", "--build", str(bld)], check=True, capture_output=True)
+    exe = bld / name
+    assert exe.exists()
+    kept.parent.mkdir(parents=True, exist_ok=True)
+    tmp = kept.with_name(f".{name}.{os.getpid()}")
+    shutil.copy2(exe, tmp)
+    os.replace(tmp, kept)            # whole or absent, also with two sessions at once
+    return kept
+
+
+@pytest.fixture(scope="session")
 def kane_sim(kane_model):
     return gen.compile(kane_model)
 

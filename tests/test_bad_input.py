@@ -212,16 +212,9 @@ def test_solver_error_carries_status_time_state(kane_sim):
 
 # ------------------------------------------------------------ the binary
 @pytest.fixture(scope="module")
-def binary(tmp_path_factory, kane_model):
-    import subprocess
-    from conftest import require_tool
-    require_tool("cmake")
-    out = tmp_path_factory.mktemp("catalogue_bin")
-    gen.generate(kane_model, out / "src")
-    subprocess.run(["cmake", "-S", str(out / "src"), "-B", str(out / "b"),
-                    "-DCMAKE_BUILD_TYPE=Release"], check=True, capture_output=True)
-    subprocess.run(["cmake", "--build", str(out / "b")], check=True, capture_output=True)
-    return out / "b" / "pendulum_kane_sim"
+def binary(kane_binary):
+    """The seed Kane pendulum's standalone simulator (conftest.py)."""
+    return kane_binary
 
 
 BINARY_CASES = [

@@ -41,10 +41,10 @@ def _build(model, out):
 
 
 @pytest.fixture(scope="module")
-def binary(tmp_path_factory, kane_model):
-    """The seed Kane pendulum's standalone simulator (strict flags: the
-    generated CMake project builds with -Wall -Wextra -Werror -pedantic)."""
-    return _build(kane_model, tmp_path_factory.mktemp("engine_cli"))
+def binary(kane_binary):
+    """The seed Kane pendulum's standalone simulator (conftest.py: one
+    strict-flag CMake build per session)."""
+    return kane_binary
 
 
 @pytest.fixture(scope="module")

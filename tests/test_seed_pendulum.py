@@ -174,20 +174,8 @@ def test_lagrange_linearize_seed_point(lagrange_sim, sympy_lagrange_AB, g, L):
 
 
 # ------------------------------------------------------ the binary (CMake)
-@pytest.fixture(scope="module")
-def kane_binary(tmp_path_factory, kane_model):
-    from conftest import require_tool
-    require_tool("cmake")
-    out = tmp_path_factory.mktemp("kane_project")
-    src = out / "src"
-    gen.generate(kane_model, src)
-    bld = out / "build"
-    subprocess.run(["cmake", "-S", str(src), "-B", str(bld), "-DCMAKE_BUILD_TYPE=Release"],
-                   check=True, capture_output=True)
-    subprocess.run(["cmake", "--build", str(bld)], check=True, capture_output=True)
-    exe = bld / "pendulum_kane_sim"
-    assert exe.exists()
-    return exe
+# kane_binary: conftest.py (one build per session, shared with the other
+# modules' binary tests)
 
 
 def test_binary_period_and_constraint(kane_binary, tmp_path):

@@ -16,8 +16,9 @@ gets a partition whose dependent blocks are nonsingular at a random point. The c
 ``sim.rhs`` (and, for Lagrange, the multipliers) is compared at random consistent states
 with ``numpy.linalg.solve`` of sympy's ``mass_matrix_full`` / ``forcing_full``.
 
-Tiers: the module is ``slow`` except its first 3 models (collected from the first test
-functions only when ``slow`` is deselected). Sympy's ``@slow`` tests (the Whipple
+Tiers: the module is ``slow`` except 3 models of two quick sympy tests (``FAST_SOURCES``:
+auxiliary speeds and a plain pendulum, about 1.5 s of sympy; only these run when ``slow``
+is deselected). Sympy's ``@slow`` tests (the Whipple
 bicycle, minutes of sympy time) are collected only with ``EOMGEN_CORPUS=all``.
 """
 import hashlib
@@ -39,6 +40,8 @@ from helpers import rel_err
 
 TOL = 1e-9
 FAST_COUNT = 3
+# the fast tier's models: the first FAST_COUNT formed by these sympy tests
+FAST_SOURCES = ("test_kane.py::test_aux", "test_kane.py::test_pend")
 TIME_LIMIT = 30          # seconds per sympy test function during collection
 FILES = ["test_kane", "test_kane2", "test_kane3", "test_kane4", "test_kane5", "test_lagrange",
          "test_lagrange2", "test_linearize", "test_system_class", "test_jointsmethod",
@@ -78,9 +81,9 @@ def _sympy_tests(mod, fname):
     return out
 
 
-def collect(max_models=None):
-    """Run sympy's mechanics tests, recording every formed method object.
-    Returns [(id, method)] deduplicated, and {source: seconds} of the run."""
+def collect(max_models=None, sources=None):
+    """Run sympy's mechanics tests (those named in ``sources`` if given),
+    recording every formed method object. Returns [(id, method)] deduplicated."""
     every = os.environ.get("EOMGEN_CORPUS") == "all"
     rec = []
     cur = [None]
@@ -113,6 +116,8 @@ def collect(max_models=None):
                 continue
             for src, fn, slow in _sympy_tests(mod, fname):
                 if (src in SLOW_SOURCES or slow) and not every:
+                    continue
+                if sources is not None and src not in sources:
                     continue
                 if max_models is not None and len(rec) >= max_models:
                     break
@@ -156,10 +161,14 @@ _CACHE = {}
 def corpus(fast_only):
     key = "fast" if fast_only else "all"
     if key not in _CACHE:
-        _CACHE[key] = collect(FAST_COUNT if fast_only else None)
-        if not fast_only:
-            _CACHE.setdefault("fast", _CACHE[key][:FAST_COUNT])
+        _CACHE[key] = collect(FAST_COUNT, FAST_SOURCES) if fast_only else collect()
     return _CACHE[key]
+
+
+def _fast_ids(models):
+    """The ids of the models the FAST_SOURCES tests form (the fast tier
+    takes the first FAST_COUNT)."""
+    return {mid for mid, _ in models if mid.split("#")[0] in FAST_SOURCES}
 
 
 def _slow_deselected(config):
@@ -172,7 +181,8 @@ def pytest_generate_tests(metafunc):
         return
     fast_only = _slow_deselected(metafunc.config)
     models = corpus(fast_only)
-    params = [pytest.param(i, id=mid, marks=() if i < FAST_COUNT else pytest.mark.slow)
+    fast = sorted(_fast_ids(models), key=[mid for mid, _ in models].index)[:FAST_COUNT]
+    params = [pytest.param(i, id=mid, marks=() if mid in fast else pytest.mark.slow)
               for i, (mid, _) in enumerate(models)]
     metafunc.parametrize("entry", params)
     metafunc.parametrize("fast_only", [fast_only], ids=[""])
