@@ -68,18 +68,31 @@ def lagrange_model():
     return seed_pendulum.lagrange_model()
 
 
-@pytest.fixture(scope="session")
-def kane_binary(tmp_path_factory, kane_model):
-    """The seed Kane pendulum's standalone simulator, built from its
-    generated CMake project (Release; the project's strict flags: -Wall
-    -Wextra -Werror -pedantic). The binary tests of several modules share
-    it. A build costs 6-8 s, so it is kept in the test cache keyed by the
-    generated sources' content (CI starts with an empty cache and builds)."""
-    import hashlib
+def build_binary(model, out):
+    """The model's standalone simulator, built from its generated CMake
+    project under out (Release; the project's strict flags: -Wall -Wextra
+    -Werror -pedantic)."""
     import subprocess
     require_tool("cmake")
-    out = tmp_path_factory.mktemp("kane_project")
     src, bld = out / "src", out / "build"
+    gen.generate(model, src)
+    subprocess.run(["cmake", "-S", str(src), "-B", str(bld), "-DCMAKE_BUILD_TYPE=Release"],
+                   check=True, capture_output=True)
+    subprocess.run(["cmake", "--build", str(bld)], check=True, capture_output=True)
+    exe = bld / f"{model.name}_sim"
+    assert exe.exists()
+    return exe
+
+
+@pytest.fixture(scope="session")
+def kane_binary(tmp_path_factory, kane_model):
+    """The seed Kane pendulum's standalone simulator (build_binary), shared
+    by the binary tests of several modules. A build costs 6-8 s, so it is
+    kept in the test cache keyed by the generated sources' content (CI
+    starts with an empty cache and builds)."""
+    import hashlib
+    require_tool("cmake")
+    src = tmp_path_factory.mktemp("kane_sources")
     gen.generate(kane_model, src)
     h = hashlib.sha256()
     for f in sorted(src.rglob("*")):
@@ -89,11 +102,7 @@ def kane_binary(tmp_path_factory, kane_model):
     kept = Path(os.environ["EOMGEN_CACHE"]) / "test-binaries" / h.hexdigest()[:16] / name
     if kept.exists():
         return kept
-    subprocess.run(["cmake", "-S", str(src), "-B", str(bld), "-DCMAKE_BUILD_TYPE=Release"],
-                   check=True, capture_output=True)
-    subprocess.run(["cmake", "--build", str(bld)], check=True, capture_output=True)
-    exe = bld / name
-    assert exe.exists()
+    exe = build_binary(kane_model, tmp_path_factory.mktemp("kane_project"))
     kept.parent.mkdir(parents=True, exist_ok=True)
     tmp = kept.with_name(f".{name}.{os.getpid()}")
     shutil.copy2(exe, tmp)

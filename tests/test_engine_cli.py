@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import gen
-from conftest import require_tool
+from conftest import build_binary
 from helpers import pendulum_state, rel_err
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -26,18 +26,6 @@ def quarter_period():
     """T/4 = sqrt(L/g) K(sin^2(theta0/2)): from rest at theta0 to the bottom."""
     from scipy.special import ellipk
     return np.sqrt(L / G) * ellipk(np.sin(TH0 / 2) ** 2)
-
-
-def _build(model, out):
-    require_tool("cmake")
-    gen.generate(model, out / "src")
-    bld = out / "build"
-    subprocess.run(["cmake", "-S", str(out / "src"), "-B", str(bld),
-                    "-DCMAKE_BUILD_TYPE=Release"], check=True, capture_output=True)
-    subprocess.run(["cmake", "--build", str(bld)], check=True, capture_output=True)
-    exe = bld / f"{model.name}_sim"
-    assert exe.exists()
-    return exe
 
 
 @pytest.fixture(scope="module")
@@ -308,7 +296,7 @@ def test_binary_event_on_an_output(tmp_path):
     binary resolves output names, as sim.simulate does."""
     import cart_pole
     m = cart_pole.model()
-    exe = _build(m, tmp_path)
+    exe = build_binary(m, tmp_path)
     sim = gen.compile(m)
     x0 = np.zeros(sim.nx)
     x0[sim.state_names.index("theta")] = 0.3

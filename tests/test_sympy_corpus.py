@@ -165,12 +165,6 @@ def corpus(fast_only):
     return _CACHE[key]
 
 
-def _fast_ids(models):
-    """The ids of the models the FAST_SOURCES tests form (the fast tier
-    takes the first FAST_COUNT)."""
-    return {mid for mid, _ in models if mid.split("#")[0] in FAST_SOURCES}
-
-
 def _slow_deselected(config):
     expr = (config.getoption("markexpr", "") or "").replace(" ", "")
     return "notslow" in expr
@@ -181,7 +175,7 @@ def pytest_generate_tests(metafunc):
         return
     fast_only = _slow_deselected(metafunc.config)
     models = corpus(fast_only)
-    fast = sorted(_fast_ids(models), key=[mid for mid, _ in models].index)[:FAST_COUNT]
+    fast = [mid for mid, _ in models if mid.split("#")[0] in FAST_SOURCES][:FAST_COUNT]
     params = [pytest.param(i, id=mid, marks=() if mid in fast else pytest.mark.slow)
               for i, (mid, _) in enumerate(models)]
     metafunc.parametrize("entry", params)
