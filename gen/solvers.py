@@ -34,7 +34,8 @@ def ldlt_program(n, nonzero):
           its rows i > j with l_ij != 0: the index of M_ij or None (base) and
           the k with l_ik l_jk != 0 (ks);
     forward: per row i, the k < i with l_ik != 0 (L y = f);
-    backward: per row i, last to first, the k > i with l_ki != 0 (L^T x = D^-1 y)."""
+    backward: per row i, last to first, the k > i with l_ki != 0 (L^T x = D^-1 y),
+          nearest last (the latest value ends the sum: a shorter chain)."""
     L = ldlt_pattern(nonzero)
     cols = []
     for j in range(n):
@@ -52,7 +53,7 @@ def ldlt_program(n, nonzero):
         "diag": [i * n + i for i in range(1, n)],
         "cols": cols,
         "forward": [{"i": i, "ks": [k for k in range(i) if L[i][k]]} for i in range(n)],
-        "backward": [{"i": i, "ks": [k for k in range(i + 1, n) if L[k][i]]}
+        "backward": [{"i": i, "ks": [k for k in reversed(range(i + 1, n)) if L[k][i]]}
                      for i in reversed(range(n))],
     }
 
