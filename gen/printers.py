@@ -156,13 +156,15 @@ class ModelCPrinter(C99CodePrinter):
         return "0"
 
 
-def print_kernel_body(kernel, printer, indent="    ", bind=None):
+def print_kernel_body(kernel, printer, indent="    ", bind=None, store_bound=True):
     """Lines of C for a kernel: temporaries then output stores. Each
     expression goes to the printer's _print directly: what doprint adds
     (assignment targets, a walk for UnevaluatedExpr, code formatting,
     collecting unsupported nodes) does nothing for a kernel's single-line
     expressions, and strict printers raise on an unsupported node in _print
-    itself. bind: {output: prefix}: those outputs also as locals prefix<k>."""
+    itself. bind: {output: prefix}: those outputs also as locals prefix<k>;
+    store_bound=False leaves their stores to the caller (the fused
+    right-hand side stores them only when asked)."""
     lines = []
     rt = printer.real_type
     printer._not_supported = set()
@@ -177,7 +179,8 @@ def print_kernel_body(kernel, printer, indent="    ", bind=None):
                 # a named local first (read again by what follows the kernel)
                 v = f"{bind[o.name]}{k}"
                 lines.append(f"{indent}const {rt} {v} = {pr(e)};")
-                lines.append(f"{indent}out_{o.name}[{k}] = {v};")
+                if store_bound:
+                    lines.append(f"{indent}out_{o.name}[{k}] = {v};")
             else:
                 lines.append(f"{indent}out_{o.name}[{k}] = {pr(e)};")
     return lines

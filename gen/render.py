@@ -185,7 +185,11 @@ def _kernel_context(kernels, printer, bind=None):
             "name": k.name,
             "args": [{"name": a.name, "scalar": a.scalar} for a in k.args],
             "outputs": [o.name for o in k.outputs],
-            "body": print_kernel_body(k, printer, bind=bind.get(k.name)),
+            "body": print_kernel_body(k, printer, bind=bind.get(k.name),
+                                      store_bound=not bind.get(k.name)),
+            # the outputs held in locals (bind), stored by the template
+            "bound": [{"name": o.name, "local": bind[k.name][o.name], "size": len(o.exprs)}
+                      for o in k.outputs if o.name in bind.get(k.name, {})],
             "doc": _KERNEL_DOCS.get(k.name, k.name),
             "n_assign": len(k.assignments),
         })
@@ -313,6 +317,10 @@ def build_context(plan, iface, timings=None, backend="c"):
         "accel_c": iface.accel_macro,
         "mass_solve": (ldlt_program(m.nu, plan.mass_nonzero) if plan.accel == "ldlt" else None),
         "fused_rhs": fused,
+        # q' is u itself (the usual q' = u): the fused right-hand side's q'
+        # is finite when the checked state is, so only its u' is checked
+        "qdot_is_u": (m.qdot is not None and m.nq == m.nu
+                      and all(a == b for a, b in zip(m.qdot, m.u))),
         # array sizes (C99 and C++ have no zero-length arrays)
         "sz": {"nqi": mx(nq - mc), "nui": mx(nu - mv), "mc": mx(mc), "mv": mx(mv),
                "np": mx(m.np), "nr": mx(nr)},
