@@ -52,6 +52,29 @@ def test_fast_path_still_refuses_bad_values(cart):
         cart.rhs(0.0, xc, np.array([0.5, 0.5]))
 
 
+def test_fused_rhs_failure_names_the_cause_and_writes_nothing(cart):
+    """eval_rhs calls the fused kernel without M and f and checks only u'
+    (q' is the checked u): a u' that overflows and a singular mass matrix
+    are still found, named, and the output buffer keeps its contents."""
+    out = np.full(4, 7.0)
+    # omega^2 overflows in the forcing: u' is not finite while x is
+    with pytest.raises(gen.DivergenceError) as e:
+        cart.rhs(0.0, np.array([0.1, 0.2, 0.3, 1e200]), np.array([0.5]), out=out)
+    assert e.value.status_name == "ERR_DIVERGED" and "omega=1e+200" in str(e.value)
+    assert np.array_equal(out, np.full(4, 7.0))
+    # a massless pole: M = [[m_c, 0], [0, 0]] has a zero pivot
+    with pytest.raises(gen.SingularError) as e:
+        cart.rhs(0.0, np.array([0.1, 0.2, 0.3, 0.4]), np.array([0.5]),
+                 p=[1.0, 0.0, 0.5, 9.81], out=out)
+    assert e.value.status_name == "ERR_SINGULAR"
+    assert np.array_equal(out, np.full(4, 7.0))
+    # and next to the failures, a regular call: M u' = f from the model's M and f
+    x = np.array([0.1, 0.2, 0.3, 0.4])
+    ud = cart.rhs(0.0, x, np.array([0.5]), out=out)[2:]
+    np.testing.assert_allclose(ud, np.linalg.solve(cart.mass_matrix(x[:2]),
+                                                   cart.forcing(x[:2], x[2:], [0.5])), rtol=1e-13)
+
+
 def test_host_fast_path_is_taken_and_exact(kane_sim, cart):
     """The host module's CPython function (csrc/host/gen_host_fast.c) is
     bound to the model, gives the general path's numbers for the usual
