@@ -156,34 +156,41 @@ class ModelCPrinter(C99CodePrinter):
         return "0"
 
 
-def print_kernel_body(kernel, printer, indent="    ", bind=None, store_bound=True):
-    """Lines of C for a kernel: temporaries then output stores. Each
+def kernel_statements(kernel, printer, bind=None, reads=True):
+    """A kernel as printed C: ([(name, line, reads)] of its temporaries and
+    of its bound outputs' locals, in order, reads the names of the symbols
+    each expression reads; [lines] of its other outputs' stores). Each
     expression goes to the printer's _print directly: what doprint adds
     (assignment targets, a walk for UnevaluatedExpr, code formatting,
     collecting unsupported nodes) does nothing for a kernel's single-line
     expressions, and strict printers raise on an unsupported node in _print
-    itself. bind: {output: prefix}: those outputs also as locals prefix<k>;
-    store_bound=False leaves their stores to the caller (the fused
-    right-hand side stores them only when asked)."""
-    lines = []
+    itself. bind: {output: prefix}: those outputs as locals prefix<k>, not
+    stored (the caller stores them). reads=False: empty reads (the
+    free-symbol walk costs time at scale and only an ordering needs it)."""
     rt = printer.real_type
     printer._not_supported = set()
     printer._number_symbols = set()
     pr = printer._print
-    for s, e in kernel.assignments:
-        lines.append(f"{indent}const {rt} {s.name} = {pr(e)};")
+    temps, stores = [], []
+    names = (lambda e: {x.name for x in e.free_symbols}) if reads else (lambda e: set())
+    for sym, e in kernel.assignments:
+        temps.append((sym.name, f"const {rt} {sym.name} = {pr(e)};", names(e)))
     bind = bind or {}
     for o in kernel.outputs:
         for k, e in enumerate(o.exprs):
             if o.name in bind:
-                # a named local first (read again by what follows the kernel)
                 v = f"{bind[o.name]}{k}"
-                lines.append(f"{indent}const {rt} {v} = {pr(e)};")
-                if store_bound:
-                    lines.append(f"{indent}out_{o.name}[{k}] = {v};")
+                temps.append((v, f"const {rt} {v} = {pr(e)};", names(e)))
             else:
-                lines.append(f"{indent}out_{o.name}[{k}] = {pr(e)};")
-    return lines
+                stores.append(f"out_{o.name}[{k}] = {pr(e)};")
+    return temps, stores
+
+
+def print_kernel_body(kernel, printer, indent="    "):
+    """Lines of C for a kernel: temporaries then output stores
+    (kernel_statements)."""
+    temps, stores = kernel_statements(kernel, printer, reads=False)
+    return [indent + line for _, line, _ in temps] + [indent + line for line in stores]
 
 
 class ModelCxxPrinter(ModelCPrinter):

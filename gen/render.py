@@ -25,9 +25,9 @@ from ._version import __version__
 from .abi import METHODS, interface
 from .errors import ModelError
 from .ir import DERIVATIVE_KERNELS, plan as make_plan
-from .printers import ModelCPrinter, ModelCxxPrinter, print_kernel_body
+from .printers import ModelCPrinter, ModelCxxPrinter, kernel_statements, print_kernel_body
 from .resources import csrc_dir, templates_dir
-from .solvers import ldlt_program
+from .solvers import demand_order, ldlt_lines, ldlt_program
 
 __all__ = ["Rendered", "render", "render_files", "generate", "write_atomic", "template_env",
            "model_sources", "RUNTIME_SOURCES", "RUNTIME_HEADERS", "BACKENDS"]
@@ -175,24 +175,34 @@ def template_env():
     return _env(str(templates_dir()))
 
 
-def _kernel_context(kernels, printer, bind=None):
+def _kernel_context(kernels, printer, fused=None, real_type=None):
     """Kernels as data: names, arguments, outputs and the printed body
-    (bind: {kernel: {output: local prefix}}, print_kernel_body)."""
+    (print_kernel_body). fused: the plan of the unrolled LDL^T
+    (solvers.ldlt_program) when rhs_terms is the fused right-hand side: its
+    body is then the solve's statements with the kernel's temporaries and
+    its M and f (as locals m_<k>, f_<k>) each where the solve first reads
+    them (solvers.demand_order), and "bound" lists M and f for the
+    template's stores; the solve's locals are of real_type."""
     out = []
-    bind = bind or {}
     for k in kernels.values():
-        out.append({
+        ctx = {
             "name": k.name,
             "args": [{"name": a.name, "scalar": a.scalar} for a in k.args],
             "outputs": [o.name for o in k.outputs],
-            "body": print_kernel_body(k, printer, bind=bind.get(k.name),
-                                      store_bound=not bind.get(k.name)),
-            # the outputs held in locals (bind), stored by the template
-            "bound": [{"name": o.name, "local": bind[k.name][o.name], "size": len(o.exprs)}
-                      for o in k.outputs if o.name in bind.get(k.name, {})],
             "doc": _KERNEL_DOCS.get(k.name, k.name),
             "n_assign": len(k.assignments),
-        })
+        }
+        if fused is not None and k.name == "rhs_terms":
+            bind = {"M": "m_", "f": "f_"}
+            temps, stores = kernel_statements(k, printer, bind=bind)
+            solve = ldlt_lines(fused, real_type or printer.real_type, M=lambda i: f"m_{i}",
+                               f=lambda i: f"f_{i}")
+            ctx["body"] = ["    " + line for line in demand_order(solve, temps) + stores]
+            ctx["bound"] = [{"name": o.name, "local": bind[o.name], "size": len(o.exprs)}
+                            for o in k.outputs if o.name in bind]
+        else:
+            ctx["body"] = print_kernel_body(k, printer)
+        out.append(ctx)
     return out
 
 
@@ -260,8 +270,9 @@ def build_context(plan, iface, timings=None, backend="c"):
     # and f bound to locals the solve reads (gen_rt_model.rhs_solve)
     fused = (backend == "c" and plan.accel == "ldlt" and m.qdot is not None
              and "rhs_terms" in kernels)
-    kctx = _kernel_context(kernels, printer,
-                           bind={"rhs_terms": {"M": "m_", "f": "f_"}} if fused else None)
+    mass_plan = ldlt_program(m.nu, plan.mass_nonzero) if plan.accel == "ldlt" else None
+    kctx = _kernel_context(kernels, printer, fused=mass_plan if fused else None,
+                           real_type=f"{p}_real")
     t2 = time.perf_counter()
     mx = lambda n: max(1, n)  # noqa: E731  C99 has no zero-length arrays
     nq, nu, nr, mc, mv = m.nq, m.nu, m.nr, m.mc, m.mv
@@ -315,7 +326,8 @@ def build_context(plan, iface, timings=None, backend="c"):
         # the solver choice (made by the plan) as the runtime's constant, and
         # the arguments of the runtime's work-size macros
         "accel_c": iface.accel_macro,
-        "mass_solve": (ldlt_program(m.nu, plan.mass_nonzero) if plan.accel == "ldlt" else None),
+        "mass_solve": mass_plan,
+        "mass_solve_lines": ldlt_lines(mass_plan, f"{p}_real") if mass_plan else None,
         "fused_rhs": fused,
         # q' is u itself (the usual q' = u): the fused right-hand side's q'
         # is finite when the checked state is, so only its u' is checked

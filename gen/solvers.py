@@ -5,12 +5,26 @@ symmetric positive definite n x n matrix (the mass matrix of an
 unconstrained model) for one right-hand side. The structural zeros of the
 matrix (known at generation time) are skipped, and so is the fill-in they
 spare, so a banded or block-diagonal mass matrix costs what its pattern
-costs. The C is written by the template ``templates/c/mass_solve.j2`` from
-this plan: sizes are literals, no loops, no work arrays.
+costs. ``ldlt_statements`` spells the plan out as straight-line
+assignments, and the template ``templates/c/mass_solve.j2`` writes them
+with the pivot test: sizes are literals, no loops, no work arrays.
+
+The statements are written for a short dependency chain, which is what
+bounds the solve at small n (the divisions of the pivots follow each
+other): column j keeps the unscaled entries c_ij = M_ij - sum_k c_ik l_jk
+(= l_ij d_j) and scales them once, l_ij = c_ij / d_j, so no product
+l_ik d_k is formed; the pivot d_j = M_jj - sum_k c_jk^2 / d_k waits for
+the last reciprocal through one product and one difference; every sum
+ends with its latest term (the nearest column; the nearest row of the
+back substitution). The pivots are tested once, after the solve: a failed
+pivot leaves inf or NaN in locals, which are then not written out.
 """
 from __future__ import annotations
 
-__all__ = ["ldlt_pattern", "ldlt_program", "ldlt_solve_c"]
+import re
+
+__all__ = ["ldlt_pattern", "ldlt_program", "ldlt_statements", "ldlt_lines", "ldlt_solve_c",
+           "demand_order"]
 
 
 def ldlt_pattern(nonzero):
@@ -58,6 +72,76 @@ def ldlt_program(n, nonzero):
     }
 
 
+def ldlt_statements(s, M, f):
+    """The solve of plan s (ldlt_program) as straight-line assignments
+    [(name, expression)], in the plan's order: per column the pivot d<j>,
+    its reciprocal id<j> and the entries c<i>_<j>, l<i>_<j>; then y<i>
+    (L y = f) and z<i> (the solution). M(i) and f(i) give the text that
+    reads M's row-major entry i and f's entry i."""
+    out = []
+    for c in s["cols"]:
+        j = c["j"]
+        out.append((f"d{j}", M(c["d"]) + "".join(f" - c{j}_{k} * c{j}_{k} * id{k}"
+                                                  for k in c["ks"])))
+        out.append((f"id{j}", f"1 / d{j}"))
+        for r in c["rows"]:
+            i = r["i"]
+            terms = [f"c{i}_{k} * l{j}_{k}" for k in r["ks"]]
+            base = M(r["base"]) if r["base"] is not None else None
+            if base is None:
+                expr = "-" + " - ".join(terms)          # fill-in: no entry of M
+            else:
+                expr = base + "".join(f" - {t}" for t in terms)
+            out.append((f"c{i}_{j}", expr))
+            out.append((f"l{i}_{j}", f"c{i}_{j} * id{j}"))
+    for r in s["forward"]:
+        i = r["i"]
+        out.append((f"y{i}", f(i) + "".join(f" - l{i}_{k} * y{k}" for k in r["ks"])))
+    for r in s["backward"]:
+        i = r["i"]
+        out.append((f"z{i}", f"y{i} * id{i}" + "".join(f" - l{k}_{i} * z{k}" for k in r["ks"])))
+    return out
+
+
+_NAME = re.compile(r"[A-Za-z_]\w*")
+
+
+def demand_order(spine, temps):
+    """Straight-line statements in one order: the lines of spine, in their
+    order, each preceded by the temporaries it reads that are not yet
+    written (and theirs); then the temporaries nothing in the spine read,
+    in their own order. temps: [(name, line, reads)] in a valid order
+    (reads: the names the temporary's expression reads). So the fused right-hand side
+    computes M's entries and the trigonometric calls behind them where the
+    solve first needs them, in its columns' order, and the processor
+    overlaps the solve's long chain of divisions with them. Returns the
+    list of texts. Iterative (kernels have chains of thousands)."""
+    info = {n: (i, t, rd) for i, (n, t, rd) in enumerate(temps)}
+    done, out = set(), []
+
+    def need(names):
+        stack = [(n, False) for n in sorted((n for n in names if n in info and n not in done),
+                                            key=lambda n: -info[n][0])]
+        while stack:
+            n, ready = stack.pop()
+            if n in done:
+                continue
+            if ready:
+                done.add(n)
+                out.append(info[n][1])
+                continue
+            stack.append((n, True))
+            stack.extend((d, False) for d in sorted(
+                (d for d in info[n][2] if d in info and d not in done),
+                key=lambda d: -info[d][0]))
+
+    for line in spine:
+        need(_NAME.findall(line))
+        out.append(line)
+    need([n for n, _, _ in temps])
+    return out
+
+
 def ldlt_solve_c(prefix, n, nonzero, real, rtol_macro="GEN_RT_PIVOT_RTOL"):
     """C99 source of
 
@@ -70,4 +154,10 @@ def ldlt_solve_c(prefix, n, nonzero, real, rtol_macro="GEN_RT_PIVOT_RTOL"):
     template the generated models use."""
     from .render import template_env
     macro = template_env().get_template("c/mass_solve.j2").module.mass_solve
-    return str(macro(prefix, real, ldlt_program(n, nonzero), rtol_macro))
+    plan = ldlt_program(n, nonzero)
+    return str(macro(prefix, real, plan, ldlt_lines(plan, real), rtol_macro))
+
+
+def ldlt_lines(s, real, M=lambda i: f"M[{i}]", f=lambda i: f"f[{i}]"):
+    """ldlt_statements as C declarations of type real."""
+    return [f"const {real} {name} = {expr};" for name, expr in ldlt_statements(s, M, f)]
