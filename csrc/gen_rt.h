@@ -334,10 +334,11 @@ typedef struct gen_rt_model {
                             const gen_rt_real *p, gen_rt_real t, gen_rt_real *Yq,
                             gen_rt_real *Yu, gen_rt_real *Yr);
     /* the unconstrained right-hand side in one function (explicit kinematics
-     * and GEN_RT_ACCEL_LDLT): q' (qd), M, f and u' (ud) by the model's
-     * unrolled LDL^T, M and f kept in registers between the two; a status
-     * (GEN_RT_ERR_SINGULAR on a failed pivot); NULL when the model has none
-     * (then the runtime calls rhs_terms and mass_solve) */
+     * and GEN_RT_ACCEL_LDLT): q' (qd) and u' (ud) by the model's unrolled
+     * LDL^T, M and f kept in registers (also written where M and f are not
+     * NULL); a status (GEN_RT_ERR_SINGULAR on a failed pivot, ud then not
+     * written); NULL when the model has none (then the runtime calls
+     * rhs_terms and mass_solve) */
     int (*rhs_solve)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
                      const gen_rt_real *p, gen_rt_real t, gen_rt_real *qd, gen_rt_real *M,
                      gen_rt_real *f, gen_rt_real *ud);

@@ -154,7 +154,7 @@ static int rhs_(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
          * kernel and its solve), one check of the whole x'; a failure goes
          * through the general path below, which names it */
         if (m->rhs_solve) {
-            st = m->rhs_solve(q, u, r, p, t, dxdt, M, f, dxdt + nq);
+            st = m->rhs_solve(q, u, r, p, t, dxdt, NULL, NULL, dxdt + nq);
         } else {
             m->rhs_terms(q, u, r, p, t, NULL, dxdt, M, f, NULL, NULL);
             st = m->mass_solve(M, f, dxdt + nq);
@@ -202,8 +202,7 @@ int gen_rt_model_eval_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_rea
     if (m->rhs_solve) {
         /* the fused right-hand side, straight (rhs_ below names a failure) */
         const int nq = m->nq, nu = m->nu;
-        gen_rt_real *M = work + nq + nu;
-        st = m->rhs_solve(x, x + nq, r, p, t, work, M, M + nu * nu, work + nq);
+        st = m->rhs_solve(x, x + nq, r, p, t, work, NULL, NULL, work + nq);
         if (!st && gen_rt_finite_n(nq + nu, work)) {
             copy_n(nq + nu, work, dxdt);
             return GEN_RT_OK;

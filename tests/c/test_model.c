@@ -183,13 +183,15 @@ static int o_solve(const gen_rt_real *M, const gen_rt_real *f, gen_rt_real *x)
     return GEN_RT_OK;
 }
 
-/* the fused right-hand side (rhs_solve) of a generated LDL^T model */
+/* the fused right-hand side (rhs_solve) of a generated LDL^T model: M and f
+ * written where given (the runtime passes NULL when it needs neither) */
 static int o_rhs_solve(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
                        const gen_rt_real *p, gen_rt_real t, gen_rt_real *qd, gen_rt_real *M,
                        gen_rt_real *f, gen_rt_real *ud)
 {
-    o_rhs_terms(q, u, r, p, t, NULL, qd, M, f, NULL, NULL);
-    return o_solve(M, f, ud);
+    gen_rt_real M_[1], f_[1];
+    o_rhs_terms(q, u, r, p, t, NULL, qd, M ? M : M_, f ? f : f_, NULL, NULL);
+    return o_solve(M ? M : M_, f ? f : f_, ud);
 }
 
 /* two made-up reactions R of the oscillator: F R + g = 0 with g = [m x'', x]
