@@ -114,3 +114,21 @@ def test_generated_singular_mass_matrix_raises():
     sim = gen.compile(n_link_cart.model(2, name="cart2_massless", **vals))
     with pytest.raises(gen.SingularError, match="singular"):
         sim.rhs(0.0, np.full(sim.nx, 0.1))
+
+
+def test_demand_order_defines_before_use():
+    """The fused kernel's order (gen.solvers.demand_order): each temporary
+    right before the first spine line that reads it, its own reads first,
+    the unread ones after the spine in their order; a chain of 5000 (the
+    size of a large kernel) without recursion."""
+    from gen.solvers import demand_order
+    temps = [("a", "A", set()), ("b", "B", {"a", "q"}), ("c", "C", {"b"}),
+             ("d", "D", set()), ("e", "E", {"a", "d"})]
+    out = demand_order(["S1 = c;", "S2 = a + e;"], temps)
+    assert out == ["A", "B", "C", "S1 = c;", "D", "E", "S2 = a + e;"]
+    out = demand_order(["S = a;"], temps)
+    assert out == ["A", "S = a;", "B", "C", "D", "E"]
+    n = 5000
+    chain = [(f"w{i}", f"w{i}", {f"w{i - 1}"} if i else set()) for i in range(n)]
+    out = demand_order([f"x = w{n - 1};"], chain)
+    assert out == [f"w{i}" for i in range(n)] + [f"x = w{n - 1};"]
