@@ -89,11 +89,19 @@ DRIVER = textwrap.dedent("""\
         struct timespec ts; clock_gettime(CLOCK_MONOTONIC, &ts);
         return ts.tv_sec + 1e-9 * ts.tv_nsec;
     }}
+    /* the clock the core runs at now: a chain of n (add, xor) pairs, one
+     * cycle each on every x86-64 and ARMv8 core, which no compiler shortens */
+    static unsigned long long chain(long n, unsigned long long a) {{
+        long i;
+        for (i = 0; i < n; ++i) a = (a + a) ^ (unsigned long long)i;
+        return a;
+    }}
     int main(void) {{
         static const double x0[{P}_NX] = {{ {x0} }};
         static const double p[{np}] = {{ {pvals} }};
         double x[{P}_NX], r[1] = {{0.0}}, d_eom[{P}_NX], d_cas[{P}_NX];
         volatile double sink = 0;
+        volatile unsigned long long spin = 1;
         int i, rep, n = {iters};
         {cas_setup}
         for (i = 0; i < {P}_NX; ++i) x[i] = x0[i];
@@ -111,6 +119,10 @@ DRIVER = textwrap.dedent("""\
             t1 = now();
             printf("eomgen %.9g\\n", (t1 - t0) / n);
             {cas_loop}
+            t0 = now();
+            spin = chain(200000L, spin);
+            t1 = now();
+            printf("clock %.9g\\n", 2 * 200000.0 / (t1 - t0));
         }}
         return sink == 12345.0;
     }}
@@ -152,7 +164,9 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
                   iters=None, cc="gcc", runs=3):
     """Build one driver from eomgen's generated sources (and CasADi's
     generated .c if given) and return {'eomgen': s, 'casadi': s,
-    'maxreldiff': d} (median seconds per call; interleaved repeats)."""
+    'maxreldiff': d, 'clock': Hz} (median seconds per call, and the median
+    clock the core ran at, measured between the repeats by a chain of
+    one-cycle integer operations; interleaved repeats)."""
     eom_dir = Path(eom_dir)
     nx = len(x0)
     if iters is None:
@@ -187,7 +201,7 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
         if res.returncode != 0:
             raise RuntimeError(f"driver exited with {res.returncode}: {res.stdout[-2000:]}")
         text += res.stdout
-    vals = {"eomgen": [], "casadi": []}
+    vals = {"eomgen": [], "casadi": [], "clock": []}
     out = {"iters": iters, "reps": reps, "runs": runs}
     for line in text.split("\n"):
         if not line.strip():
@@ -200,5 +214,6 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
     for k, v in vals.items():
         if v:
             out[k] = statistics.median(v)
-            out[k + "_min"] = min(v)
+            if k != "clock":
+                out[k + "_min"] = min(v)
     return out

@@ -383,7 +383,10 @@ def md_table(headers, rows):
 
 def floor_estimate(ops, nu, mhz):
     """Seconds: arithmetic flops of the rhs kernel + a Cholesky-class
-    factor/solve (nu^3/3 + 2 nu^2) at 4 flops/cycle, + 20 cycles per sin/cos."""
+    factor/solve (nu^3/3 + 2 nu^2) at 4 flops/cycle, + 20 cycles per sin/cos,
+    at mhz: the clock the C driver measured between its repeats (the core's
+    speed at that moment, turbo or a VM's slow phase included), or the
+    nominal /proc/cpuinfo clock where there is no measurement."""
     if not ops or not mhz:
         return None
     flops = ops["arith"] + nu ** 3 / 3 + 2 * nu ** 2
@@ -436,7 +439,8 @@ def main():
             "quick": quick, "max_seconds": args.max_seconds, "rtol": RTOL, "atol": ATOL,
             "floor_model": "arith flops of the rhs kernel (counted in the printed C) + "
                            "nu^3/3 + 2 nu^2 (Cholesky-class solve), at 4 flops/cycle, "
-                           "+ 20 cycles per sin/cos, at the /proc/cpuinfo 'cpu MHz'"}
+                           "+ 20 cycles per sin/cos, at the clock the C driver measures "
+                           "between its repeats (floor_nominal: at the /proc/cpuinfo 'cpu MHz')"}
     try:
         meta["git_head"] = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
                                           capture_output=True, text=True).stdout.strip()
@@ -517,12 +521,15 @@ def main():
                         cas_fname=c.get("fname") if cas_ok else None,
                         reps=11 if quick else 21)
                     entry["c_call"] = ct
-                    fl = floor_estimate(e.get("ops"), n + 1, mhz)
+                    clock = ct.get("clock", 0) / 1e6 or None
+                    fl = floor_estimate(e.get("ops"), n + 1, clock or mhz)
                     entry["floor"] = fl
+                    entry["floor_nominal"] = floor_estimate(e.get("ops"), n + 1, mhz)
                     print(f"n={n:2d} C rhs: eomgen {ct['eomgen'] * 1e6:.3f} us"
                           + (f", casadi {ct['casadi'] * 1e6:.3f} us (max rel diff "
                              f"{ct.get('maxreldiff', float('nan')):.2g})" if "casadi" in ct else "")
-                          + (f", floor {fl * 1e6:.3f} us" if fl else ""), flush=True)
+                          + (f", floor {fl * 1e6:.3f} us at {clock or mhz:.0f} MHz"
+                             + (" measured" if clock else " nominal") if fl else ""), flush=True)
                 except Exception as ex:  # noqa: BLE001 - report and go on
                     entry["c_call"] = {"error": str(ex)[-1500:]}
                     print(f"n={n:2d} C driver failed: {str(ex)[-300:]}", flush=True)
@@ -628,12 +635,13 @@ def report(results):
                      (f"{ops['arith']} + {ops['sin']}s/{ops['cos']}c" if ops else "-")
                      + (f" + solve {sops['arith']}" if sops else ""),
                      f"{cops['arith']} + {cops['sin']}s/{cops['cos']}c" if cops else "-",
-                     fmt_t(fl, "us"), ratio(ce, fl),
+                     fmt_t(fl, "us") + (f" at {ct['clock'] / 1e9:.2f} GHz" if ct.get("clock") else ""),
+                     ratio(ce, fl),
                      f"{ct['maxreldiff']:.1g}" if "maxreldiff" in ct else "-"])
     out.append("\n### 2. C time per rhs call (median), microseconds\n")
     out.append(md_table(["n", "nx", "eomgen eval_rhs", "CasADi", "eomgen / CasADi (of minima)",
                          "rhs_batch per state / eval_rhs",
-                         "eomgen ops (arith + sin/cos [+ unrolled solve])", "CasADi ops (incl. LDL)", "floor", "eomgen / floor",
+                         "eomgen ops (arith + sin/cos [+ unrolled solve])", "CasADi ops (incl. LDL)", "floor (at the measured clock)", "eomgen / floor",
                          "max rel diff"], rows))
     # 3. Python call
     rows = []
