@@ -161,12 +161,14 @@ CAS_LOOP = """
 
 
 def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=21,
-                  iters=None, cc="gcc", runs=3):
+                  iters=None, cc="gcc", runs=3, cflags=("-std=c99", "-O2")):
     """Build one driver from eomgen's generated sources (and CasADi's
-    generated .c if given) and return {'eomgen': s, 'casadi': s,
-    'maxreldiff': d, 'clock': Hz} (median seconds per call, and the median
-    clock the core ran at, measured between the repeats by a chain of
-    one-cycle integer operations; interleaved repeats)."""
+    generated .c if given) with cc and cflags, and return {'eomgen': s,
+    'casadi': s, 'maxreldiff': d, 'clock': Hz} (median seconds per call, and
+    the median clock the core ran at, measured between the repeats by a
+    chain of one-cycle integer operations; interleaved repeats). The driver
+    is built once per (sources, compiler, flags, sizes): a second call runs
+    it again."""
     eom_dir = Path(eom_dir)
     nx = len(x0)
     if iters is None:
@@ -181,9 +183,9 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
         cas_setup=CAS_SETUP.format(**fmt) if cas_c else "",
         cas_check=CAS_CHECK.format(**fmt) if cas_c else "",
         cas_loop=CAS_LOOP.format(**fmt) if cas_c else "")
-    drv = eom_dir / "bench_driver.c"
-    drv.write_text(src)
-    exe = eom_dir / "bench_driver"
+    tag = re.sub(r"\W", "_", Path(cc).name)
+    drv = eom_dir / f"bench_driver_{tag}.c"
+    exe = eom_dir / f"bench_driver_{tag}"
     from gen.render import model_sources
     srcs = [str(drv)] + [str(eom_dir / f) for f in model_sources(prefix)] + sorted(
         str(f) for f in eom_dir.glob("gen_rt_*.c"))
@@ -191,10 +193,16 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
     if cas_c:
         srcs.append(str(cas_c))
         incs += ["-I", str(Path(cas_c).parent)]
-    cmd = [cc, "-std=c99", "-O2", *incs, *srcs, "-o", str(exe), "-lm"]
-    proc = subprocess.run(cmd, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise RuntimeError("driver build failed:\n$ " + " ".join(cmd) + "\n" + proc.stderr[-4000:])
+    cmd = [cc, *cflags, *incs, *srcs, "-o", str(exe), "-lm"]
+    stamp = exe.with_suffix(".cmd")
+    if not (exe.exists() and drv.exists() and drv.read_text() == src
+            and stamp.exists() and stamp.read_text() == " ".join(cmd)):
+        drv.write_text(src)
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise RuntimeError("driver build failed:\n$ " + " ".join(cmd) + "\n"
+                               + proc.stderr[-4000:])
+        stamp.write_text(" ".join(cmd))
     text = ""
     for _ in range(runs):          # separate runs, samples pooled (noisy machines)
         res = subprocess.run([str(exe)], capture_output=True, text=True)
@@ -202,7 +210,7 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
             raise RuntimeError(f"driver exited with {res.returncode}: {res.stdout[-2000:]}")
         text += res.stdout
     vals = {"eomgen": [], "casadi": [], "clock": []}
-    out = {"iters": iters, "reps": reps, "runs": runs}
+    out = {"iters": iters, "reps": reps, "runs": runs, "cc": cc}
     for line in text.split("\n"):
         if not line.strip():
             continue
