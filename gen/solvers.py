@@ -111,11 +111,11 @@ def demand_order(spine, temps):
     order, each preceded by the temporaries it reads that are not yet
     written (and theirs); then the temporaries nothing in the spine read,
     in their own order. temps: [(name, line, reads)] in a valid order
-    (reads: the names the temporary's expression reads). So the fused right-hand side
-    computes M's entries and the trigonometric calls behind them where the
-    solve first needs them, in its columns' order, and the processor
-    overlaps the solve's long chain of divisions with them. Returns the
-    list of texts. Iterative (kernels have chains of thousands)."""
+    (reads: the names the temporary's expression reads). So the fused
+    right-hand side computes M's entries, and the trigonometric calls
+    behind them, where the solve first needs them, in its columns' order,
+    and the processor overlaps the solve's chain of divisions with them.
+    Returns the lines. Iterative (kernels have chains of thousands)."""
     info = {n: (i, t, rd) for i, (n, t, rd) in enumerate(temps)}
     done, out = set(), []
 
