@@ -224,4 +224,13 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
             out[k] = statistics.median(v)
             if k != "clock":
                 out[k + "_min"] = min(v)
+    # per repeat (the lines come in repeat order: eomgen, casadi, clock), so
+    # that a change of the machine's speed between repeats cancels: the
+    # median of the repeats' eomgen / CasADi ratios, and eomgen's cycles per
+    # call at the clock measured in the same repeat
+    e, c, hz = vals["eomgen"], vals["casadi"], vals["clock"]
+    if c and len(c) == len(e):
+        out["pair_ratio"] = statistics.median(a / b for a, b in zip(e, c))
+    if hz and len(hz) == len(e):
+        out["eomgen_cycles"] = statistics.median(a * f for a, f in zip(e, hz))
     return out

@@ -401,16 +401,23 @@ def md_table(headers, rows):
     return "\n".join(lines)
 
 
-def floor_estimate(ops, nu, mhz):
-    """Seconds: arithmetic flops of the rhs kernel + a Cholesky-class
-    factor/solve (nu^3/3 + 2 nu^2) at 4 flops/cycle, + 20 cycles per sin/cos,
-    at mhz: the clock the C driver measured between its repeats (the core's
-    speed at that moment, turbo or a VM's slow phase included), or the
-    nominal /proc/cpuinfo clock where there is no measurement."""
-    if not ops or not mhz:
+def floor_cycles(ops, nu):
+    """Cycles: arithmetic flops of the rhs kernel + a Cholesky-class
+    factor/solve (nu^3/3 + 2 nu^2) at 4 flops/cycle, + 20 cycles per sin/cos."""
+    if not ops:
         return None
     flops = ops["arith"] + nu ** 3 / 3 + 2 * nu ** 2
-    cycles = flops / 4 + 20 * (ops["sin"] + ops["cos"])
+    return flops / 4 + 20 * (ops["sin"] + ops["cos"])
+
+
+def floor_estimate(ops, nu, mhz):
+    """Seconds: floor_cycles at mhz, the clock the C driver measured between
+    its repeats (the core's speed at that moment, turbo or a VM's slow phase
+    included), or the nominal /proc/cpuinfo clock where there is no
+    measurement."""
+    cycles = floor_cycles(ops, nu)
+    if not cycles or not mhz:
+        return None
     return cycles / (mhz * 1e6)
 
 
@@ -545,6 +552,11 @@ def main():
                     fl = floor_estimate(e.get("ops"), n + 1, clock or mhz)
                     entry["floor"] = fl
                     entry["floor_nominal"] = floor_estimate(e.get("ops"), n + 1, mhz)
+                    # eomgen / floor per repeat: cycles per call at the clock
+                    # of the same repeat against the floor's cycles
+                    fc = floor_cycles(e.get("ops"), n + 1)
+                    if fc and ct.get("eomgen_cycles"):
+                        entry["floor_ratio"] = ct["eomgen_cycles"] / fc
                     print(f"n={n:2d} C rhs: eomgen {ct['eomgen'] * 1e6:.3f} us"
                           + (f", casadi {ct['casadi'] * 1e6:.3f} us (max rel diff "
                              f"{ct.get('maxreldiff', float('nan')):.2g})" if "casadi" in ct else "")
@@ -645,24 +657,26 @@ def report(results):
         ops = e.get("ops") if isinstance(e, dict) else None
         cops = (m.get("casadi") or {}).get("ops")
         ce, cc, fl = ct.get("eomgen"), ct.get("casadi"), m.get("floor")
+        pr, frr = ct.get("pair_ratio"), m.get("floor_ratio")
         sops = e.get("solve_ops") if isinstance(e, dict) else None
         cstat = (m.get("casadi") or {}).get("status", "-")
         rmin = ratio(ct.get("eomgen_min"), ct.get("casadi_min"))
         b = (e.get("batch") or {}) if isinstance(e, dict) else {}
         rows.append([n, m["nx"], fmt_t(ce, "us"), fmt_t(cc, "us") if cc else cstat,
-                     ratio(ce, cc) + (f" ({rmin})" if rmin != "-" else ""),
+                     (f"{pr:.3g}" if pr else ratio(ce, cc)) + (f" ({rmin})" if rmin != "-" else ""),
                      (f"{b['same_cc']['ratio']:.3g} ({Path(b['same_cc']['cc']).name})"
                       if "same_cc" in b else ratio(b.get("per_state"), ce)),
                      (f"{ops['arith']} + {ops['sin']}s/{ops['cos']}c" if ops else "-")
                      + (f" + solve {sops['arith']}" if sops else ""),
                      f"{cops['arith']} + {cops['sin']}s/{cops['cos']}c" if cops else "-",
                      fmt_t(fl, "us") + (f" at {ct['clock'] / 1e9:.2f} GHz" if ct.get("clock") else ""),
-                     ratio(ce, fl),
+                     f"{frr:.3g}" if frr else ratio(ce, fl),
                      f"{ct['maxreldiff']:.1g}" if "maxreldiff" in ct else "-"])
     out.append("\n### 2. C time per rhs call (median), microseconds\n")
-    out.append(md_table(["n", "nx", "eomgen eval_rhs", "CasADi", "eomgen / CasADi (of minima)",
+    out.append(md_table(["n", "nx", "eomgen eval_rhs", "CasADi",
+                         "eomgen / CasADi (median of the repeats' ratios; of minima)",
                          "rhs_batch (N = 1000, out=) per state / eval_rhs (the library's compiler, by turns)",
-                         "eomgen ops (arith + sin/cos [+ unrolled solve])", "CasADi ops (incl. LDL)", "floor (at the measured clock)", "eomgen / floor",
+                         "eomgen ops (arith + sin/cos [+ unrolled solve])", "CasADi ops (incl. LDL)", "floor (at the measured clock)", "eomgen / floor (per repeat, at its clock)",
                          "max rel diff"], rows))
     # 3. Python call
     rows = []
