@@ -175,7 +175,7 @@ def template_env():
     return _env(str(templates_dir()))
 
 
-def _kernel_context(kernels, printer, fused=None, real_type=None):
+def _kernel_context(kernels, printer, fused=None, real_type="double"):
     """Kernels as data: names, arguments, outputs and the printed body
     (print_kernel_body). fused: the plan of the unrolled LDL^T
     (solvers.ldlt_program) when rhs_terms is the fused right-hand side: its
@@ -195,7 +195,7 @@ def _kernel_context(kernels, printer, fused=None, real_type=None):
         if fused is not None and k.name == "rhs_terms":
             bind = {"M": "m_", "f": "f_"}
             temps, stores = kernel_statements(k, printer, bind=bind)
-            solve = ldlt_lines(fused, real_type or printer.real_type, M=lambda i: f"m_{i}",
+            solve = ldlt_lines(fused, real_type, M=lambda i: f"m_{i}",
                                f=lambda i: f"f_{i}")
             ctx["body"] = ["    " + line for line in demand_order(solve, temps) + stores]
             ctx["bound"] = [{"name": o.name, "local": bind[o.name], "size": len(o.exprs)}
