@@ -119,14 +119,41 @@ DRIVER = textwrap.dedent("""\
             t1 = now();
             printf("eomgen %.9g\\n", (t1 - t0) / n);
             {cas_loop}
-            t0 = now();
-            spin = chain(200000L, spin);
-            t1 = now();
-            printf("clock %.9g\\n", 2 * 200000.0 / (t1 - t0));
+            {{
+                /* the fastest of 15 short chains: a chain that the VM's
+                 * scheduler interrupts reads slow, one that runs through
+                 * reads the core's clock */
+                double best = 0;
+                int c;
+                for (c = 0; c < 15; ++c) {{
+                    t0 = now();
+                    spin = chain(20000L, spin);
+                    t1 = now();
+                    if (2 * 20000.0 / (t1 - t0) > best) best = 2 * 20000.0 / (t1 - t0);
+                }}
+                printf("clock %.9g\\n", best);
+            }}
+            {libm_loop}
         }}
         return sink == 12345.0;
     }}
 """)
+
+# the platform's sin and cos at the arguments the model's kernel takes
+# (x[k] for k in the trig indices), per call of the loop: what the floor's
+# trigonometric part costs on this machine with this libm
+LIBM_LOOP = """
+            for (i = 0; i < {P}_NX; ++i) x[i] = x0[i];
+            t0 = now();
+            for (i = 0; i < n; ++i) {{
+                double acc = 0;
+                x[1] += 1e-12;
+{calls}
+                sink += acc;
+            }}
+            t1 = now();
+            printf("libm %.9g\\n", (t1 - t0) / n);
+"""
 
 CAS_SETUP = """
     casadi_int sz_arg, sz_res, sz_iw, sz_w;
@@ -161,12 +188,15 @@ CAS_LOOP = """
 
 
 def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=21,
-                  iters=None, cc="gcc", runs=3, cflags=("-std=c99", "-O2")):
+                  iters=None, cc="gcc", runs=3, cflags=("-std=c99", "-O2"), trig=()):
     """Build one driver from eomgen's generated sources (and CasADi's
     generated .c if given) with cc and cflags, and return {'eomgen': s,
     'casadi': s, 'maxreldiff': d, 'clock': Hz} (median seconds per call, and
-    the median clock the core ran at, measured between the repeats by a
-    chain of one-cycle integer operations; interleaved repeats). The driver
+    the median clock the core ran at, measured between the repeats by the
+    fastest of short chains of one-cycle integer operations; interleaved
+    repeats). trig: the indices k of x whose sin and cos the kernel takes:
+    the driver also times those calls of the platform's libm ('libm', s
+    per call of the model, and 'libm_cycles' at each repeat's clock). The driver
     is built once per (sources, compiler, flags, sizes): a second call runs
     it again."""
     eom_dir = Path(eom_dir)
@@ -182,7 +212,9 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
         cas_include=f'#include "{Path(cas_c).with_suffix(".h").name}"' if cas_c else "",
         cas_setup=CAS_SETUP.format(**fmt) if cas_c else "",
         cas_check=CAS_CHECK.format(**fmt) if cas_c else "",
-        cas_loop=CAS_LOOP.format(**fmt) if cas_c else "")
+        cas_loop=CAS_LOOP.format(**fmt) if cas_c else "",
+        libm_loop=LIBM_LOOP.format(P=P, calls="\n".join(
+            f"                acc += sin(x[{k}]) + cos(x[{k}]);" for k in trig)) if trig else "")
     tag = re.sub(r"\W", "_", Path(cc).name)
     drv = eom_dir / f"bench_driver_{tag}.c"
     exe = eom_dir / f"bench_driver_{tag}"
@@ -209,7 +241,7 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
         if res.returncode != 0:
             raise RuntimeError(f"driver exited with {res.returncode}: {res.stdout[-2000:]}")
         text += res.stdout
-    vals = {"eomgen": [], "casadi": [], "clock": []}
+    vals = {"eomgen": [], "casadi": [], "clock": [], "libm": []}
     out = {"iters": iters, "reps": reps, "runs": runs, "cc": cc}
     for line in text.split("\n"):
         if not line.strip():
@@ -233,4 +265,6 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
         out["pair_ratio"] = statistics.median(a / b for a, b in zip(e, c))
     if hz and len(hz) == len(e):
         out["eomgen_cycles"] = statistics.median(a * f for a, f in zip(e, hz))
+        if len(vals["libm"]) == len(e):
+            out["libm_cycles"] = statistics.median(a * f for a, f in zip(vals["libm"], hz))
     return out

@@ -401,13 +401,15 @@ def md_table(headers, rows):
     return "\n".join(lines)
 
 
-def floor_cycles(ops, nu):
+def floor_cycles(ops, nu, trig_cycles=None):
     """Cycles: arithmetic flops of the rhs kernel + a Cholesky-class
-    factor/solve (nu^3/3 + 2 nu^2) at 4 flops/cycle, + 20 cycles per sin/cos."""
+    factor/solve (nu^3/3 + 2 nu^2) at 4 flops/cycle, + 20 cycles per sin/cos
+    (or trig_cycles for all of them: the libm's measured time)."""
     if not ops:
         return None
     flops = ops["arith"] + nu ** 3 / 3 + 2 * nu ** 2
-    return flops / 4 + 20 * (ops["sin"] + ops["cos"])
+    trig = 20 * (ops["sin"] + ops["cos"]) if trig_cycles is None else trig_cycles
+    return flops / 4 + trig
 
 
 def floor_estimate(ops, nu, mhz):
@@ -466,7 +468,8 @@ def main():
             "quick": quick, "max_seconds": args.max_seconds, "rtol": RTOL, "atol": ATOL,
             "floor_model": "arith flops of the rhs kernel (counted in the printed C) + "
                            "nu^3/3 + 2 nu^2 (Cholesky-class solve), at 4 flops/cycle, "
-                           "+ 20 cycles per sin/cos, at the clock the C driver measures "
+                           "+ 20 cycles per sin/cos (floor_libm: + the libm's sin/cos at the "
+                           "model's angles, timed in the same repeats), at the clock the C driver measures "
                            "between its repeats (floor_nominal: at the /proc/cpuinfo 'cpu MHz')"}
     try:
         meta["git_head"] = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
@@ -546,7 +549,7 @@ def main():
                         derive_values(n),
                         cas_c=c.get("c_file") if cas_ok else None,
                         cas_fname=c.get("fname") if cas_ok else None,
-                        reps=11 if quick else 21)
+                        reps=11 if quick else 21, trig=range(1, n + 1))
                     entry["c_call"] = ct
                     clock = ct.get("clock", 0) / 1e6 or None
                     fl = floor_estimate(e.get("ops"), n + 1, clock or mhz)
@@ -557,6 +560,13 @@ def main():
                     fc = floor_cycles(e.get("ops"), n + 1)
                     if fc and ct.get("eomgen_cycles"):
                         entry["floor_ratio"] = ct["eomgen_cycles"] / fc
+                    # the same with the trigonometric part at what this
+                    # machine's libm takes for the model's sin and cos
+                    # (timed in the same repeats) instead of 20 cycles each
+                    fcl = floor_cycles(e.get("ops"), n + 1, ct.get("libm_cycles"))
+                    if fcl and ct.get("eomgen_cycles"):
+                        entry["floor_libm_cycles"] = fcl
+                        entry["floor_libm_ratio"] = ct["eomgen_cycles"] / fcl
                     print(f"n={n:2d} C rhs: eomgen {ct['eomgen'] * 1e6:.3f} us"
                           + (f", casadi {ct['casadi'] * 1e6:.3f} us (max rel diff "
                              f"{ct.get('maxreldiff', float('nan')):.2g})" if "casadi" in ct else "")
@@ -671,12 +681,15 @@ def report(results):
                      f"{cops['arith']} + {cops['sin']}s/{cops['cos']}c" if cops else "-",
                      fmt_t(fl, "us") + (f" at {ct['clock'] / 1e9:.2f} GHz" if ct.get("clock") else ""),
                      f"{frr:.3g}" if frr else ratio(ce, fl),
+                     (f"{m['floor_libm_ratio']:.3g} (libm {ct['libm_cycles']:.0f} cycles)"
+                      if m.get("floor_libm_ratio") else "-"),
                      f"{ct['maxreldiff']:.1g}" if "maxreldiff" in ct else "-"])
     out.append("\n### 2. C time per rhs call (median), microseconds\n")
     out.append(md_table(["n", "nx", "eomgen eval_rhs", "CasADi",
                          "eomgen / CasADi (median of the repeats' ratios; of minima)",
                          "rhs_batch (N = 1000, out=) per state / eval_rhs (the library's compiler, by turns)",
                          "eomgen ops (arith + sin/cos [+ unrolled solve])", "CasADi ops (incl. LDL)", "floor (at the measured clock)", "eomgen / floor (per repeat, at its clock)",
+                         "eomgen / floor with this machine's libm for sin/cos",
                          "max rel diff"], rows))
     # 3. Python call
     rows = []

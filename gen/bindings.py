@@ -38,10 +38,11 @@ EXCEPTIONS = {
 }
 
 
-def _fast_rhs(host, api):
-    """The host module's CPython fast path of rhs, bound to the table api
+def _fast_rhs(host, api, which="rhs"):
+    """The host module's CPython fast path of rhs (which="rhs") or
+    rhs_batch ("rhs_batch"), bound to the table api
     (csrc/host/gen_host_fast.c); None where the host has none."""
-    make = getattr(host.lib, "eomgen_fast_rhs_new", None)
+    make = getattr(host.lib, f"eomgen_fast_{which}_new", None)
     if make is None:
         return None
     ptr = make(api)
@@ -129,6 +130,7 @@ class Simulator:
         self._null = self._ffi.NULL
         self._rhs_c = self._lib.eomgen_eval_rhs    # the fast path passes the table itself
         self._rhs_fast = _fast_rhs(host, api)
+        self._rhs_batch_fast = _fast_rhs(host, api, "rhs_batch")
         for k, n in (("nq", self.nq), ("nu", self.nu), ("nr", self.nr), ("np", self.np),
                      ("mc", self.mc), ("mv", self.mv), ("ns", self.ns), ("ny", self.ny),
                      ("na", self.na)):
@@ -181,6 +183,7 @@ class Simulator:
             api, built, timings = self._derive()
             self._api = api
             self._rhs_fast = _fast_rhs(self._mod, api)
+            self._rhs_batch_fast = _fast_rhs(self._mod, api, "rhs_batch")
             self._fns.clear()
             self.build_info.update(timings, module=str(built.path), derivatives=True)
             self._derive = None
@@ -1245,6 +1248,14 @@ class Simulator:
             When the C function returns a failure status (a
             :class:`gen.SingularError` at a singular configuration, ...).
         """
+        if self._rhs_batch_fast is not None:
+            # the host's CPython function (csrc/host/gen_host_fast.c): for a
+            # number t and exact arrays of the right types and shapes; None
+            # otherwise or when a state fails (the path below converts,
+            # checks and names the state)
+            res = self._rhs_batch_fast(t, X, r, p, out)
+            if res is not None:
+                return res
         X = np.ascontiguousarray(X, dtype=self.dtype)
         if X.ndim != 2 or X.shape[1] != self.nx:
             raise ValueError(f"states must have shape (N, {self.nx}), got {X.shape}")

@@ -175,6 +175,14 @@ def template_env():
     return _env(str(templates_dir()))
 
 
+# a right-hand-side kernel of at least this many statements is compiled
+# twice, for the baseline and for AVX (GEN_RT_CLONES): past the instruction
+# cache the VEX encoding's smaller code pays (cart, eval_rhs: n = 8 links,
+# 512 statements, 22% faster; n = 10 25%; n = 16 35%), below it nothing is
+# gained and the compile time would double (n = 4: 178 statements)
+CLONE_MIN_STATEMENTS = 300
+
+
 def _kernel_context(kernels, printer, fused=None, real_type="double"):
     """Kernels as data: names, arguments, outputs and the printed body
     (print_kernel_body). fused: the plan of the unrolled LDL^T
@@ -202,6 +210,9 @@ def _kernel_context(kernels, printer, fused=None, real_type="double"):
                             for o in k.outputs if o.name in bind]
         else:
             ctx["body"] = print_kernel_body(k, printer)
+        # the right-hand side of a large model: built for the baseline and
+        # for AVX, picked at load time (GEN_RT_CLONES in gen_rt.h)
+        ctx["clones"] = k.name == "rhs_terms" and len(ctx["body"]) >= CLONE_MIN_STATEMENTS
         out.append(ctx)
     return out
 

@@ -116,3 +116,51 @@ def test_host_fast_path_float_model():
     assert out.dtype == np.float32 and np.array_equal(out, ref)
     assert sim._rhs_fast(0.0, xc.astype(float), r) is None
     np.testing.assert_array_equal(sim.rhs(0.0, xc.astype(float), r), ref)
+
+
+def test_host_fast_batch_is_taken_and_exact(cart):
+    """rhs_batch's CPython function (csrc/host/gen_host_fast.c): for a
+    number t and exact arrays (X (N, nx), r and p vectors or None, out None
+    or (N, nx)) it gives each state's rhs, into out when given; whatever it
+    does not take (per-state r or p, an array t, a strided or read-only or
+    mistyped array, a failing state) it declines, and Simulator.rhs_batch
+    then takes the general path, which names the failing state."""
+    fast = cart._rhs_batch_fast
+    assert fast is not None
+    rng = np.random.default_rng(11)
+    X = rng.uniform(-1, 1, (25, 4))
+    r, p = np.array([0.5]), cart.constants * 1.2
+    ref = np.array([cart.rhs(0.0, x, r, p) for x in X])
+    # independent: M u' = f from the model's own M and f, q' = u
+    for x, d in zip(X[:3], ref[:3]):
+        M, f = cart.mass_matrix(x[:2], p), cart.forcing(x[:2], x[2:], r, p)
+        np.testing.assert_allclose(d[2:], np.linalg.solve(M, f), rtol=1e-13)
+        assert np.array_equal(d[:2], x[2:])
+    got = fast(0.0, X, r, p, None)
+    assert got.shape == X.shape and np.array_equal(got, ref)
+    out = np.full_like(X, 7.0)
+    assert fast(0, X, r, p, out) is out and np.array_equal(out, ref)
+    assert np.array_equal(fast(0.0, X, None, None, None),
+                          np.array([cart.rhs(0.0, x) for x in X]))
+    assert fast(0.0, X[:0], r, p, None).shape == (0, 4)
+    # declined
+    assert fast(np.zeros(25), X, r, p, None) is None                     # t per state
+    assert fast(0.0, X, np.tile(r, (25, 1)), p, None) is None             # r per state
+    assert fast(0.0, X, r, np.tile(p, (25, 1)), None) is None             # p per state
+    assert fast(0.0, np.asfortranarray(X), r, p, None) is None
+    assert fast(0.0, X[:, :3], r, p, None) is None
+    assert fast(0.0, X.astype(np.float32), r, p, None) is None
+    ro = np.empty_like(X)
+    ro.flags.writeable = False
+    assert fast(0.0, X, r, p, ro) is None
+    assert fast(0.0, X, r, p, np.empty((24, 4))) is None
+    bad = X.copy()
+    bad[7, 1] = np.nan
+    assert fast(0.0, bad, r, p, None) is None
+    with pytest.raises(TypeError):
+        fast(0.0, X)
+    # Simulator.rhs_batch: the same numbers by either path, and the failing state named
+    assert np.array_equal(cart.rhs_batch(0.0, X, r, p), ref)
+    assert np.array_equal(cart.rhs_batch(np.zeros(25), X, r, np.tile(p, (25, 1))), ref)
+    with pytest.raises(ValueError, match="state 7 of 25"):
+        cart.rhs_batch(0.0, bad, r, p)

@@ -1,11 +1,11 @@
 /*
- * gen_host_fast.c - the Python fast path of Simulator.rhs: see
- * gen_host_fast.h. One vectorcall (METH_FASTCALL) function object per model
- * table, its self a capsule holding the table: the call checks its
- * arguments' types and sizes with numpy's C API, allocates x', calls the
- * model's eval_rhs with the GIL held (a call of well under a microsecond)
- * and returns. A cffi call costs a from_buffer per array and a conversion
- * per argument; this costs none.
+ * gen_host_fast.c - the Python fast paths of Simulator.rhs and
+ * Simulator.rhs_batch: see gen_host_fast.h. One vectorcall (METH_FASTCALL)
+ * function object per model table and path, its self a capsule holding the
+ * table: the call checks its arguments' types and sizes with numpy's C API,
+ * allocates the result (unless given), calls the model's eval_rhs (per
+ * state for the batch, the GIL released) and returns. A cffi call costs a
+ * from_buffer per array and a conversion per argument; this costs none.
  */
 #define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
 #include <numpy/arrayobject.h>
@@ -67,13 +67,96 @@ static PyObject *eomgen_fast_rhs(PyObject *self, PyObject *const *args, Py_ssize
     return out;
 }
 
+/* arr: an exact, writable ndarray of eomgen_real, 2-D (n, ncol), aligned,
+ * C-contiguous */
+static int eomgen_fast_matrix(PyObject *arr, npy_intp ncol, int writable)
+{
+    PyArrayObject *a = (PyArrayObject *)arr;
+    return PyArray_CheckExact(arr) && PyArray_NDIM(a) == 2 && PyArray_DIM(a, 1) == ncol
+        && PyArray_TYPE(a) == eomgen_fast_type()
+        && (writable ? PyArray_ISCARRAY(a) : PyArray_ISCARRAY_RO(a))
+        && PyArray_ISNOTSWAPPED(a);
+}
+
+/* rhs_batch(t, X, r, p, out) -> out (new when None), or None where it does
+ * not apply (t not a number; X, r, p or out not exact arrays of the type,
+ * shapes (N, nx), (nr,), (np,), (N, nx)) or a state fails (the caller's
+ * general path then names it) */
+static PyObject *eomgen_fast_rhs_batch(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    const eomgen_api *api = (const eomgen_api *)PyCapsule_GetPointer(self, EOMGEN_FAST_CAPSULE);
+    const eomgen_real *x, *r = NULL, *p = NULL;
+    eomgen_real *dxdt;
+    npy_intp n, dims[2];
+    long nx, i;
+    double t;
+    PyObject *out;
+    int st = 0;
+    if (api == NULL)
+        return NULL;
+    if (nargs != 5) {
+        PyErr_SetString(PyExc_TypeError, "eomgen fast rhs_batch: (t, X, r, p, out)");
+        return NULL;
+    }
+    nx = api->nx;
+    if (!PyFloat_Check(args[0]) && !PyLong_Check(args[0]))
+        Py_RETURN_NONE;
+    t = PyFloat_AsDouble(args[0]);
+    if (t == -1.0 && PyErr_Occurred()) {
+        PyErr_Clear();
+        Py_RETURN_NONE;
+    }
+    if (!eomgen_fast_matrix(args[1], nx, 0))
+        Py_RETURN_NONE;
+    n = PyArray_DIM((PyArrayObject *)args[1], 0);
+    if (args[2] != Py_None) {
+        if (!eomgen_fast_vector(args[2], api->nr))
+            Py_RETURN_NONE;
+        r = (const eomgen_real *)PyArray_DATA((PyArrayObject *)args[2]);
+    }
+    if (args[3] != Py_None) {
+        if (!eomgen_fast_vector(args[3], api->np))
+            Py_RETURN_NONE;
+        p = (const eomgen_real *)PyArray_DATA((PyArrayObject *)args[3]);
+    }
+    if (args[4] != Py_None) {
+        if (!eomgen_fast_matrix(args[4], nx, 1) || PyArray_DIM((PyArrayObject *)args[4], 0) != n)
+            Py_RETURN_NONE;
+        out = args[4];
+        Py_INCREF(out);
+    } else {
+        dims[0] = n;
+        dims[1] = nx;
+        out = PyArray_SimpleNew(2, dims, eomgen_fast_type());
+        if (out == NULL)
+            return NULL;
+    }
+    x = (const eomgen_real *)PyArray_DATA((PyArrayObject *)args[1]);
+    dxdt = (eomgen_real *)PyArray_DATA((PyArrayObject *)out);
+    /* the GIL released, as cffi's calls do: the caller holds X and out */
+    Py_BEGIN_ALLOW_THREADS
+    for (i = 0; i < (long)n && !st; ++i)
+        st = api->eval_rhs((eomgen_real)t, x + i * nx, r, p, dxdt + i * nx, NULL);
+    Py_END_ALLOW_THREADS
+    if (st) {
+        Py_DECREF(out);
+        Py_RETURN_NONE;
+    }
+    return out;
+}
+
+static PyMethodDef eomgen_fast_rhs_batch_def = {
+    "rhs_batch", (PyCFunction)(void (*)(void))eomgen_fast_rhs_batch, METH_FASTCALL,
+    "rhs_batch(t, X, r, p, out) -> out, or None: the fast path of Simulator.rhs_batch"
+};
+
 static PyMethodDef eomgen_fast_rhs_def = {
     "rhs", (PyCFunction)(void (*)(void))eomgen_fast_rhs, METH_FASTCALL,
     "rhs(t, x, r=None) -> x', or None: the fast path of Simulator.rhs"
 };
 
-/* cffi calls this with the GIL released: take it for the Python API */
-void *eomgen_fast_rhs_new(const eomgen_api *api)
+/* cffi calls these with the GIL released: take it for the Python API */
+static void *eomgen_fast_new(const eomgen_api *api, PyMethodDef *def)
 {
     PyObject *cap, *fn = NULL;
     PyGILState_STATE gil = PyGILState_Ensure();
@@ -82,11 +165,21 @@ void *eomgen_fast_rhs_new(const eomgen_api *api)
     cap = PyCapsule_New((void *)api, EOMGEN_FAST_CAPSULE, NULL);
     if (cap == NULL)
         goto done;
-    fn = PyCFunction_NewEx(&eomgen_fast_rhs_def, cap, NULL);
+    fn = PyCFunction_NewEx(def, cap, NULL);
     Py_DECREF(cap);
 done:
     if (fn == NULL)
         PyErr_Clear();    /* the caller takes the general path */
     PyGILState_Release(gil);
     return fn;
+}
+
+void *eomgen_fast_rhs_new(const eomgen_api *api)
+{
+    return eomgen_fast_new(api, &eomgen_fast_rhs_def);
+}
+
+void *eomgen_fast_rhs_batch_new(const eomgen_api *api)
+{
+    return eomgen_fast_new(api, &eomgen_fast_rhs_batch_def);
 }

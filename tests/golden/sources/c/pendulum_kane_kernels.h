@@ -9,7 +9,7 @@
  * that pendulum_kane.c wires into the runtime: the Jacobian blocks of the
  * linearization (lin_terms) and the outputs' Jacobians (output_jacobian),
  * under the runtime's signatures. Internal: not part of the public API
- * (pendulum_kane.h).
+ * (pendulum_kane.h): hidden in a shared library (GEN_RT_INTERNAL).
  */
 #ifndef PENDULUM_KANE_KERNELS_H
 #define PENDULUM_KANE_KERNELS_H
@@ -17,23 +17,23 @@
 #include "gen_rt.h"
 #include "pendulum_kane.h"
 
-void pendulum_kane_k_kinematics(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_kr);
+GEN_RT_INTERNAL void pendulum_kane_k_kinematics(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_kr);
 
-void pendulum_kane_k_accel_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_a);
+GEN_RT_INTERNAL void pendulum_kane_k_accel_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_a);
 
-void pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_kr, pendulum_kane_real *out_M, pendulum_kane_real *out_f, pendulum_kane_real *out_A, pendulum_kane_real *out_a);
+GEN_RT_INTERNAL void pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_kr, pendulum_kane_real *out_M, pendulum_kane_real *out_f, pendulum_kane_real *out_A, pendulum_kane_real *out_a);
 
-void pendulum_kane_k_constraints(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_fc);
+GEN_RT_INTERNAL void pendulum_kane_k_constraints(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_fc);
 
-void pendulum_kane_k_constraint_jacobian(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_fc, pendulum_kane_real *out_Jc);
+GEN_RT_INTERNAL void pendulum_kane_k_constraint_jacobian(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_fc, pendulum_kane_real *out_Jc);
 
-void pendulum_kane_k_velocity_constraint_matrix(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_A, pendulum_kane_real *out_b);
+GEN_RT_INTERNAL void pendulum_kane_k_velocity_constraint_matrix(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_A, pendulum_kane_real *out_b);
 
-void pendulum_kane_k_velocity_constraints(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_fv);
+GEN_RT_INTERNAL void pendulum_kane_k_velocity_constraints(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_fv);
 
-void pendulum_kane_k_energy(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_E);
+GEN_RT_INTERNAL void pendulum_kane_k_energy(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_E);
 
-void pendulum_kane_lin_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *ud,
+GEN_RT_INTERNAL void pendulum_kane_lin_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *ud,
                  const pendulum_kane_real *lam, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t,
                  const gen_rt_lin_out *o);
 
