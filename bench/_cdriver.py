@@ -96,6 +96,21 @@ DRIVER = textwrap.dedent("""\
         for (i = 0; i < n; ++i) a = (a + a) ^ (unsigned long long)i;
         return a;
     }}
+    /* the machine's peak rate of scalar arithmetic, measured: twelve
+     * independent chains of a product and a sum or a difference (operations
+     * no compiler packs into vectors; enough chains to fill every pipe),
+     * n iterations of 24 flops */
+    static double peak(long n, double m, double a) {{
+        double s0 = 1, s1 = 1.1, s2 = 1.2, s3 = 1.3, s4 = 1.4, s5 = 1.5;
+        double s6 = 1.6, s7 = 1.7, s8 = 1.8, s9 = 1.9, s10 = 2.0, s11 = 2.1;
+        long i;
+        for (i = 0; i < n; ++i) {{
+            s0 = s0 * m + a; s1 = s1 * m - a; s2 = a + s2 * m; s3 = s3 * m - a;
+            s4 = s4 * m + a; s5 = s5 * m - a; s6 = a + s6 * m; s7 = s7 * m - a;
+            s8 = s8 * m + a; s9 = s9 * m - a; s10 = a + s10 * m; s11 = s11 * m - a;
+        }}
+        return s0 + s1 + s2 + s3 + s4 + s5 + s6 + s7 + s8 + s9 + s10 + s11;
+    }}
     int main(void) {{
         static const double x0[{P}_NX] = {{ {x0} }};
         static const double p[{np}] = {{ {pvals} }};
@@ -133,6 +148,18 @@ DRIVER = textwrap.dedent("""\
                 }}
                 printf("clock %.9g\\n", best);
             }}
+            {{
+                volatile double pm = 0.999999, pa = 1e-7;
+                double best = 0;
+                int c;
+                for (c = 0; c < 5; ++c) {{
+                    t0 = now();
+                    sink += peak(20000L, pm, pa);
+                    t1 = now();
+                    if (24 * 20000.0 / (t1 - t0) > best) best = 24 * 20000.0 / (t1 - t0);
+                }}
+                printf("peak %.9g\\n", best);
+            }}
             {libm_loop}
         }}
         return sink == 12345.0;
@@ -146,8 +173,7 @@ LIBM_LOOP = """
             for (i = 0; i < {P}_NX; ++i) x[i] = x0[i];
             t0 = now();
             for (i = 0; i < n; ++i) {{
-                double acc = 0;
-                x[1] += 1e-12;
+                double acc = 0, d = 1e-12 * i;   /* every argument moves */
 {calls}
                 sink += acc;
             }}
@@ -196,7 +222,9 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
     fastest of short chains of one-cycle integer operations; interleaved
     repeats). trig: the indices k of x whose sin and cos the kernel takes:
     the driver also times those calls of the platform's libm ('libm', s
-    per call of the model, and 'libm_cycles' at each repeat's clock). The driver
+    per call of the model, and 'libm_cycles' at each repeat's clock). Each
+    repeat also measures the peak rate of scalar arithmetic ('peak',
+    flops/s; per repeat with eomgen's and the libm's times in 'repeats'). The driver
     is built once per (sources, compiler, flags, sizes): a second call runs
     it again."""
     eom_dir = Path(eom_dir)
@@ -214,7 +242,7 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
         cas_check=CAS_CHECK.format(**fmt) if cas_c else "",
         cas_loop=CAS_LOOP.format(**fmt) if cas_c else "",
         libm_loop=LIBM_LOOP.format(P=P, calls="\n".join(
-            f"                acc += sin(x[{k}]) + cos(x[{k}]);" for k in trig)) if trig else "")
+            f"                acc += sin(x[{k}] + d) + cos(x[{k}] + d);" for k in trig)) if trig else "")
     tag = re.sub(r"\W", "_", Path(cc).name)
     drv = eom_dir / f"bench_driver_{tag}.c"
     exe = eom_dir / f"bench_driver_{tag}"
@@ -241,7 +269,7 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
         if res.returncode != 0:
             raise RuntimeError(f"driver exited with {res.returncode}: {res.stdout[-2000:]}")
         text += res.stdout
-    vals = {"eomgen": [], "casadi": [], "clock": [], "libm": []}
+    vals = {"eomgen": [], "casadi": [], "clock": [], "libm": [], "peak": []}
     out = {"iters": iters, "reps": reps, "runs": runs, "cc": cc}
     for line in text.split("\n"):
         if not line.strip():
@@ -267,4 +295,9 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
         out["eomgen_cycles"] = statistics.median(a * f for a, f in zip(e, hz))
         if len(vals["libm"]) == len(e):
             out["libm_cycles"] = statistics.median(a * f for a, f in zip(vals["libm"], hz))
+    if vals["peak"] and len(vals["peak"]) == len(e):
+        # per repeat, for the measured floor: eomgen's time, the libm's time
+        # and the peak rate of the same repeat
+        out["repeats"] = [{"eomgen": a, "libm": lm, "peak": pk} for a, lm, pk in
+                          zip(e, vals["libm"] or [0.0] * len(e), vals["peak"])]
     return out

@@ -128,7 +128,11 @@ def worker_eomgen(n, work, opts):
         # the right-hand-side kernel (<name>_kernels.c); fused with the
         # unrolled LDL^T for an unconstrained model, whose statements are
         # mass_solve's (one plan), interleaved: its kernel part is the rest
-        body = function_body((out / f"cart{n}_kernels.c").read_text(), f"cart{n}_k_rhs_terms")
+        # (a large model's kernel is <name>_k_rhs_terms_isa, built for the
+        # baseline and for AVX, behind a wrapper of the plain name)
+        ktext = (out / f"cart{n}_kernels.c").read_text()
+        kname = f"cart{n}_k_rhs_terms"
+        body = function_body(ktext, kname + "_isa" if kname + "_isa(" in ktext else kname)
         ops = count_flops(body.split("if (!out_ud)")[0])
         if "if (!out_ud)" in body and res["solve_ops"]:
             ops = {k: max(0, v - res["solve_ops"][k]) for k, v in ops.items()}
@@ -412,6 +416,22 @@ def floor_cycles(ops, nu, trig_cycles=None):
     return flops / 4 + trig
 
 
+def measured_floor(ops, nu, repeats):
+    """The floor from measurements of the same repeats: the flops of
+    floor_cycles at the peak scalar rate the driver measured, plus the
+    platform's libm on the model's sin/cos arguments; the median over the
+    repeats of floor (s) and of eomgen / floor."""
+    if not ops or not repeats or not all(r.get("peak") and r.get("libm") for r in repeats):
+        return None
+    flops = ops["arith"] + nu ** 3 / 3 + 2 * nu ** 2
+    fl = [flops / r["peak"] + r["libm"] for r in repeats]
+    return {"floor_measured": statistics.median(fl),
+            "floor_measured_ratio": statistics.median(r["eomgen"] / f
+                                                      for r, f in zip(repeats, fl)),
+            "peak_flops": statistics.median(r["peak"] for r in repeats),
+            "libm": statistics.median(r["libm"] for r in repeats)}
+
+
 def floor_estimate(ops, nu, mhz):
     """Seconds: floor_cycles at mhz, the clock the C driver measured between
     its repeats (the core's speed at that moment, turbo or a VM's slow phase
@@ -468,9 +488,11 @@ def main():
             "quick": quick, "max_seconds": args.max_seconds, "rtol": RTOL, "atol": ATOL,
             "floor_model": "arith flops of the rhs kernel (counted in the printed C) + "
                            "nu^3/3 + 2 nu^2 (Cholesky-class solve), at 4 flops/cycle, "
-                           "+ 20 cycles per sin/cos (floor_libm: + the libm's sin/cos at the "
-                           "model's angles, timed in the same repeats), at the clock the C driver measures "
-                           "between its repeats (floor_nominal: at the /proc/cpuinfo 'cpu MHz')"}
+                           "+ 20 cycles per sin/cos, at the clock the C driver measures "
+                           "between its repeats (floor_nominal: at the /proc/cpuinfo 'cpu MHz'); "
+                           "floor_measured: the same flops at the peak scalar rate the driver "
+                           "measures, + the libm's sin/cos at the model's angles, both timed "
+                           "in the same repeat as eomgen"}
     try:
         meta["git_head"] = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
                                           capture_output=True, text=True).stdout.strip()
@@ -560,13 +582,14 @@ def main():
                     fc = floor_cycles(e.get("ops"), n + 1)
                     if fc and ct.get("eomgen_cycles"):
                         entry["floor_ratio"] = ct["eomgen_cycles"] / fc
-                    # the same with the trigonometric part at what this
-                    # machine's libm takes for the model's sin and cos
-                    # (timed in the same repeats) instead of 20 cycles each
-                    fcl = floor_cycles(e.get("ops"), n + 1, ct.get("libm_cycles"))
-                    if fcl and ct.get("eomgen_cycles"):
-                        entry["floor_libm_cycles"] = fcl
-                        entry["floor_libm_ratio"] = ct["eomgen_cycles"] / fcl
+                    # the measured floor: the flops at this machine's peak
+                    # rate of scalar arithmetic and the model's sin and cos
+                    # at what its libm takes, both timed in the same repeat
+                    # as eomgen (no clock needed: on a VM whose neighbours
+                    # slow an integer chain, cycles read wrong)
+                    mf = measured_floor(e.get("ops"), n + 1, ct.get("repeats"))
+                    if mf:
+                        entry.update(mf)
                     print(f"n={n:2d} C rhs: eomgen {ct['eomgen'] * 1e6:.3f} us"
                           + (f", casadi {ct['casadi'] * 1e6:.3f} us (max rel diff "
                              f"{ct.get('maxreldiff', float('nan')):.2g})" if "casadi" in ct else "")
@@ -681,15 +704,16 @@ def report(results):
                      f"{cops['arith']} + {cops['sin']}s/{cops['cos']}c" if cops else "-",
                      fmt_t(fl, "us") + (f" at {ct['clock'] / 1e9:.2f} GHz" if ct.get("clock") else ""),
                      f"{frr:.3g}" if frr else ratio(ce, fl),
-                     (f"{m['floor_libm_ratio']:.3g} (libm {ct['libm_cycles']:.0f} cycles)"
-                      if m.get("floor_libm_ratio") else "-"),
+                     (f"{m['floor_measured_ratio']:.3g} (floor {m['floor_measured'] * 1e6:.3g} us: "
+                      f"{m['peak_flops'] / 1e9:.3g} Gflop/s, libm {m['libm'] * 1e6:.3g} us)"
+                      if m.get("floor_measured_ratio") else "-"),
                      f"{ct['maxreldiff']:.1g}" if "maxreldiff" in ct else "-"])
     out.append("\n### 2. C time per rhs call (median), microseconds\n")
     out.append(md_table(["n", "nx", "eomgen eval_rhs", "CasADi",
                          "eomgen / CasADi (median of the repeats' ratios; of minima)",
                          "rhs_batch (N = 1000, out=) per state / eval_rhs (the library's compiler, by turns)",
                          "eomgen ops (arith + sin/cos [+ unrolled solve])", "CasADi ops (incl. LDL)", "floor (at the measured clock)", "eomgen / floor (per repeat, at its clock)",
-                         "eomgen / floor with this machine's libm for sin/cos",
+                         "eomgen / measured floor (the flops at the measured peak scalar rate + the libm's sin/cos at the model's angles, per repeat)",
                          "max rel diff"], rows))
     # 3. Python call
     rows = []

@@ -26,6 +26,31 @@ static int eomgen_fast_vector(PyObject *arr, npy_intp n)
         && PyArray_ISCARRAY_RO(a) && PyArray_ISNOTSWAPPED(a);
 }
 
+/* t: a Python float or int, into *t; 0 for anything else (no error set) */
+static int eomgen_fast_time(PyObject *arg, double *t)
+{
+    if (!PyFloat_Check(arg) && !PyLong_Check(arg))
+        return 0;
+    *t = PyFloat_AsDouble(arg);
+    if (*t == -1.0 && PyErr_Occurred()) {
+        PyErr_Clear();
+        return 0;
+    }
+    return 1;
+}
+
+/* an optional vector (r, p): None (*v = NULL) or a vector of n; 0 else */
+static int eomgen_fast_optional(PyObject *arg, npy_intp n, const eomgen_real **v)
+{
+    *v = NULL;
+    if (arg == Py_None)
+        return 1;
+    if (!eomgen_fast_vector(arg, n))
+        return 0;
+    *v = (const eomgen_real *)PyArray_DATA((PyArrayObject *)arg);
+    return 1;
+}
+
 static PyObject *eomgen_fast_rhs(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     const eomgen_api *api = (const eomgen_api *)PyCapsule_GetPointer(self, EOMGEN_FAST_CAPSULE);
@@ -41,20 +66,9 @@ static PyObject *eomgen_fast_rhs(PyObject *self, PyObject *const *args, Py_ssize
         return NULL;
     }
     nx = api->nx;
-    if (!PyFloat_Check(args[0]) && !PyLong_Check(args[0]))
+    if (!eomgen_fast_time(args[0], &t) || !eomgen_fast_vector(args[1], nx)
+        || (nargs == 3 && !eomgen_fast_optional(args[2], api->nr, &r)))
         Py_RETURN_NONE;
-    t = PyFloat_AsDouble(args[0]);
-    if (t == -1.0 && PyErr_Occurred()) {
-        PyErr_Clear();
-        Py_RETURN_NONE;
-    }
-    if (!eomgen_fast_vector(args[1], nx))
-        Py_RETURN_NONE;
-    if (nargs == 3 && args[2] != Py_None) {
-        if (!eomgen_fast_vector(args[2], api->nr))
-            Py_RETURN_NONE;
-        r = (const eomgen_real *)PyArray_DATA((PyArrayObject *)args[2]);
-    }
     out = PyArray_SimpleNew(1, &nx, eomgen_fast_type());
     if (out == NULL)
         return NULL;
@@ -85,7 +99,7 @@ static int eomgen_fast_matrix(PyObject *arr, npy_intp ncol, int writable)
 static PyObject *eomgen_fast_rhs_batch(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     const eomgen_api *api = (const eomgen_api *)PyCapsule_GetPointer(self, EOMGEN_FAST_CAPSULE);
-    const eomgen_real *x, *r = NULL, *p = NULL;
+    const eomgen_real *x, *r, *p;
     eomgen_real *dxdt;
     npy_intp n, dims[2];
     long nx, i;
@@ -99,26 +113,11 @@ static PyObject *eomgen_fast_rhs_batch(PyObject *self, PyObject *const *args, Py
         return NULL;
     }
     nx = api->nx;
-    if (!PyFloat_Check(args[0]) && !PyLong_Check(args[0]))
-        Py_RETURN_NONE;
-    t = PyFloat_AsDouble(args[0]);
-    if (t == -1.0 && PyErr_Occurred()) {
-        PyErr_Clear();
-        Py_RETURN_NONE;
-    }
-    if (!eomgen_fast_matrix(args[1], nx, 0))
+    if (!eomgen_fast_time(args[0], &t) || !eomgen_fast_matrix(args[1], nx, 0)
+        || !eomgen_fast_optional(args[2], api->nr, &r)
+        || !eomgen_fast_optional(args[3], api->np, &p))
         Py_RETURN_NONE;
     n = PyArray_DIM((PyArrayObject *)args[1], 0);
-    if (args[2] != Py_None) {
-        if (!eomgen_fast_vector(args[2], api->nr))
-            Py_RETURN_NONE;
-        r = (const eomgen_real *)PyArray_DATA((PyArrayObject *)args[2]);
-    }
-    if (args[3] != Py_None) {
-        if (!eomgen_fast_vector(args[3], api->np))
-            Py_RETURN_NONE;
-        p = (const eomgen_real *)PyArray_DATA((PyArrayObject *)args[3]);
-    }
     if (args[4] != Py_None) {
         if (!eomgen_fast_matrix(args[4], nx, 1) || PyArray_DIM((PyArrayObject *)args[4], 0) != n)
             Py_RETURN_NONE;
