@@ -70,7 +70,8 @@ def _run(exe):
     return [ln for ln in lines if not ln.startswith("avx")], avx
 
 
-@pytest.mark.parametrize("which", ["cart", pytest.param("kane", marks=pytest.mark.slow)])
+@pytest.mark.slow
+@pytest.mark.parametrize("which", ["cart", "kane"])
 def test_clones_give_the_baseline_bit_for_bit(tmp_path, monkeypatch, which):
     """With the threshold at 0 the seed Kane pendulum (constrained: the
     plain kernel) and the 2-link cart (the fused right-hand side with its
