@@ -222,9 +222,9 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
     fastest of short chains of one-cycle integer operations; interleaved
     repeats). trig: the indices k of x whose sin and cos the kernel takes:
     the driver also times those calls of the platform's libm ('libm', s
-    per call of the model, and 'libm_cycles' at each repeat's clock). Each
-    repeat also measures the peak rate of scalar arithmetic ('peak',
-    flops/s; per repeat with eomgen's and the libm's times in 'repeats'). The driver
+    per call of the model). Each repeat also measures the peak rate of
+    scalar arithmetic ('peak', flops/s; with trig, per repeat with eomgen's
+    and the libm's times in 'repeats'). The driver
     is built once per (sources, compiler, flags, sizes): a second call runs
     it again."""
     eom_dir = Path(eom_dir)
@@ -293,11 +293,9 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
         out["pair_ratio"] = statistics.median(a / b for a, b in zip(e, c))
     if hz and len(hz) == len(e):
         out["eomgen_cycles"] = statistics.median(a * f for a, f in zip(e, hz))
-        if len(vals["libm"]) == len(e):
-            out["libm_cycles"] = statistics.median(a * f for a, f in zip(vals["libm"], hz))
-    if vals["peak"] and len(vals["peak"]) == len(e):
+    if e and len(vals["peak"]) == len(e) == len(vals["libm"]):
         # per repeat, for the measured floor: eomgen's time, the libm's time
         # and the peak rate of the same repeat
-        out["repeats"] = [{"eomgen": a, "libm": lm, "peak": pk} for a, lm, pk in
-                          zip(e, vals["libm"] or [0.0] * len(e), vals["peak"])]
+        out["repeats"] = [{"eomgen": a, "libm": lm, "peak": pk}
+                          for a, lm, pk in zip(e, vals["libm"], vals["peak"])]
     return out

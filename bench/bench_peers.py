@@ -405,25 +405,27 @@ def md_table(headers, rows):
     return "\n".join(lines)
 
 
-def floor_cycles(ops, nu, trig_cycles=None):
-    """Cycles: arithmetic flops of the rhs kernel + a Cholesky-class
-    factor/solve (nu^3/3 + 2 nu^2) at 4 flops/cycle, + 20 cycles per sin/cos
-    (or trig_cycles for all of them: the libm's measured time)."""
+def floor_flops(ops, nu):
+    """Arithmetic flops of the rhs kernel + a Cholesky-class factor/solve
+    (nu^3/3 + 2 nu^2)."""
+    return ops["arith"] + nu ** 3 / 3 + 2 * nu ** 2
+
+
+def floor_cycles(ops, nu):
+    """Cycles: floor_flops at 4 flops/cycle, + 20 cycles per sin/cos."""
     if not ops:
         return None
-    flops = ops["arith"] + nu ** 3 / 3 + 2 * nu ** 2
-    trig = 20 * (ops["sin"] + ops["cos"]) if trig_cycles is None else trig_cycles
-    return flops / 4 + trig
+    return floor_flops(ops, nu) / 4 + 20 * (ops["sin"] + ops["cos"])
 
 
 def measured_floor(ops, nu, repeats):
-    """The floor from measurements of the same repeats: the flops of
-    floor_cycles at the peak scalar rate the driver measured, plus the
-    platform's libm on the model's sin/cos arguments; the median over the
-    repeats of floor (s) and of eomgen / floor."""
-    if not ops or not repeats or not all(r.get("peak") and r.get("libm") for r in repeats):
+    """The floor from measurements of the same repeats: floor_flops at the
+    peak scalar rate the driver measured, plus the platform's libm on the
+    model's sin/cos arguments; the median over the repeats of floor (s) and
+    of eomgen / floor."""
+    if not ops or not repeats:
         return None
-    flops = ops["arith"] + nu ** 3 / 3 + 2 * nu ** 2
+    flops = floor_flops(ops, nu)
     fl = [flops / r["peak"] + r["libm"] for r in repeats]
     return {"floor_measured": statistics.median(fl),
             "floor_measured_ratio": statistics.median(r["eomgen"] / f
