@@ -27,7 +27,7 @@ from .errors import ModelError
 from .ir import DERIVATIVE_KERNELS, plan as make_plan
 from .printers import ModelCPrinter, ModelCxxPrinter, kernel_statements, print_kernel_body
 from .resources import csrc_dir, templates_dir
-from .solvers import demand_order, ldlt_lines, ldlt_program
+from .solvers import demand_order, ldlt_lines, ldlt_work_index, ldlt_program
 
 __all__ = ["Rendered", "render", "render_files", "generate", "write_atomic", "template_env",
            "model_sources", "RUNTIME_SOURCES", "RUNTIME_HEADERS", "BACKENDS"]
@@ -37,7 +37,7 @@ RUNTIME_SOURCES = ["gen_rt_status.c", "gen_rt_linalg.c", "gen_rt_dynamics.c",
                    "gen_rt_project.c", "gen_rt_integrate.c", "gen_rt_linearize.c",
                    "gen_rt_model.c", "gen_rt_simulate.c", "gen_rt_expm.c", "gen_rt_sens.c"]
 RUNTIME_HEADERS = ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h", "gen_rt_rodas4.h", "gen_rt_expm.h",
-                   "gen_rt_sens.h"]
+                   "gen_rt_sens.h", "gen_rt_ldlt.h"]
 # the C++ runtime of the Eigen backend and the tables it shares with the C one
 EIGEN_RUNTIME_HEADERS = ["eigen/gen_rt_eigen.hpp", "eigen/gen_rt_expm.hpp", "gen_rt_status.h", "gen_rt_rodas4.h",
                          "gen_rt_dopri5.h"]
@@ -202,10 +202,19 @@ def _kernel_context(kernels, printer, fused=None, real_type="double"):
         }
         if fused is not None and k.name == "rhs_terms":
             bind = {"M": "m_", "f": "f_"}
-            temps, stores = kernel_statements(k, printer, bind=bind)
-            solve = ldlt_lines(fused, real_type, M=lambda i: f"m_{i}",
-                               f=lambda i: f"f_{i}")
-            ctx["body"] = ["    " + line for line in demand_order(solve, temps) + stores]
+            temps, stores = kernel_statements(k, printer, bind=bind, reads=not fused["loop"])
+            if fused["loop"]:
+                # a large dense M: its lower triangle and f into the work
+                # array of the runtime's LDL^T in loops (gen_rt_ldlt.h)
+                n = fused["n"]
+                fill = [f"work_[{ldlt_work_index(n, i, j)}] = m_{i * n + j};"
+                        for j in range(n) for i in range(j, n)]
+                fill += [f"work_[{ldlt_work_index(n, i)}] = f_{i};" for i in range(n)]
+                ctx["body"] = ["    " + line for line in [t for _, t, _ in temps] + fill + stores]
+            else:
+                solve = ldlt_lines(fused, real_type, M=lambda i: f"m_{i}",
+                                   f=lambda i: f"f_{i}")
+                ctx["body"] = ["    " + line for line in demand_order(solve, temps) + stores]
             ctx["bound"] = [{"name": o.name, "local": bind[o.name], "size": len(o.exprs)}
                             for o in k.outputs if o.name in bind]
         else:
@@ -338,7 +347,8 @@ def build_context(plan, iface, timings=None, backend="c"):
         # the arguments of the runtime's work-size macros
         "accel_c": iface.accel_macro,
         "mass_solve": mass_plan,
-        "mass_solve_lines": ldlt_lines(mass_plan, f"{p}_real") if mass_plan else None,
+        "mass_solve_lines": (ldlt_lines(mass_plan, f"{p}_real")
+                             if mass_plan and not mass_plan["loop"] else None),
         "fused_rhs": fused,
         # q' is u itself (the usual q' = u): the fused right-hand side's q'
         # is finite when the checked state is, so only its u' is checked

@@ -24,7 +24,30 @@ from __future__ import annotations
 import re
 
 __all__ = ["ldlt_pattern", "ldlt_program", "ldlt_statements", "ldlt_lines", "ldlt_solve_c",
-           "demand_order"]
+           "demand_order", "LDLT_LOOP_MIN", "ldlt_work_index"]
+
+# a dense mass matrix of at least this many speeds is solved by the
+# runtime's LDL^T in loops (csrc/gen_rt_ldlt.h: the same operations in the
+# same order, so the same bits), not unrolled: the unrolled solve is n^3/3
+# statements, and from about here on the loops, vectorized four rows at a
+# time, are faster and compile faster (cart, eval_rhs, loops / unrolled,
+# clang, AVX clone: nu = 17: 1.00; 21: 0.86; 25: 0.69; 33: 0.56, gcc 0.82;
+# the 32-link cart's kernels compile in 5.0 s instead of 8.1)
+LDLT_LOOP_MIN = 20
+
+
+def ldlt_work_index(n, i, j=None):
+    """Where the looped solve (csrc/gen_rt_ldlt.h) reads M_ij (i >= j) in
+    its work array (GEN_RT_LDLT_M, GEN_RT_LDLT_D), or f_i when j is None
+    (GEN_RT_LDLT_F)."""
+    ld = (n + 3) // 4 * 4
+    if j is None:
+        return ld * ld + 2 * n + i
+    if i == j:
+        return ld * ld + j
+    if i < j:
+        raise ValueError(f"M_{i}{j}: the solve reads the lower triangle")
+    return j * ld + i
 
 
 def ldlt_pattern(nonzero):
@@ -43,6 +66,9 @@ def ldlt_pattern(nonzero):
 
 def ldlt_program(n, nonzero):
     """The unrolled solve as plain data for the template:
+    loop: M is dense (no structural zero in L) and n >= LDLT_LOOP_MIN: the
+          template calls the runtime's solve in loops instead (the same
+          operations, in the same order, as the statements of this plan);
     diag: row-major indices of M's diagonal after the first (the pivot scale);
     cols: per column j, the k with l_jk != 0 (ks), the index of M_jj (d), and
           its rows i > j with l_ij != 0: the index of M_ij or None (base) and
@@ -51,6 +77,7 @@ def ldlt_program(n, nonzero):
     backward: per row i, last to first, the k > i with l_ki != 0 (L^T x = D^-1 y),
           nearest last (the latest value ends the sum: a shorter chain)."""
     L = ldlt_pattern(nonzero)
+    dense = all(L[i][j] for i in range(n) for j in range(i))
     cols = []
     for j in range(n):
         rows = []
@@ -64,6 +91,8 @@ def ldlt_program(n, nonzero):
                      "rows": rows})
     return {
         "n": n,
+        # solved in loops by the runtime (gen_rt_ldlt_dense), not unrolled
+        "loop": dense and n >= LDLT_LOOP_MIN,
         "diag": [i * n + i for i in range(1, n)],
         "cols": cols,
         "forward": [{"i": i, "ks": [k for k in range(i) if L[i][k]]} for i in range(n)],
