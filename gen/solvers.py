@@ -30,10 +30,11 @@ __all__ = ["ldlt_pattern", "ldlt_program", "ldlt_statements", "ldlt_lines", "ldl
 # runtime's LDL^T in loops (csrc/gen_rt_ldlt.h: the same operations in the
 # same order, so the same bits), not unrolled: the unrolled solve is n^3/3
 # statements, and from about here on the loops, vectorized four rows at a
-# time, are faster and compile faster (cart, eval_rhs, loops / unrolled,
-# clang, AVX clone: nu = 17: 1.00; 21: 0.86; 25: 0.69; 33: 0.56, gcc 0.82;
-# the 32-link cart's kernels compile in 5.0 s instead of 8.1)
-LDLT_LOOP_MIN = 20
+# time, are faster with both compilers and compile faster (cart, eval_rhs,
+# AVX clone, loops / unrolled: clang nu = 17: 1.00, 21: 0.86, 25: 0.69,
+# 33: 0.56; gcc nu = 21: 1.13, 25: 1.00, 33: 0.82; the 32-link cart's
+# kernels compile in 5.0 s instead of 8.1 with clang)
+LDLT_LOOP_MIN = 24
 
 
 def ldlt_work_index(n, i, j=None):
