@@ -154,3 +154,36 @@ def test_model_with_the_loop_gives_the_unrolled_model_bit_for_bit(tmp_path, monk
             np.testing.assert_allclose(dx[nq:], np.linalg.solve(M, f), rtol=1e-11, atol=1e-12)
     assert np.array_equal(out["loop"][0], out["unrolled"][0])
     assert np.array_equal(out["loop"][1], out["unrolled"][1])
+
+
+def test_work_index_is_the_headers(tmp_path):
+    """gen.solvers.ldlt_work_index (where a fused kernel stores M and f) and
+    the header's GEN_RT_LDLT_M/D/F/WORK macros (where the solve reads them)
+    are one layout."""
+    from gen.solvers import ldlt_work_index
+    ns = [1, 3, 4, 5, 24, 33]
+    body = "".join(
+        f'    for (i = 0; i < {n}; ++i) {{ printf("F %d %d %d\\n", {n}, i, GEN_RT_LDLT_F({n}, i));\n'
+        f'        for (j = 0; j <= i; ++j) printf("M %d %d %d %d\\n", {n}, i, j, i == j ? '
+        f'GEN_RT_LDLT_D({n}, j) : GEN_RT_LDLT_M({n}, i, j)); }}\n'
+        f'    printf("W %d %d\\n", {n}, GEN_RT_LDLT_WORK({n}));\n' for n in ns)
+    (tmp_path / "w.c").write_text('#include <stdio.h>\n#include "gen_rt_ldlt.h"\n'
+                                  "int main(void) {\n    int i, j;\n" + body + "    return 0;\n}\n")
+    subprocess.run([_compiler(), *STRICT_FLAGS, "-I", str(CSRC), str(tmp_path / "w.c"), "-o",
+                    str(tmp_path / "w")], check=True)
+    out = subprocess.run([str(tmp_path / "w")], capture_output=True, text=True).stdout
+    seen = {n: set() for n in ns}
+    work = {}
+    for line in out.splitlines():
+        kind, *v = line.split()
+        v = list(map(int, v))
+        if kind == "F":
+            assert v[2] == ldlt_work_index(v[0], v[1])
+            seen[v[0]].add(v[2])
+        elif kind == "M":
+            assert v[3] == ldlt_work_index(v[0], v[1], v[2])
+            seen[v[0]].add(v[3])
+        else:
+            work[v[0]] = v[1]
+    for n in ns:    # distinct places, all inside the work array
+        assert len(seen[n]) == n * (n + 1) // 2 + n and max(seen[n]) < work[n]
