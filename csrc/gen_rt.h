@@ -70,6 +70,12 @@ enum gen_rt_status { GEN_RT_STATUS_TABLE(GEN_RT_STATUS_ENUM_) GEN_RT_STATUS_END_
 #undef GEN_RT_STATUS_ENUM_
 #define GEN_RT_STATUS_MIN (-12)
 
+/* The integration methods, the table holds, the stack bound and the structs
+ * of the public API (gen_rt_sim_options, gen_rt_sim_stats, gen_rt_input,
+ * gen_rt_events, gen_rt_controller_fn): rendered from gen/abi.py, the one
+ * description of the interface, which every model's header also comes from. */
+#include "gen_rt_abi.h"
+
 /* A state with an entry beyond this magnitude has diverged: a model that
  * evaluates to NaN/inf there reports GEN_RT_ERR_DIVERGED, not a singular
  * configuration. */
@@ -377,35 +383,10 @@ typedef struct gen_rt_model {
                      gen_rt_real *f, gen_rt_real *ud);
 } gen_rt_model;
 
-/* integration methods (gen_rt_sim_options.method) */
-#define GEN_RT_METHOD_RK4 0
-#define GEN_RT_METHOD_DOPRI5 1
-#define GEN_RT_METHOD_RODAS4 2
-
-/* the options and statistics of advance/simulate; the generated
- * <p>_sim_options and <p>_sim_stats carry the same fields (gen/abi.py) */
-typedef struct {
-    int method, project;
-    gen_rt_real rtol, atol, h_init, h_min, h_max;
-    long max_steps;
-    gen_rt_real proj_tol;
-    int proj_max_iter;
-    /* bounded output of simulate: keep every every-th output row (and the
-     * last), or only the last row (final_only); every <= 1 keeps them all */
-    int every, final_only;
-} gen_rt_sim_options;
-/* the rows simulate keeps of the rows of simulate_rows (a negative status as is) */
-int gen_rt_simulate_rows_kept(int rows, int every, int final_only);
-
-typedef struct {
-    long n_accepted, n_rejected, n_rhs;
-    long n_jac;                     /* Jacobian evaluations (RODAS4) */
-    int n_out;
-    int n_events;                   /* events found (logged: the first capacity) */
-    int terminal;                   /* the terminal event that ended the run, -1: none */
-    gen_rt_real t_last, h_next;
-    gen_rt_real *x_last;            /* nx reals: the last good state */
-} gen_rt_sim_stats;
+/* the options and statistics of advance/simulate (gen_rt_sim_options,
+ * gen_rt_sim_stats) are in gen_rt_abi.h. Bounded output of simulate: every
+ * opts.every-th output row and the last, or only the last (final_only);
+ * every <= 1 keeps them all. */
 
 /* Work arrays, by function: every macro takes the same arguments, the
  * model's sizes and its two solver choices:
@@ -549,7 +530,13 @@ int gen_rt_model_advance(const gen_rt_model *m, gen_rt_real t0, gen_rt_real t1,
                          const gen_rt_real *r, const gen_rt_real *p,
                          const gen_rt_sim_options *o, gen_rt_real *work, int *iwork,
                          gen_rt_sim_stats *s, gen_rt_real *x);
+/* the output times of simulate from t0 to t_end every dt (the last interval
+ * clipped), or GEN_RT_ERR_BAD_ARG */
 int gen_rt_simulate_rows(gen_rt_real t0, gen_rt_real t_end, gen_rt_real dt);
+/* the rows simulate writes of those (what its capacity must hold) with
+ * opts.every and opts.final_only; a negative rows (a status) as is. The one
+ * place this is computed: the bindings call it through <p>_simulate_rows_kept. */
+int gen_rt_simulate_rows_kept(int rows, int every, int final_only);
 int gen_rt_model_simulate(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,
                           gen_rt_real t_end, gen_rt_real dt, const gen_rt_real *r,
                           const gen_rt_real *p, const gen_rt_sim_options *o, int capacity,
@@ -572,22 +559,7 @@ int gen_rt_model_simulate(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_r
  *              continuous controller); > 0: r is evaluated at t0 + k period
  *              (from the state there) and held until the next sample (a
  *              digital controller); the integrator steps to every sample. */
-typedef int (*gen_rt_controller_fn)(void *ctx, gen_rt_real t, const gen_rt_real *x,
-                                    gen_rt_real *r);
-#define GEN_RT_HOLD_ZOH 0
-#define GEN_RT_HOLD_LINEAR 1
-typedef struct {
-    const gen_rt_real *r;
-    int n_table;
-    const gen_rt_real *t_table;
-    const gen_rt_real *r_table;
-    int hold;
-    const gen_rt_real *K;
-    const gen_rt_real *x_op;
-    gen_rt_controller_fn controller;
-    void *ctx;
-    gen_rt_real period;
-} gen_rt_input;
+/* (gen_rt_input, gen_rt_controller_fn and GEN_RT_HOLD_*: gen_rt_abi.h) */
 
 /* the inputs at (t, x) from in (sampling aside: the base at t, feedback,
  * controller); work: ns reals. A bad description is GEN_RT_ERR_BAD_ARG
@@ -618,14 +590,7 @@ int gen_rt_model_simulate_input(const gen_rt_model *m, const gen_rt_real *x0, ge
  * stats->n_events counts them all. With terminal != NULL and terminal[i]
  * nonzero, the first crossing of event i ends the run there: its state is
  * the last output row and stats->terminal = i. */
-typedef struct {
-    int n;
-    const int *which, *direction, *terminal;
-    const gen_rt_real *level;
-    int capacity;
-    int *log_which;
-    gen_rt_real *log_t, *log_x;
-} gen_rt_events;
+/* (gen_rt_events: gen_rt_abi.h) */
 int gen_rt_model_simulate_events(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,
                                  gen_rt_real t_end, gen_rt_real dt, const gen_rt_input *in,
                                  const gen_rt_events *ev, const gen_rt_real *p,

@@ -27,7 +27,8 @@ from dataclasses import dataclass, field
 from .resources import csrc_dir
 
 __all__ = ["Status", "Field", "Struct", "Param", "Function", "Interface", "STATUSES",
-           "STRUCTS", "FUNCTIONS", "BATCH_FUNCTIONS", "METHODS", "status_name", "status_value",
+           "STRUCTS", "FUNCTIONS", "BATCH_FUNCTIONS", "METHODS", "METHOD_ALIASES", "HOLDS",
+           "STACK_LIMIT", "method_name", "method_code", "hold_code", "status_name", "status_value",
            "status_message", "interface", "host_interface", "ABI_TAG", "DERIVATIVE_VERBS"]
 
 
@@ -73,8 +74,43 @@ def status_message(code):
     return s.message if s else STATUS_UNKNOWN
 
 
+# ------------------------------------------------------- codes and bounds
+# These facts are written here once. The runtime's own copy (csrc/gen_rt_abi.h:
+# GEN_RT_METHOD_*, GEN_RT_HOLD_*, the structs) and every model's header
+# (<P>_METHOD_*, <P>_HOLD_*) are rendered from them (templates/c/
+# gen_rt_abi.h.j2, model.h.j2); tests/test_abi.py pins the committed
+# csrc/gen_rt_abi.h to this file.
+
 # integration methods: name -> value of <P>_METHOD_<NAME> / sim_options.method
 METHODS = {"rk4": 0, "dopri5": 1, "rodas4": 2}
+# other spellings a user may give (Python, the command line, the binary)
+METHOD_ALIASES = {"rodas": "rodas4"}
+# table holds: name -> value of <P>_HOLD_<NAME> / input.hold
+HOLDS = {"zoh": 0, "linear": 1}
+# the embedded profile's bound on every function frame, in bytes
+# (-Wstack-usage when cross-compiling, gen.footprint, `eomgen report`)
+STACK_LIMIT = 8192
+
+
+def method_name(method, arg="method"):
+    """The canonical name of an integration method ("rodas" -> "rodas4");
+    a ValueError naming the argument for an unknown one."""
+    name = METHOD_ALIASES.get(method, method) if isinstance(method, str) else method
+    if name not in METHODS:
+        raise ValueError(f"{arg} must be one of {sorted(METHODS)}, got {method!r}")
+    return name
+
+
+def method_code(method, arg="method"):
+    """The value of sim_options.method for a method name or alias."""
+    return METHODS[method_name(method, arg)]
+
+
+def hold_code(hold, arg="input_hold"):
+    """The value of input.hold for a hold name."""
+    if hold not in HOLDS:
+        raise ValueError(f"{arg} must be one of {sorted(HOLDS)}, got {hold!r}")
+    return HOLDS[hold]
 
 
 # ------------------------------------------------------------------- structs
@@ -195,6 +231,8 @@ class Function:
     work: str | None = None  # the runtime's work-size macros: GEN_RT_MODEL_<work>_WORK/_IWORK
     iwork: bool = False
     work_args: str | None = None  # sizes the work macros take beyond the model's ("NA")
+    model: bool = True      # False: no model; the function is the runtime's gen_rt_<verb>,
+                            # called with the same arguments and nothing checked
 
 
 def _params(spec):
@@ -216,7 +254,7 @@ def _params(spec):
 
 FUNCTIONS = (
     Function("status_message", _params("status:value::int"), "Message for a status code.",
-             ret="const char *"),
+             ret="const char *", model=False),
     Function("eval_mass_matrix", _params("q:in:NQ, p:in?:NP=p, t:scalar, M:out:NU*NU"),
              "Mass matrix M(q) of the unconstrained equations, NU x NU."),
     Function("eval_forcing", _params("q:in:NQ, u:in:NU, r:in?:NR=r, p:in?:NP=p, t:scalar, f:out:NU"),
@@ -264,7 +302,14 @@ FUNCTIONS = (
              "Integrate x from t0 to t1 (one RK4 step, or adaptive DOPRI5 or RODAS4 steps); "
              "stats accumulate.", work="ADVANCE", iwork=True),
     Function("simulate_rows", _params("t0:value, t_end:value, dt:value"),
-             "Number of output rows simulate() writes for these times (or a negative status)."),
+             "Number of output times of simulate() for these times (or a negative status).",
+             model=False),
+    Function("simulate_rows_kept", _params("rows:value::int, every:value::int, "
+                                           "final_only:value::int"),
+             "The rows simulate() writes (its capacity) of simulate_rows()'s rows with "
+             "opts.every and opts.final_only: every k-th and the last (every <= 1: all), or 1 "
+             "with final_only; a negative rows (a status) returned as is.",
+             model=False),
     Function("simulate", _params("x0:in:NX, t0:value, t_end:value, dt:value, r:in?:NR=r, p:in?:NP=p, "
                                  "opts:struct?::sim_options, capacity:value::int, t_out:rows, "
                                  "x_out:rows, lam_out:out?, stats:struct_out::sim_stats"),

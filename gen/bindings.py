@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-from .abi import DERIVATIVE_VERBS, METHODS, status_name
+from .abi import DERIVATIVE_VERBS, METHODS, method_name, status_name
 from .errors import ConvergenceError, DivergenceError, SingularError, SolverError
 
 __all__ = ["Simulator", "EXCEPTIONS"]
@@ -834,9 +834,7 @@ class Simulator:
         """
         from .control import InputPlan, plan_inputs
         from .events import plan_events
-        method = {"rodas": "rodas4"}.get(method, method)
-        if method not in METHODS:
-            raise ValueError(f"method must be one of {sorted(METHODS)}, got {method!r}")
+        method = method_name(method)
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a positive number, got {dt!r}")
         if not (np.isfinite(t_end) and t_end >= t0):
@@ -852,7 +850,7 @@ class Simulator:
         if every < 1:
             raise ValueError(f"every must be an integer >= 1, got {every!r}")
         full = rows
-        rows = 1 if final_only else (rows - 1) // every + 1 + ((rows - 1) % every != 0)
+        rows = self._fn("simulate_rows_kept")(rows, every, 1 if final_only else 0)
         if max_rows is not None and rows > max_rows:
             raise ValueError(f"this run would return {rows} rows ({full} output times, every="
                              f"{every}), more than max_rows={max_rows}: use a larger dt or "

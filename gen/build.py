@@ -517,7 +517,8 @@ def _runtime_objects(src: Path, cc: str):
         raise BuildError(f"the C compiler {cc!r} cannot be run: {e}") from None
     # every runtime source and header (a header missing here would leave
     # stale objects in the cache when it changes)
-    for name in sorted(RUNTIME_SOURCES) + sorted(RUNTIME_HEADERS) + ["gen_rt_config.h"]:
+    for name in (sorted(RUNTIME_SOURCES) + sorted(RUNTIME_HEADERS)
+                 + ["gen_rt_config.h", "gen_rt_abi.h"]):
         h.update(name.encode() + b"\0" + (src / name).read_bytes() + b"\0")
     folder = cache_dir() / f"runtime_{h.hexdigest()[:16]}"
     objs = [folder / (Path(s).stem + ".o") for s in RUNTIME_SOURCES]

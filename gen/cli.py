@@ -17,7 +17,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from . import __version__
+from . import __version__, abi
 from .cli_output import (MissingDependency, Progress, plot_simulation, print_csv,
                          print_events, print_linearization, write_csv, write_events_csv)
 from .errors import EomgenError
@@ -313,7 +313,7 @@ def cmd_simulate(a, progress):
             raise UsageError("give the inputs either with --input or with --input-csv")
         r = _read_input_table(sim, a.input_csv)
         varying = True
-    method = {"rodas": "rodas4"}.get(a.method, a.method)
+    method = abi.method_name(a.method, "--method")
     kw = dict(events=events, terminal=terminal, return_events=True) if events else {}
     with progress.stage(f"simulate {a.t_end:g} s ({method})"):
         res = sim.simulate(x, a.t_end, a.dt, method=method, r=r, p=p, rtol=a.rtol,
@@ -655,8 +655,9 @@ def build_parser():
     _add_real(b)
     b.add_argument("--stack-limit", type=int, default=None, metavar="BYTES",
                    help="fail the library build on a function frame above BYTES "
-                        "(-Wstack-usage, GCC; the embedded profile's bound, 8192 by default "
-                        "when cross-compiling); default: no bound on the host")
+                        "(-Wstack-usage, GCC; the embedded profile's bound, "
+                        f"{abi.STACK_LIMIT} by default when cross-compiling); default: no "
+                        "bound on the host")
     b.set_defaults(fn=cmd_build)
 
     s = _sub(sub, "simulate", "simulate the compiled model; write CSV and/or a plot (states, "
@@ -667,7 +668,7 @@ def build_parser():
     s.add_argument("--t-end", type=float, required=True, help="end time [s]")
     s.add_argument("--dt", type=float, default=0.01,
                    help="RK4 step, or the output interval of dopri5 and rodas4 (default 0.01)")
-    s.add_argument("--method", default="rk4", choices=["rk4", "dopri5", "rodas4", "rodas"],
+    s.add_argument("--method", default="rk4", choices=[*abi.METHODS, *abi.METHOD_ALIASES],
                    help="rk4 (default), dopri5 or rodas4 (alias rodas: implicit, for stiff "
                         "models)")
     s.add_argument("--rtol", type=float, default=1e-8,
@@ -682,7 +683,7 @@ def build_parser():
     s.add_argument("--input-csv", metavar="FILE",
                    help="inputs from a table: a header 't,<input names>' then rows; held "
                         "(--hold zoh, default) or interpolated (--hold linear) inside C")
-    s.add_argument("--hold", default="zoh", choices=["zoh", "linear"],
+    s.add_argument("--hold", default="zoh", choices=list(abi.HOLDS),
                    help="the input table between rows")
     s.add_argument("--event", action="append", metavar="NAME[=LEVEL]:DIR[:terminal]",
                    help="log the crossings of LEVEL (default 0) by a state or an output NAME; "
@@ -727,9 +728,9 @@ def build_parser():
     rp.add_argument("file", help="model file (FILE.py or FILE.py:function)")
     _add_real(rp, default="both", both=True)
     rp.add_argument("--target", default="cortex-m4f", choices=["cortex-m4f", "host"])
-    rp.add_argument("--stack-limit", type=int, default=8192, metavar="BYTES",
-                    help="-Wstack-usage bound on every function frame (default 8192; "
-                         "0: no bound)")
+    rp.add_argument("--stack-limit", type=int, default=abi.STACK_LIMIT, metavar="BYTES",
+                    help="-Wstack-usage bound on every function frame (default "
+                         f"{abi.STACK_LIMIT}; 0: no bound)")
     rp.add_argument("--build-dir", help="keep the build here (default: a temporary directory)")
     rp.add_argument("-o", "--output", help="write the table to this file (footprint.txt)")
     rp.add_argument("--json", metavar="FILE", help="also write the reports as JSON")
@@ -780,7 +781,7 @@ def build_parser():
     en.add_argument("--t-end", type=float, required=True, help="end time [s]")
     en.add_argument("--dt", type=float, default=1e-3, help="RK4 step or output interval "
                     "(default 1e-3)")
-    en.add_argument("--method", default="rk4", choices=["rk4", "dopri5", "rodas4", "rodas"])
+    en.add_argument("--method", default="rk4", choices=[*abi.METHODS, *abi.METHOD_ALIASES])
     en.add_argument("--rtol", type=float, default=1e-8)
     en.add_argument("--atol", type=float, default=1e-10)
     en.add_argument("--reduce", action="append",

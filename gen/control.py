@@ -21,9 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LinearFeedback", "InputPlan", "plan_inputs"]
+from .abi import hold_code
 
-HOLDS = {"zoh": 0, "linear": 1}
+__all__ = ["LinearFeedback", "InputPlan", "plan_inputs"]
 
 
 @dataclass
@@ -162,11 +162,10 @@ def plan_inputs(sim, r, controller, dt, method, input_period, input_hold):
         if input_period is not None:
             raise ValueError("input_period applies to a callable r(t, x); r is constant")
         return None
-    if input_hold not in HOLDS:
-        raise ValueError(f"input_hold must be one of {sorted(HOLDS)}, got {input_hold!r}")
+    hold = hold_code(input_hold)
     plan = InputPlan(sim)
     s = plan.struct
-    s.hold = HOLDS[input_hold]
+    s.hold = hold
     if controller is not None:
         if not isinstance(controller, LinearFeedback):
             raise TypeError(f"controller must be a gen.LinearFeedback, got "

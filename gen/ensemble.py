@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .abi import METHODS, status_name
+from .abi import METHODS, method_name, status_name
 
 __all__ = ["Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult", "run_ensemble"]
 
@@ -477,9 +477,7 @@ def run_ensemble(sim, x0, t_end, dt, p=None, r=None, controller=None, reduce="fi
                  t0=0.0, max_steps=100000, consistent=False, workers=None, progress=None,
                  input_period=None, input_hold="zoh"):
     """Simulator.ensemble (its docstring)."""
-    method = {"rodas": "rodas4"}.get(method, method)
-    if method not in METHODS:
-        raise ValueError(f"method must be one of {sorted(METHODS)}, got {method!r}")
+    method = method_name(method)
     if not (np.isfinite(dt) and dt > 0):
         raise ValueError(f"dt must be a positive number, got {dt!r}")
     if not (np.isfinite(t_end) and t_end >= t0):

@@ -46,7 +46,7 @@ import tempfile
 from pathlib import Path
 
 from .errors import BuildError
-from .abi import FUNCTIONS
+from .abi import FUNCTIONS, STACK_LIMIT
 from .render import generate
 from .stack import (FootprintError, analyze, display_name, find_tool, image_stack,
                     parse_callgraph, parse_su, section_sizes)
@@ -54,7 +54,7 @@ from .stack import (FootprintError, analyze, display_name, find_tool, image_stac
 __all__ = ["report", "report_many", "build_library", "analyze", "parse_callgraph", "section_sizes",
            "image_stack", "format_table", "FootprintError", "TARGETS", "DEFAULT_STACK_LIMIT"]
 
-DEFAULT_STACK_LIMIT = 8192
+DEFAULT_STACK_LIMIT = STACK_LIMIT     # gen/abi.py: the embedded profile's bound
 
 # target -> (toolchain file in the generated project or None, tool prefix)
 TARGETS = {

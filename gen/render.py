@@ -22,7 +22,7 @@ from pathlib import Path
 import jinja2
 
 from ._version import __version__
-from .abi import METHODS, interface
+from .abi import interface
 from .errors import ModelError
 from .ir import DERIVATIVE_KERNELS, plan as make_plan
 from .printers import ModelCPrinter, ModelCxxPrinter, kernel_statements, print_kernel_body
@@ -56,6 +56,7 @@ C_TEMPLATES = [
     ("{name}_kernels.h", "c/model_kernels.h.j2", "model"),   # the functions of _lin.c
     ("{name}_api.c", "c/model_api.c.j2", "model"),        # the plugin table (gen/host.py)
     ("gen_rt_config.h", "c/gen_rt_config.h.j2", "model"),  # the runtime's scalar type
+    ("gen_rt_abi.h", "c/gen_rt_abi.h.j2", "model"),  # the runtime's structs and codes (gen/abi.py)
     ("main.c", "c/main.c.j2", "project"),
     ("CMakeLists.txt", "c/CMakeLists.txt.j2", "project"),
     ("arm-none-eabi.cmake", "c/arm-none-eabi.cmake.j2", "project"),  # Cortex-M4F toolchain
@@ -312,7 +313,6 @@ def build_context(plan, iface, timings=None, backend="c"):
         "method_doc": ("Kane's method (dependent speeds eliminated numerically)"
                        if m.method == "kane" else
                        "Lagrange's method (multipliers from the KKT system)"),
-        "methods": sorted(METHODS.items(), key=lambda kv: kv[1]),
         "nq": nq, "nu": nu, "nx": m.nx, "nr": nr, "np": m.np, "mc": mc, "mv": mv, "ns": m.ns,
         "has_energy": 1 if m.energy is not None else 0,
         "explicit_kinematics": m.qdot is not None,
@@ -367,11 +367,32 @@ def build_context(plan, iface, timings=None, backend="c"):
         "ind_names": m.independent_state_names,
         "runtime_sources": RUNTIME_SOURCES,
     }
+    ctx.update(abi_context())
     if backend == "eigen":
         ctx.update(_eigen_context(m, kernels))
     if timings is not None:
         timings["printing"] = t2 - t1
     return ctx
+
+
+def abi_context():
+    """The facts of gen/abi.py a template renders with no model: the method
+    and hold codes, the stack bound, the structs (read at call time)."""
+    from . import abi
+    return {
+        "methods": sorted(abi.METHODS.items(), key=lambda kv: kv[1]),
+        "method_names": (sorted(abi.METHODS.items(), key=lambda kv: kv[1])
+                         + [(a, abi.METHODS[n]) for a, n in abi.METHOD_ALIASES.items()]),
+        "holds": sorted(abi.HOLDS.items(), key=lambda kv: kv[1]),
+        "stack_limit": abi.STACK_LIMIT,
+        "abi_structs": abi.STRUCTS,
+    }
+
+
+def runtime_abi_header():
+    """The text of gen_rt_abi.h (csrc/ holds a copy for the runtime built
+    alone; every model renders its own)."""
+    return template_env().get_template("c/gen_rt_abi.h.j2").render(**abi_context())
 
 
 def _eigen_context(model, kernels):

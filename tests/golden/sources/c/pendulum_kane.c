@@ -282,8 +282,8 @@ int pendulum_kane_advance(pendulum_kane_real t0, pendulum_kane_real t1, const pe
 {
     pendulum_kane_real work[GEN_RT_MODEL_ADVANCE_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     int iwork[GEN_RT_MODEL_ADVANCE_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
-    gen_rt_sim_options opts_rt;
-    gen_rt_sim_stats stats_rt;
+    gen_rt_sim_options opts_rt = { 0 };
+    gen_rt_sim_stats stats_rt = { 0 };
     pendulum_kane_sim_options opts_default;
     int st;
     PENDULUM_KANE_CHECK_REAL(t0);
@@ -336,12 +336,17 @@ int pendulum_kane_simulate_rows(pendulum_kane_real t0, pendulum_kane_real t_end,
     return gen_rt_simulate_rows(t0, t_end, dt);
 }
 
+int pendulum_kane_simulate_rows_kept(int rows, int every, int final_only)
+{
+    return gen_rt_simulate_rows_kept(rows, every, final_only);
+}
+
 int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_real *r, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_sim_stats *stats)
 {
     pendulum_kane_real work[GEN_RT_MODEL_SIMULATE_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     int iwork[GEN_RT_MODEL_SIMULATE_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
-    gen_rt_sim_options opts_rt;
-    gen_rt_sim_stats stats_rt;
+    gen_rt_sim_options opts_rt = { 0 };
+    gen_rt_sim_stats stats_rt = { 0 };
     pendulum_kane_sim_options opts_default;
     int st;
     PENDULUM_KANE_CHECK_IN(x0, 4);
@@ -393,9 +398,9 @@ int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_rea
 {
     pendulum_kane_real work[GEN_RT_MODEL_SIMULATE_INPUT_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
     int iwork[GEN_RT_MODEL_SIMULATE_INPUT_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
-    gen_rt_input in_rt;
-    gen_rt_sim_options opts_rt;
-    gen_rt_sim_stats stats_rt;
+    gen_rt_input in_rt = { 0 };
+    gen_rt_sim_options opts_rt = { 0 };
+    gen_rt_sim_stats stats_rt = { 0 };
     pendulum_kane_sim_options opts_default;
     int st;
     PENDULUM_KANE_CHECK_IN(x0, 4);
@@ -456,10 +461,10 @@ int pendulum_kane_simulate_events(const pendulum_kane_real *x0, pendulum_kane_re
 {
     pendulum_kane_real work[GEN_RT_MODEL_SIMULATE_EVENTS_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED, 0)];
     int iwork[GEN_RT_MODEL_SIMULATE_EVENTS_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED, 0)];
-    gen_rt_input in_rt;
-    gen_rt_events ev_rt;
-    gen_rt_sim_options opts_rt;
-    gen_rt_sim_stats stats_rt;
+    gen_rt_input in_rt = { 0 };
+    gen_rt_events ev_rt = { 0 };
+    gen_rt_sim_options opts_rt = { 0 };
+    gen_rt_sim_stats stats_rt = { 0 };
     pendulum_kane_sim_options opts_default;
     int st;
     PENDULUM_KANE_CHECK_IN(x0, 4);

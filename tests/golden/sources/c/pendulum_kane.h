@@ -187,8 +187,11 @@ int pendulum_kane_step_rk4(pendulum_kane_real t, pendulum_kane_real h, const pen
 /* Integrate x from t0 to t1 (one RK4 step, or adaptive DOPRI5 or RODAS4 steps); stats accumulate. */
 int pendulum_kane_advance(pendulum_kane_real t0, pendulum_kane_real t1, const pendulum_kane_real *r, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, pendulum_kane_sim_stats *stats, pendulum_kane_real *x);
 
-/* Number of output rows simulate() writes for these times (or a negative status). */
+/* Number of output times of simulate() for these times (or a negative status). */
 int pendulum_kane_simulate_rows(pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt);
+
+/* The rows simulate() writes (its capacity) of simulate_rows()'s rows with opts.every and opts.final_only: every k-th and the last (every <= 1: all), or 1 with final_only; a negative rows (a status) returned as is. */
+int pendulum_kane_simulate_rows_kept(int rows, int every, int final_only);
 
 /* Simulate from x0 with outputs every dt up to t_end (the last interval clipped): rows of t_out, x_out (NX each), lam_out (MV each, may be NULL). On failure the rows written are stats->n_out and stats->x_last holds the last good state. */
 int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_real *r, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_sim_stats *stats);

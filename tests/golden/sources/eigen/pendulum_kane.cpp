@@ -434,6 +434,11 @@ int pendulum_kane_simulate_rows(pendulum_kane_real t0, pendulum_kane_real t_end,
     return mdl::simulate_rows<S>(t0, t_end, dt);
 }
 
+int pendulum_kane_simulate_rows_kept(int rows, int every, int final_only)
+{
+    return mdl::detail::RT<S>::rows_kept(rows, every, final_only);
+}
+
 int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_real *r, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_sim_stats *stats)
 {
     PENDULUM_KANE_CHECK_IN(x0, 4);

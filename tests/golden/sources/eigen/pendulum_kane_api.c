@@ -11,7 +11,7 @@
  * every model through the same compiled module this way. The functions
  * that take a struct appear with void pointers (a trampoline below casts
  * them back), so the table's types are the same for every model; the
- * layout is tagged by abi (eomgen-abi-63df326125b18c2d). Not needed by a program
+ * layout is tagged by abi (eomgen-abi-fe418721fdb62e98). Not needed by a program
  * that links the model and calls pendulum_kane.h directly.
  */
 #include <stddef.h>
@@ -46,6 +46,7 @@ typedef struct {
     int (*step_rk4)(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, int project, pendulum_kane_real *x);
     int (*advance)(pendulum_kane_real t0, pendulum_kane_real t1, const pendulum_kane_real *r, const pendulum_kane_real *p, const void *opts, void *stats, pendulum_kane_real *x);
     int (*simulate_rows)(pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt);
+    int (*simulate_rows_kept)(int rows, int every, int final_only);
     int (*simulate)(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_real *r, const pendulum_kane_real *p, const void *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, void *stats);
     int (*simulate_input)(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const void *in, const pendulum_kane_real *p, const void *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_real *r_out, void *stats);
     int (*simulate_events)(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const void *in, const void *ev, const pendulum_kane_real *p, const void *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_real *r_out, void *stats);
@@ -85,7 +86,7 @@ static int pendulum_kane_api_simulate_events(const pendulum_kane_real *x0, pendu
 PENDULUM_KANE_API_EXPORT extern const pendulum_kane_api_table pendulum_kane_api;
 
 PENDULUM_KANE_API_EXPORT const pendulum_kane_api_table pendulum_kane_api = {
-    "eomgen-abi-63df326125b18c2d", "pendulum_kane", (int)sizeof(pendulum_kane_real),
+    "eomgen-abi-fe418721fdb62e98", "pendulum_kane", (int)sizeof(pendulum_kane_real),
     PENDULUM_KANE_NQ, PENDULUM_KANE_NU, PENDULUM_KANE_NX, PENDULUM_KANE_NR, PENDULUM_KANE_NP, PENDULUM_KANE_MC, PENDULUM_KANE_MV, PENDULUM_KANE_NS, PENDULUM_KANE_NA, PENDULUM_KANE_NY,
     sizeof(pendulum_kane_sim_options), sizeof(pendulum_kane_input), sizeof(pendulum_kane_events), sizeof(pendulum_kane_sim_stats),
     pendulum_kane_status_message,
@@ -105,6 +106,7 @@ PENDULUM_KANE_API_EXPORT const pendulum_kane_api_table pendulum_kane_api = {
     pendulum_kane_step_rk4,
     pendulum_kane_api_advance,
     pendulum_kane_simulate_rows,
+    pendulum_kane_simulate_rows_kept,
     pendulum_kane_api_simulate,
     pendulum_kane_api_simulate_input,
     pendulum_kane_api_simulate_events,

@@ -72,6 +72,7 @@ typedef struct {
     int (*step_rk4)(eomgen_real t, eomgen_real h, const eomgen_real *r, const eomgen_real *p, int project, eomgen_real *x);
     int (*advance)(eomgen_real t0, eomgen_real t1, const eomgen_real *r, const eomgen_real *p, const void *opts, void *stats, eomgen_real *x);
     int (*simulate_rows)(eomgen_real t0, eomgen_real t_end, eomgen_real dt);
+    int (*simulate_rows_kept)(int rows, int every, int final_only);
     int (*simulate)(const eomgen_real *x0, eomgen_real t0, eomgen_real t_end, eomgen_real dt, const eomgen_real *r, const eomgen_real *p, const void *opts, int capacity, eomgen_real *t_out, eomgen_real *x_out, eomgen_real *lam_out, void *stats);
     int (*simulate_input)(const eomgen_real *x0, eomgen_real t0, eomgen_real t_end, eomgen_real dt, const void *in, const eomgen_real *p, const void *opts, int capacity, eomgen_real *t_out, eomgen_real *x_out, eomgen_real *lam_out, eomgen_real *r_out, void *stats);
     int (*simulate_events)(const eomgen_real *x0, eomgen_real t0, eomgen_real t_end, eomgen_real dt, const void *in, const void *ev, const eomgen_real *p, const void *opts, int capacity, eomgen_real *t_out, eomgen_real *x_out, eomgen_real *lam_out, eomgen_real *r_out, void *stats);
@@ -99,6 +100,7 @@ void eomgen_sim_options_default(const eomgen_api *api, eomgen_sim_options *opts)
 int eomgen_step_rk4(const eomgen_api *api, eomgen_real t, eomgen_real h, const eomgen_real *r, const eomgen_real *p, int project, eomgen_real *x);
 int eomgen_advance(const eomgen_api *api, eomgen_real t0, eomgen_real t1, const eomgen_real *r, const eomgen_real *p, const eomgen_sim_options *opts, eomgen_sim_stats *stats, eomgen_real *x);
 int eomgen_simulate_rows(const eomgen_api *api, eomgen_real t0, eomgen_real t_end, eomgen_real dt);
+int eomgen_simulate_rows_kept(const eomgen_api *api, int rows, int every, int final_only);
 int eomgen_simulate(const eomgen_api *api, const eomgen_real *x0, eomgen_real t0, eomgen_real t_end, eomgen_real dt, const eomgen_real *r, const eomgen_real *p, const eomgen_sim_options *opts, int capacity, eomgen_real *t_out, eomgen_real *x_out, eomgen_real *lam_out, eomgen_sim_stats *stats);
 int eomgen_simulate_input(const eomgen_api *api, const eomgen_real *x0, eomgen_real t0, eomgen_real t_end, eomgen_real dt, const eomgen_input *in, const eomgen_real *p, const eomgen_sim_options *opts, int capacity, eomgen_real *t_out, eomgen_real *x_out, eomgen_real *lam_out, eomgen_real *r_out, eomgen_sim_stats *stats);
 int eomgen_simulate_events(const eomgen_api *api, const eomgen_real *x0, eomgen_real t0, eomgen_real t_end, eomgen_real dt, const eomgen_input *in, const eomgen_events *ev, const eomgen_real *p, const eomgen_sim_options *opts, int capacity, eomgen_real *t_out, eomgen_real *x_out, eomgen_real *lam_out, eomgen_real *r_out, eomgen_sim_stats *stats);
