@@ -27,8 +27,9 @@ from dataclasses import dataclass, field
 from .resources import csrc_dir
 
 __all__ = ["Status", "Field", "Struct", "Param", "Function", "Interface", "STATUSES",
-           "STRUCTS", "FUNCTIONS", "BATCH_FUNCTIONS", "METHODS", "METHOD_ALIASES", "HOLDS",
-           "STACK_LIMIT", "method_name", "method_code", "hold_code", "status_name", "status_value",
+           "STRUCTS", "FUNCTIONS", "BATCH_FUNCTIONS", "METHODS", "METHOD_ALIASES",
+           "ADAPTIVE_METHODS", "JACOBIAN_METHODS", "HOLDS", "STACK_LIMIT", "method_name",
+           "method_code", "hold_code", "check_structs", "status_name", "status_value",
            "status_message", "interface", "host_interface", "ABI_TAG", "DERIVATIVE_VERBS"]
 
 
@@ -85,6 +86,10 @@ def status_message(code):
 METHODS = {"rk4": 0, "dopri5": 1, "rodas4": 2}
 # other spellings a user may give (Python, the command line, the binary)
 METHOD_ALIASES = {"rodas": "rodas4"}
+# the adaptive methods (error control, dense output: the FMU's co-simulation
+# choices), and those that evaluate the Jacobian (the derivative kernels)
+ADAPTIVE_METHODS = ("dopri5", "rodas4")
+JACOBIAN_METHODS = ("rodas4",)
 # table holds: name -> value of <P>_HOLD_<NAME> / input.hold
 HOLDS = {"zoh": 0, "linear": 1}
 # the embedded profile's bound on every function frame, in bytes
@@ -197,6 +202,19 @@ STRUCTS = (
 
 
 STRUCT_NAMES = tuple(s.name for s in STRUCTS)
+
+
+def check_structs(structs):
+    """A counted field (an array of a model's size) must be its struct's
+    last: the runtime sees it as a pointer to the caller's array and the
+    Python host as a flexible array member, so only the fields before it
+    share one layout on every side."""
+    for s in structs:
+        for f in s.fields[:-1]:
+            if f.count:
+                raise ValueError(f"gen/abi.py: {s.name}.{f.name} is an array of {f.count} but "
+                                 f"not the last field of {s.name}: add fields before it")
+    return structs
 
 
 # ----------------------------------------------------------------- functions
@@ -532,8 +550,8 @@ def interface(model, real="double", accel="lu"):
         q_ind=list(m.q_ind), q_dep=list(m.q_dep), u_ind=list(m.u_ind), u_dep=list(m.u_dep),
         constants=[float(v) for v in m.p_values], has_energy=m.energy is not None,
         explicit_kinematics=m.qdot is not None,
-        accel=accel, functions=FUNCTIONS, batch_functions=BATCH_FUNCTIONS, structs=STRUCTS,
-        statuses=tuple(STATUSES),
+        accel=accel, functions=FUNCTIONS, batch_functions=BATCH_FUNCTIONS,
+        structs=check_structs(STRUCTS), statuses=tuple(STATUSES),
         auxiliary_names=list(getattr(m, "auxiliary_names", [])),
         auxiliary_labels=list(getattr(m, "auxiliary_labels", [])),
         output_names=list(getattr(m, "output_names", [])),
@@ -549,7 +567,7 @@ def host_interface(real="double"):
         input_names=[], input_labels=[], constant_names=[], constant_labels=[],
         independent_state_names=[], q_ind=[], q_dep=[], u_ind=[], u_dep=[], constants=[],
         has_energy=False, explicit_kinematics=True, accel="lu", functions=FUNCTIONS,
-        batch_functions=BATCH_FUNCTIONS, structs=STRUCTS)
+        batch_functions=BATCH_FUNCTIONS, structs=check_structs(STRUCTS))
 
 
 # the functions that call the derivative kernels (<name>_lin.c): a model

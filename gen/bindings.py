@@ -15,7 +15,8 @@ import threading
 
 import numpy as np
 
-from .abi import DERIVATIVE_VERBS, METHODS, method_name, status_name
+from .abi import (DERIVATIVE_VERBS, JACOBIAN_METHODS, METHODS, method_name,
+                  status_name)
 from .errors import ConvergenceError, DivergenceError, SingularError, SolverError
 
 __all__ = ["Simulator", "EXCEPTIONS"]
@@ -855,7 +856,7 @@ class Simulator:
             raise ValueError(f"this run would return {rows} rows ({full} output times, every="
                              f"{every}), more than max_rows={max_rows}: use a larger dt or "
                              "every=, or final_only=True")
-        if method == "rodas4":
+        if method in JACOBIAN_METHODS:
             self._need_derivatives()       # its Jacobian
         opts = self._new("sim_options")
         self._fn("sim_options_default")(opts)

@@ -754,7 +754,7 @@ def build_parser():
     fm.add_argument("--unit", action="append", metavar="NAME=UNIT",
                     help="unit of a state, input, constant or output (repeat), Modelica "
                          "syntax: m, rad/s, N.m")
-    fm.add_argument("--cs-method", default="dopri5", choices=["dopri5", "rodas4"],
+    fm.add_argument("--cs-method", default="dopri5", choices=list(abi.ADAPTIVE_METHODS),
                     help="the Co-Simulation integrator (default dopri5; rodas4 for stiff "
                          "models)")
     fm.add_argument("--no-binary", action="store_true",

@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .abi import METHODS, method_name, status_name
+from .abi import JACOBIAN_METHODS, METHODS, method_name, status_name
 
 __all__ = ["Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult", "run_ensemble"]
 
@@ -370,7 +370,7 @@ def run_chunk(sim, job):
     reducers; returns {"status", "t_last", "x_last", "values"}."""
     ffi, lib = sim._ffi, sim._lib
     n, nx, rows = job["n"], sim.nx, job["rows"]
-    if job["method"] == "rodas4":
+    if job["method"] in JACOBIAN_METHODS:
         sim._need_derivatives()
     keep = []
 
@@ -609,7 +609,7 @@ def _dask_task(bundle, job):
 
 
 def _run_dask(sim, jobs, client, bar):
-    if jobs and jobs[0]["method"] == "rodas4":
+    if jobs and jobs[0]["method"] in JACOBIAN_METHODS:
         sim._need_derivatives()          # the workers get the complete library
     # one future for the whole bundle, under a key of this call's own: a
     # dict given to scatter itself would be scattered value by value under

@@ -47,6 +47,7 @@ import jinja2
 from ._version import __version__
 from .dependencies import dependencies
 from .errors import BuildError, MissingDependencyError, ModelError
+from .abi import ADAPTIVE_METHODS
 from .resources import csrc_dir, templates_dir
 
 __all__ = ["export_fmu", "describe", "fmi_headers", "platform_folder", "FmuDescription",
@@ -54,7 +55,7 @@ __all__ = ["export_fmu", "describe", "fmi_headers", "platform_folder", "FmuDescr
 
 FMI_VERSIONS = ("2.0", "3.0")
 KINDS = ("cs", "me", "both")
-CS_METHODS = ("dopri5", "rodas4")
+CS_METHODS = ADAPTIVE_METHODS      # gen/abi.py
 
 # the hand-written glue (csrc/fmu): the core and one layer per FMI version
 GLUE_SOURCES = ["gen_fmu.h", "gen_fmu.c"]

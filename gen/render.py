@@ -385,7 +385,7 @@ def abi_context():
                          + [(a, abi.METHODS[n]) for a, n in abi.METHOD_ALIASES.items()]),
         "holds": sorted(abi.HOLDS.items(), key=lambda kv: kv[1]),
         "stack_limit": abi.STACK_LIMIT,
-        "abi_structs": abi.STRUCTS,
+        "abi_structs": abi.check_structs(abi.STRUCTS),
     }
 
 

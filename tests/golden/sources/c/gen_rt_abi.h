@@ -18,11 +18,13 @@
 #define GEN_RT_METHOD_RK4 0
 #define GEN_RT_METHOD_DOPRI5 1
 #define GEN_RT_METHOD_RODAS4 2
+#define GEN_RT_METHOD_COUNT 3
 /* every spelling of a method a user may give, aliases included: X(name, code) */
 #define GEN_RT_METHOD_NAMES(X) X("rk4", 0) X("dopri5", 1) X("rodas4", 2) X("rodas", 2)
 /* table holds (gen_rt_input.hold) */
 #define GEN_RT_HOLD_ZOH 0
 #define GEN_RT_HOLD_LINEAR 1
+#define GEN_RT_HOLD_COUNT 2
 #define GEN_RT_HOLD_NAMES(X) X("zoh", 0) X("linear", 1)
 /* the embedded profile's bound on a function's stack frame, in bytes */
 #define GEN_RT_STACK_LIMIT 8192

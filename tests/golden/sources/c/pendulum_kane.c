@@ -18,6 +18,58 @@
 
 /* the model's scalar type must be the runtime's */
 typedef char pendulum_kane_real_matches_runtime[(sizeof(pendulum_kane_real) == sizeof(gen_rt_real)) ? 1 : -1];
+/* the model's codes and structs are the runtime's (both rendered from
+ * gen/abi.py): built against a runtime of another description, this fails */
+typedef char pendulum_kane_abi_matches_runtime[(
+    PENDULUM_KANE_METHOD_RK4 == GEN_RT_METHOD_RK4 &&
+    PENDULUM_KANE_METHOD_DOPRI5 == GEN_RT_METHOD_DOPRI5 &&
+    PENDULUM_KANE_METHOD_RODAS4 == GEN_RT_METHOD_RODAS4 &&
+    PENDULUM_KANE_HOLD_ZOH == GEN_RT_HOLD_ZOH &&
+    PENDULUM_KANE_HOLD_LINEAR == GEN_RT_HOLD_LINEAR &&
+    sizeof(pendulum_kane_sim_options) == sizeof(gen_rt_sim_options) &&
+    offsetof(pendulum_kane_sim_options, method) == offsetof(gen_rt_sim_options, method) &&
+    offsetof(pendulum_kane_sim_options, project) == offsetof(gen_rt_sim_options, project) &&
+    offsetof(pendulum_kane_sim_options, rtol) == offsetof(gen_rt_sim_options, rtol) &&
+    offsetof(pendulum_kane_sim_options, atol) == offsetof(gen_rt_sim_options, atol) &&
+    offsetof(pendulum_kane_sim_options, h_init) == offsetof(gen_rt_sim_options, h_init) &&
+    offsetof(pendulum_kane_sim_options, h_min) == offsetof(gen_rt_sim_options, h_min) &&
+    offsetof(pendulum_kane_sim_options, h_max) == offsetof(gen_rt_sim_options, h_max) &&
+    offsetof(pendulum_kane_sim_options, max_steps) == offsetof(gen_rt_sim_options, max_steps) &&
+    offsetof(pendulum_kane_sim_options, proj_tol) == offsetof(gen_rt_sim_options, proj_tol) &&
+    offsetof(pendulum_kane_sim_options, proj_max_iter) == offsetof(gen_rt_sim_options, proj_max_iter) &&
+    offsetof(pendulum_kane_sim_options, every) == offsetof(gen_rt_sim_options, every) &&
+    offsetof(pendulum_kane_sim_options, final_only) == offsetof(gen_rt_sim_options, final_only) &&
+    sizeof(pendulum_kane_input) == sizeof(gen_rt_input) &&
+    offsetof(pendulum_kane_input, r) == offsetof(gen_rt_input, r) &&
+    offsetof(pendulum_kane_input, n_table) == offsetof(gen_rt_input, n_table) &&
+    offsetof(pendulum_kane_input, t_table) == offsetof(gen_rt_input, t_table) &&
+    offsetof(pendulum_kane_input, r_table) == offsetof(gen_rt_input, r_table) &&
+    offsetof(pendulum_kane_input, hold) == offsetof(gen_rt_input, hold) &&
+    offsetof(pendulum_kane_input, K) == offsetof(gen_rt_input, K) &&
+    offsetof(pendulum_kane_input, x_op) == offsetof(gen_rt_input, x_op) &&
+    offsetof(pendulum_kane_input, controller) == offsetof(gen_rt_input, controller) &&
+    offsetof(pendulum_kane_input, ctx) == offsetof(gen_rt_input, ctx) &&
+    offsetof(pendulum_kane_input, period) == offsetof(gen_rt_input, period) &&
+    sizeof(pendulum_kane_events) == sizeof(gen_rt_events) &&
+    offsetof(pendulum_kane_events, n) == offsetof(gen_rt_events, n) &&
+    offsetof(pendulum_kane_events, which) == offsetof(gen_rt_events, which) &&
+    offsetof(pendulum_kane_events, direction) == offsetof(gen_rt_events, direction) &&
+    offsetof(pendulum_kane_events, terminal) == offsetof(gen_rt_events, terminal) &&
+    offsetof(pendulum_kane_events, level) == offsetof(gen_rt_events, level) &&
+    offsetof(pendulum_kane_events, capacity) == offsetof(gen_rt_events, capacity) &&
+    offsetof(pendulum_kane_events, log_which) == offsetof(gen_rt_events, log_which) &&
+    offsetof(pendulum_kane_events, log_t) == offsetof(gen_rt_events, log_t) &&
+    offsetof(pendulum_kane_events, log_x) == offsetof(gen_rt_events, log_x) &&
+    offsetof(pendulum_kane_sim_stats, n_accepted) == offsetof(gen_rt_sim_stats, n_accepted) &&
+    offsetof(pendulum_kane_sim_stats, n_rejected) == offsetof(gen_rt_sim_stats, n_rejected) &&
+    offsetof(pendulum_kane_sim_stats, n_rhs) == offsetof(gen_rt_sim_stats, n_rhs) &&
+    offsetof(pendulum_kane_sim_stats, n_jac) == offsetof(gen_rt_sim_stats, n_jac) &&
+    offsetof(pendulum_kane_sim_stats, n_out) == offsetof(gen_rt_sim_stats, n_out) &&
+    offsetof(pendulum_kane_sim_stats, n_events) == offsetof(gen_rt_sim_stats, n_events) &&
+    offsetof(pendulum_kane_sim_stats, terminal) == offsetof(gen_rt_sim_stats, terminal) &&
+    offsetof(pendulum_kane_sim_stats, t_last) == offsetof(gen_rt_sim_stats, t_last) &&
+    offsetof(pendulum_kane_sim_stats, h_next) == offsetof(gen_rt_sim_stats, h_next) &&
+    1) ? 1 : -1];
 
 /* Coordinate partition (indices into q and u) and default constants */
 static const int pendulum_kane_q_ind[1] = { 0 };
