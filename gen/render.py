@@ -71,6 +71,7 @@ EIGEN_TEMPLATES = [
     ("{name}.hpp", "eigen/model.hpp.j2", "model"),
     ("{name}.cpp", "eigen/model.cpp.j2", "model"),
     ("{name}_api.c", "c/model_api.c.j2", "model"),
+    ("gen_rt_abi.h", "c/gen_rt_abi.h.j2", "model"),  # the C runtime's structs (gen/abi.py)
     ("main.c", "c/main.c.j2", "project"),
     ("CMakeLists.txt", "eigen/CMakeLists.txt.j2", "project"),
 ]
