@@ -92,9 +92,10 @@ int eomgen_ensemble_run(const eomgen_api *api, const eomgen_ensemble *e)
     const int nx = api->nx;
     eomgen_sim_options opts = *e->opts;
     eomgen_input in;
-    int i, k, q, failed = 0;
-    const int capacity = e->final_only ? 1 : e->rows;
+    int i, k, q, failed = 0, capacity;
     opts.final_only = e->final_only ? 1 : opts.final_only;
+    /* the rows simulate writes (the runtime's count, gen_rt_simulate_rows_kept) */
+    capacity = api->simulate_rows_kept(e->rows, opts.every, opts.final_only);
     for (i = 0; i < e->n; ++i) {
         const eomgen_real *x0 = e->x0 + (long)i * e->x0_stride;
         const eomgen_real *p = e->p ? e->p + (long)i * e->p_stride : NULL;
