@@ -155,7 +155,12 @@ def test_a_new_struct_field_appears_everywhere(monkeypatch, kane_model, tmp_path
         assert f"{arg}_rt.{f.name} = {arg}->{f.name};" in body
         if sname == "sim_stats":
             assert f"{arg}->{f.name} = {arg}_rt.{f.name};" in body
-    assert re.search(r"\bS probe_gain\b|\bScalar probe_gain\b", e.files["pendulum_kane.hpp"])
+    # the C++ face: typed structs declaring the field and converted from the
+    # C ones field by field, or the C header's structs themselves (a face over
+    # the C runtime); test_a_new_struct_field_compiles_in_the_cxx_face builds it
+    hpp, cpp = e.files["pendulum_kane.hpp"], e.files["pendulum_kane.cpp"]
+    assert ((re.search(r"\b(S|Scalar) probe_gain\b", hpp) and "probe_gain" in cpp)
+            or '#include "pendulum_kane.h"' in hpp)
     assert "pendulum_kane_real probe_gain;" in e.files["pendulum_kane.h"]
 
     # compile the model with the runtime, and a harness printing the public
@@ -193,6 +198,24 @@ def test_a_new_struct_field_appears_everywhere(monkeypatch, kane_model, tmp_path
     tail = [line for line in out if line.startswith("advance")][0].split()
     assert tail[1] == "0" and int(tail[3]) == 4          # one RK4 step: four evaluations
     assert tail[5] == "41"                                 # the caller's value, back unchanged
+
+
+@pytest.mark.slow
+@pytest.mark.eigen
+def test_a_new_struct_field_compiles_in_the_cxx_face(monkeypatch, kane_model, tmp_path):
+    """The C++/Eigen face rendered with the added fields compiles (C++17,
+    strict warnings): nothing of it had to be edited by hand."""
+    inc = require_eigen()
+    cxx = shutil.which(os.environ.get("CXX", "c++")) or pytest.skip("no C++ compiler")
+    monkeypatch.setattr(abi, "STRUCTS", _probed_structs())
+    e = render.render(plan(kane_model), backend="eigen")
+    render.write_atomic(e.files, tmp_path)
+    for name in sorted(e.files):
+        if name.endswith(".cpp"):
+            proc = subprocess.run([cxx, "-std=c++17", "-Wall", "-Wextra", "-Werror",
+                                   "-fsyntax-only", "-isystem", str(inc), "-I", ".", name],
+                                  cwd=tmp_path, capture_output=True, text=True)
+            assert proc.returncode == 0, name + "\n" + proc.stderr[-4000:]
 
 
 def struct_body(text, name):
