@@ -68,7 +68,7 @@ typedef double gen_rt_real;
 #define GEN_RT_STATUS_ENUM_(name, value, text) GEN_RT_##name = (value),
 enum gen_rt_status { GEN_RT_STATUS_TABLE(GEN_RT_STATUS_ENUM_) GEN_RT_STATUS_END_ = 1 };
 #undef GEN_RT_STATUS_ENUM_
-#define GEN_RT_STATUS_MIN (-12)
+#define GEN_RT_STATUS_MIN (-13)
 
 /* A state with an entry beyond this magnitude has diverged: a model that
  * evaluates to NaN/inf there reports GEN_RT_ERR_DIVERGED, not a singular
@@ -393,6 +393,12 @@ typedef struct {
     /* bounded output of simulate: keep every every-th output row (and the
      * last), or only the last row (final_only); every <= 1 keeps them all */
     int every, final_only;
+    /* the caller's cancellation flag, read before every step (and every
+     * trial step): nonzero stops the run with GEN_RT_ERR_CANCELLED, its
+     * last good state in the stats; NULL: never cancelled. The runtime only
+     * reads it (no signals, no globals): a host sets it from another thread
+     * or a signal handler. */
+    const volatile int *cancel;
 } gen_rt_sim_options;
 /* the rows simulate keeps of the rows of simulate_rows (a negative status as is) */
 int gen_rt_simulate_rows_kept(int rows, int every, int final_only);

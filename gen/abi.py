@@ -112,6 +112,10 @@ STRUCTS = (
         Field("proj_max_iter", "int", "projection: Newton iterations", 10),
         Field("every", "int", "simulate: keep every k-th output row and the last (<= 1: all)", 1),
         Field("final_only", "int", "simulate: 1 keeps only the row at t_end", 0),
+        # issue 32 (Ctrl-C): the caller-owned cancellation flag (gen_rt.h reads it
+        # through a volatile pointer; gen/interrupt.py sets it on SIGINT)
+        Field("cancel", "cint*", "flag owned by the caller, read before every step: nonzero "
+              "stops the run with <P>_ERR_CANCELLED (NULL: never cancelled)", 0),
     )),
     Struct("input", "Input", "Inputs during a simulation (simulate_input): a constant or a "
            "table, a linear feedback on the independent state, a controller callback; "

@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .abi import METHODS, status_name
+from .interrupt import call
 
 __all__ = ["Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult", "run_ensemble"]
 
@@ -433,7 +434,7 @@ def run_chunk(sim, job):
         rds[i].n_rows, rds[i].rows = len(at), ptr(a_, "int[]")
         rds[i].out = ptr(out)
     e.n_reducers, e.reducers = len(reducers), rds
-    lib.eomgen_ensemble_run(sim._api, e)
+    call(sim, opts, lib.eomgen_ensemble_run, sim._api, e)   # Ctrl-C: gen/interrupt.py
     if plan is not None and plan.error is not None:
         raise plan.error
     t_rows = job["t_rows"]
