@@ -47,6 +47,7 @@ import jinja2
 from ._version import __version__
 from .dependencies import dependencies
 from .errors import BuildError, MissingDependencyError, ModelError
+from .render import mode_for_umask
 from .resources import csrc_dir, templates_dir
 
 __all__ = ["export_fmu", "describe", "fmi_headers", "platform_folder", "FmuDescription",
@@ -565,6 +566,7 @@ def _write_zip(entries, path):
                 info.external_attr = (0o755 if name.startswith("binaries/") else 0o644) << 16
                 info.create_system = 3
                 zf.writestr(info, entries[name])
+        os.chmod(tmp, mode_for_umask())   # mkstemp's 0600 -> the umask's (0644 under 022)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

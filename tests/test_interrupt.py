@@ -116,10 +116,20 @@ def test_cancelled_status_is_in_the_table_and_the_host():
     assert EXCEPTIONS["ERR_CANCELLED"] is KeyboardInterrupt
 
 
-def test_a_set_flag_cancels_in_process(kane_sim):
-    """The relay's flag, set by hand as SIGINT would, stops simulate and the
-    ensemble's loop with ERR_CANCELLED; released, a call runs as before."""
-    sim = kane_sim
+@pytest.fixture(scope="module", params=["c", pytest.param("eigen", marks=pytest.mark.eigen)])
+def any_sim(request, kane_model, kane_sim):
+    if request.param == "c":
+        return kane_sim
+    from conftest import require_eigen
+    require_eigen()
+    return gen.compile(kane_model, backend="eigen")
+
+
+def test_a_set_flag_cancels_in_process(any_sim):
+    """The caller's flag, set by hand as the SIGINT relay would, stops
+    simulate (C and C++/Eigen runtimes) with ERR_CANCELLED before its first
+    step; cleared, the run is the usual one bit for bit."""
+    sim = any_sim
     lib, ffi = sim._lib, sim._ffi
     x0 = sim.consistent_state(np.array([0.5, 0.8, 0.0, 0.0]))
     ref = sim.simulate(x0, 1.0, 0.01)[1]
