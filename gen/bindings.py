@@ -1212,7 +1212,7 @@ class Simulator:
         raise ValueError(f"{what} must have shape ({width},) or ({n}, {width}), got {a.shape}")
 
     def _batch_fn(self, name):
-        return self._fn(name)
+        return functools.partial(call, self, None, self._fn(name))   # Ctrl-C: gen/interrupt.py
 
     def _batch_check(self, idx, status, where, X, t=None):
         if idx >= 0:

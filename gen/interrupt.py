@@ -21,17 +21,19 @@ Why a signal relay rather than running the call in a worker thread while the
 main thread waits in short ``join`` slices: a thread's start and join cost
 about 200 us on a loaded machine (a persistent worker's hand-off about
 110 us), several times a short ``simulate`` (33 us for the seed pendulum's
-10 rows). The relay costs two C calls (well under 1 us) and nothing when
-there is no SIGINT; it is installed once, over Python's handler, and only
-while that handler is :func:`signal.default_int_handler` is it used (a
+10 rows). The relay costs three C calls a call (arm, with a sigaction
+query, and release: 3.7 us measured on the same loaded machine, where the
+simulate took 50 to 300 us); it is installed once, over Python's handler,
+and used only while that handler is :func:`signal.default_int_handler` (a
 program with its own SIGINT handler, or one ignoring SIGINT, keeps it).
 
 Short calls (``rhs``, ``mass_matrix``, ...: microseconds) are not wrapped.
 """
 from __future__ import annotations
 
-import signal
 import threading
+
+import _signal   # signal's C functions: getsignal without the enum wrapper (10 us)
 
 __all__ = ["call"]
 
@@ -39,7 +41,7 @@ __all__ = ["call"]
 def _armed(lib):
     """A slot of the relay for one call, or -1 (no relay: SIGINT is not
     Python's default handler, or the platform has none)."""
-    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+    if _signal.getsignal(_signal.SIGINT) is not _signal.default_int_handler:
         return -1
     return lib.eomgen_interrupt_arm()
 

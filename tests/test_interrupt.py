@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 import gen
+import gen.host
 from gen import abi
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -43,6 +44,7 @@ def short():
     return np.concatenate([X.ravel(), X2.ravel(), np.asarray(E.final).ravel()])
 
 before = short()
+{setup}
 print("ready", flush=True)
 t0 = time.monotonic()
 try:
@@ -56,8 +58,9 @@ print("ok", flush=True)
 '''
 
 # about 100 s of C work each on this machine (RK4 at 1e-5 on the seed
-# pendulum: ~2 us a step): 5e7 steps keeping one row; an ensemble of 40
-# runs of 2.5e6 steps on one worker, and the same on two worker threads
+# pendulum: ~2 us a step): 5e7 steps keeping one row; DOPRI5 at tolerances
+# that take tiny steps; an ensemble of 40 runs of 2.5e6 steps on one
+# worker, and the same on two worker threads
 LONG = {
     "simulate": "sim.simulate(x0, 500.0, 1e-5, final_only=True)",
     "simulate_dopri5": "sim.simulate(x0, 1e6, 1e3, method='dopri5', rtol=1e-13, atol=1e-14, "
@@ -65,11 +68,16 @@ LONG = {
     "ensemble": "sim.ensemble(np.repeat(X0, 14, axis=0)[:40], 25.0, 1e-5, workers=1)",
     "ensemble_threads": "sim.ensemble(np.repeat(X0, 14, axis=0)[:40], 25.0, 1e-5, workers=2, "
                         "chunk=5)",
+    # a batch loop of the host module: several seconds of linearizations
+    "linearize_batch": "sim.linearize_batch(XB)",
 }
 
 
-def _run_child(call):
-    code = CHILD.format(examples=str(ROOT / "examples"), call=call)
+SETUP = {"linearize_batch": "XB = np.repeat(x0[None], 3_000_000, axis=0)"}
+
+
+def _run_child(call, setup=""):
+    code = CHILD.format(examples=str(ROOT / "examples"), call=call, setup=setup)
     env = dict(os.environ)
     env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
     proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
@@ -91,7 +99,7 @@ def _run_child(call):
 
 @pytest.mark.parametrize("which", sorted(LONG))
 def test_sigint_stops_a_long_call_within_a_second(which):
-    sent, out, err, rc = _run_child(LONG[which])
+    sent, out, err, rc = _run_child(LONG[which], SETUP.get(which, ""))
     assert rc == 0, (out, err)
     m = re.search(r"^interrupted (\S+) (\S+)$", out, re.M)
     assert m, (out, err)
@@ -170,3 +178,19 @@ def test_a_custom_sigint_handler_is_left_alone(kane_sim):
         assert kane_sim.simulate(x0, 0.1, 0.01)[1].shape == (11, 4)
     finally:
         signal.signal(signal.SIGINT, old)
+
+
+def test_relay_compiles_strict_with_posix(tmp_path):
+    """The relay under the strict flags with sigaction declared (as the host
+    module compiles it, after Python.h), C99 -pedantic, gcc and clang."""
+    import shutil
+    cdef, source = gen.host.host_sources("double", python=False)
+    assert "eomgen_interrupt_arm" in cdef
+    src = tmp_path / "host.c"
+    src.write_text("#define _POSIX_C_SOURCE 200809L\n" + source)
+    for cc in ("gcc", "clang"):
+        if shutil.which(cc) is None:
+            continue
+        r = subprocess.run([cc, "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-c",
+                            str(src), "-o", os.devnull], capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr

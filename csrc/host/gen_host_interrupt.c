@@ -14,12 +14,20 @@ typedef char eomgen_interrupt_int_flags_[sizeof(sig_atomic_t) == sizeof(int) ? 1
 
 static volatile sig_atomic_t eomgen_interrupt_flags_[EOMGEN_INTERRUPT_SLOTS];
 static volatile sig_atomic_t eomgen_interrupt_count_;
+
+/* the relay needs sigaction (POSIX: the module is compiled after Python.h,
+ * which asks for it) and the GCC/Clang atomic builtins; elsewhere no call is
+ * armed and Ctrl-C acts when the call returns */
+#if defined(SA_SIGINFO) && (defined(__GNUC__) || defined(__clang__))
 static int eomgen_interrupt_used_[EOMGEN_INTERRUPT_SLOTS];
 static int eomgen_interrupt_lock_;
-
-#if defined(SA_SIGINFO) && (defined(__GNUC__) || defined(__clang__))
-#define EOMGEN_INTERRUPT_RELAY 1
 static struct sigaction eomgen_interrupt_prev_;
+/* the flags of the replaced handler kept (the alternate stack, restart) */
+#if defined(SA_ONSTACK) && defined(SA_RESTART)
+#define EOMGEN_INTERRUPT_KEEP_ (SA_ONSTACK | SA_RESTART)
+#else
+#define EOMGEN_INTERRUPT_KEEP_ 0
+#endif
 
 static void eomgen_interrupt_relay_(int sig, siginfo_t *info, void *uctx)
 {
@@ -47,7 +55,7 @@ static int eomgen_interrupt_install_(void)
     memset(&act, 0, sizeof act);
     act.sa_sigaction = eomgen_interrupt_relay_;
     act.sa_mask = cur.sa_mask;
-    act.sa_flags = SA_SIGINFO | (cur.sa_flags & (SA_ONSTACK | SA_RESTART));
+    act.sa_flags = SA_SIGINFO | (cur.sa_flags & EOMGEN_INTERRUPT_KEEP_);
     return sigaction(SIGINT, &act, NULL) == 0 ? 0 : -1;
 }
 
