@@ -47,6 +47,7 @@ import jinja2
 from ._version import __version__
 from .dependencies import dependencies
 from .errors import BuildError, MissingDependencyError, ModelError
+from .model import require_model
 from .render import mode_for_umask
 from .resources import csrc_dir, templates_dir
 
@@ -647,6 +648,7 @@ def export_fmu(model, path, fmi_version="2.0", kind="both", real="double", start
     gen.BuildError
         When the binary does not compile.
     """
+    require_model(model, "gen.export_fmu")
     from .model import Model
     if not isinstance(model, Model):
         raise ModelError(f"export_fmu needs a gen.Model, got {type(model).__name__}")

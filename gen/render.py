@@ -25,6 +25,7 @@ from ._version import __version__
 from .abi import METHODS, interface
 from .errors import ModelError
 from .ir import DERIVATIVE_KERNELS, plan as make_plan
+from .model import require_model
 from .printers import ModelCPrinter, ModelCxxPrinter, kernel_statements, print_kernel_body
 from .resources import csrc_dir, templates_dir
 from .solvers import demand_order, ldlt_lines, ldlt_work_index, ldlt_program
@@ -520,5 +521,6 @@ def generate(model, out_dir, backend="c", real="double", timings=None):
     list of Path
         The paths written.
     """
+    require_model(model, "gen.generate")
     files = render_files(model, real=real, backend=backend, timings=timings)
     return write_atomic(files, out_dir)
