@@ -57,8 +57,8 @@ print("same", bool(np.array_equal(before.view(np.uint64), after.view(np.uint64))
 print("ok", flush=True)
 '''
 
-# about 100 s of C work each on this machine (RK4 at 1e-5 on the seed
-# pendulum: ~2 us a step): 5e7 steps keeping one row; DOPRI5 at tolerances
+# 100 s of C work or more each (RK4 at 1e-5 on the seed pendulum: 2 to 13 us
+# a step measured on the shared 2-core machine, by load): 5e7 steps keeping one row; DOPRI5 at tolerances
 # that take tiny steps; an ensemble of 40 runs of 2.5e6 steps on one
 # worker, and the same on two worker threads
 LONG = {
