@@ -870,8 +870,10 @@ def _main(argv=None):
         if a.debug:
             raise
         detail = f" ({e})" if str(e) else ""
-        _one_line(a.cmd, f"out of memory{detail}: the run is too large for this machine; "
-                  "keep fewer rows (a larger --dt, a shorter --t-end)")
+        way_out = ("the run is too large for this machine; keep fewer rows (a larger --dt, "
+                   "a shorter --t-end)" if a.cmd in ("simulate", "ensemble")
+                   else "the job is too large for this machine")
+        _one_line(a.cmd, f"out of memory{detail}: {way_out}")
         return 1
     except KeyboardInterrupt:
         print("eomgen: interrupted", file=sys.stderr)
