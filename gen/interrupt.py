@@ -38,12 +38,38 @@ import _signal   # signal's C functions: getsignal without the enum wrapper (10 
 __all__ = ["call"]
 
 
-def _armed(lib):
-    """A slot of the relay for one call, or -1 (no relay: SIGINT is not
-    Python's default handler, or the platform has none)."""
+_lock = threading.Lock()
+_owner = None        # (lib, ffi) of the host module whose relay the process uses
+_followers = {}      # id(lib) -> (lib, ffi): modules that take the owner's flags
+
+
+def _relay_of(lib, ffi):
+    """(owner lib, owner ffi) of the process's one relay. The first host
+    module used is the owner; another (the float host next to the double
+    one) never installs its own (two relays chained over each other could
+    call each other forever): its batch loops follow the owner's counter and
+    its runs get the owner's flags."""
+    global _owner
+    owner = _owner
+    if owner is not None and (owner[0] is lib or id(lib) in _followers):
+        return owner
+    with _lock:
+        if _owner is None:
+            _owner = (lib, ffi)
+        elif _owner[0] is not lib and id(lib) not in _followers:
+            counter = int(_owner[1].cast("uintptr_t", _owner[0].eomgen_interrupt_counter()))
+            lib.eomgen_interrupt_follow(ffi.cast("void *", counter))
+            _followers[id(lib)] = (lib, ffi)
+        return _owner
+
+
+def _armed(lib, ffi=None):
+    """(owner lib, slot) of the relay for one call; slot -1: no relay
+    (SIGINT is not Python's default handler, or the platform has none)."""
     if _signal.getsignal(_signal.SIGINT) is not _signal.default_int_handler:
-        return -1
-    return lib.eomgen_interrupt_arm()
+        return lib, -1
+    owner = _relay_of(lib, ffi)[0]
+    return owner, owner.eomgen_interrupt_arm()
 
 
 def call(sim, opts, fn, *args):
@@ -53,19 +79,22 @@ def call(sim, opts, fn, *args):
     SIGINT during the call stops the C work and raises ``KeyboardInterrupt``
     (Python's handler raises it in the main thread; in another thread this
     function does)."""
-    lib = sim._lib
-    slot = -1
+    lib, ffi = sim._lib, sim._ffi
+    owner, slot = lib, -1
     try:
-        slot = _armed(lib)
+        owner, slot = _armed(lib, ffi)
         if slot < 0:
             return fn(*args)
         if opts is not None:
-            opts.cancel = lib.eomgen_interrupt_flag(slot)
+            flag = owner.eomgen_interrupt_flag(slot)
+            if owner is not lib:     # the owner's int, as this module's pointer
+                flag = ffi.cast("int *", int(_owner[1].cast("uintptr_t", flag)))
+            opts.cancel = flag
         result = fn(*args)
     finally:
-        hit = lib.eomgen_interrupt_release(slot) if slot >= 0 else 0
+        hit = owner.eomgen_interrupt_release(slot) if slot >= 0 else 0
         if slot >= 0 and opts is not None:
-            opts.cancel = sim._ffi.NULL
+            opts.cancel = ffi.NULL
     if hit:
         _interrupted()
     return result

@@ -1261,10 +1261,19 @@ def _scan(mat):
 
 def _check_expressions(mat, what, allowed, inputs=()):
     """Refuse free symbols, leftover derivatives and unknown functions,
-    naming the culprit (and, for a function of time given as a plain Symbol
-    of the same name in inputs, the mix-up)."""
+    naming the culprit (and, when inputs holds the same name as a plain
+    Symbol where the model has a function of time, or the other way round,
+    the mix-up)."""
     free, derivs, undef = _scan(mat)
     extra = free - allowed
+    functions = {str(r_.func): r_ for r_ in inputs if isinstance(r_, sm.core.function.AppliedUndef)}
+    for s_ in sorted(extra, key=str):
+        if str(s_) in functions:    # the other mix-up: T(t) declared, the plain T used
+            raise ModelError(
+                f"the {what} contain {s_}, a plain Symbol, but inputs=[...] gives "
+                f"{functions[str(s_)]}, a function of time (a dynamicsymbol): declare the "
+                "input as the model writes it (the same object), or use "
+                f"dynamicsymbols('{s_}') in the model")
     if extra:
         names = sorted(str(s) for s in extra)
         raise ModelError(

@@ -81,6 +81,23 @@ def test_a_plain_symbol_for_a_dynamicsymbol_input_is_named():
     gen.Model.from_kanes(km, constants={s["m"]: 1, s["k"]: 2}, inputs=[s["T"]])
 
 
+def test_a_dynamicsymbol_for_a_plain_symbol_input_is_named():
+    """The other way round: the model pushes with the constant-looking T,
+    inputs=[...] gives T(t)."""
+    q, u = me.dynamicsymbols("q u")
+    T, m = sm.symbols("T m")
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", q * N.x)
+    P.set_vel(N, u * N.x)
+    km = me.KanesMethod(N, [q], [u], kd_eqs=[q.diff() - u])
+    km.kanes_equations([me.Particle("pa", P, m)], [(P, T * N.x)])
+    with pytest.raises(gen.ModelError, match=r"contain T, a plain Symbol, but inputs=\[...\] "
+                                             r"gives T\(t\), a function of time"):
+        gen.Model.from_kanes(km, constants={m: 1}, inputs=[me.dynamicsymbols("T")])
+
+
 def test_an_undeclared_function_of_time_keeps_its_message():
     km, s = spring()
     with pytest.raises(gen.ModelError, match=r"contain T\(t\), a function of time that is not"):

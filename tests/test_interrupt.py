@@ -73,7 +73,21 @@ LONG = {
 }
 
 
-SETUP = {"linearize_batch": "XB = np.repeat(x0[None], 3_000_000, axis=0)"}
+# the float host module next to the double one: one relay for both (the
+# double module's, armed first), its runs and batch loops stopped through it
+FLOAT = ("simf = gen.compile(seed_pendulum.model(), real='float'); "
+         "x0f = x0.astype(np.float32); simf.simulate(x0f, 0.1, 0.01); short(); "
+         "simf.rhs_batch(0.0, np.repeat(x0f[None], 10, axis=0))")
+LONG["float_simulate"] = "simf.simulate(x0f, 500.0, 1e-5, final_only=True)"
+LONG["float_linearize_batch"] = "simf.linearize_batch(XBf)"
+# Python's handler set again after the relay was installed (as ipykernel does
+# around each cell): the next call installs the relay again
+LONG["simulate_after_signal_reset"] = LONG["simulate"]
+SETUP = {"simulate_after_signal_reset": "import signal; "
+                                        "signal.signal(signal.SIGINT, signal.default_int_handler)",
+         "linearize_batch": "XB = np.repeat(x0[None], 3_000_000, axis=0)",
+         "float_simulate": FLOAT,
+         "float_linearize_batch": FLOAT + "; XBf = np.repeat(x0f[None], 3_000_000, axis=0)"}
 
 
 def _run_child(call, setup=""):
@@ -156,7 +170,10 @@ def test_a_set_flag_cancels_in_process(any_sim):
     st = sim._fn("simulate")(sim._ptr(x0), 0.0, 1.0, 0.01, ffi.NULL, ffi.NULL, opts, 101,
                              sim._ptr(t), sim._ptr(X), ffi.NULL, stats)
     assert st == 0 and np.array_equal(X, ref)
-    # a slot of the relay: free again after release, its flag cleared on arm
+    # a slot of the process's relay: free again after release, its flag
+    # cleared on arm
+    from gen.interrupt import _relay_of
+    lib, _ = _relay_of(lib, ffi)
     slot = lib.eomgen_interrupt_arm()
     assert slot >= 0
     lib.eomgen_interrupt_flag(slot)[0] = 1      # as the SIGINT relay does
@@ -173,7 +190,7 @@ def test_a_custom_sigint_handler_is_left_alone(kane_sim):
     seen = []
     old = signal.signal(signal.SIGINT, lambda *a: seen.append(a))
     try:
-        assert _armed(kane_sim._lib) == -1
+        assert _armed(kane_sim._lib, kane_sim._ffi)[1] == -1
         x0 = kane_sim.consistent_state(np.array([0.5, 0.8, 0.0, 0.0]))
         assert kane_sim.simulate(x0, 0.1, 0.01)[1].shape == (11, 4)
     finally:

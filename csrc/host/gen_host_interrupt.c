@@ -35,7 +35,8 @@ static void eomgen_interrupt_relay_(int sig, siginfo_t *info, void *uctx)
     for (i = 0; i < EOMGEN_INTERRUPT_SLOTS; ++i) eomgen_interrupt_flags_[i] = 1;
     eomgen_interrupt_count_ = eomgen_interrupt_count_ + 1;
     if (eomgen_interrupt_prev_.sa_flags & SA_SIGINFO) {
-        if (eomgen_interrupt_prev_.sa_sigaction) eomgen_interrupt_prev_.sa_sigaction(sig, info, uctx);
+        if (eomgen_interrupt_prev_.sa_sigaction)
+            eomgen_interrupt_prev_.sa_sigaction(sig, info, uctx);
     } else if (eomgen_interrupt_prev_.sa_handler != SIG_DFL &&
                eomgen_interrupt_prev_.sa_handler != SIG_IGN) {
         eomgen_interrupt_prev_.sa_handler(sig);
@@ -99,7 +100,20 @@ int *eomgen_interrupt_flag(int slot)
     return (int *)&eomgen_interrupt_flags_[slot];
 }
 
+/* the counter the batch loops watch: this module's, or the owner's */
+static const volatile sig_atomic_t *eomgen_interrupt_watch_ = &eomgen_interrupt_count_;
+
 long eomgen_interrupt_count(void)
 {
-    return (long)eomgen_interrupt_count_;
+    return (long)*eomgen_interrupt_watch_;
+}
+
+void *eomgen_interrupt_counter(void)
+{
+    return (void *)&eomgen_interrupt_count_;
+}
+
+void eomgen_interrupt_follow(void *counter)
+{
+    if (counter) eomgen_interrupt_watch_ = (const volatile sig_atomic_t *)counter;
 }
