@@ -23,11 +23,17 @@ about 200 us on a loaded machine (a persistent worker's hand-off about
 110 us), several times a short ``simulate`` (33 us for the seed pendulum's
 10 rows). The relay costs three C calls a call (arm, with a sigaction
 query, and release: 3.7 us measured on the same loaded machine, where the
-simulate took 50 to 300 us); it is installed once, over Python's handler,
-and used only while that handler is :func:`signal.default_int_handler` (a
-program with its own SIGINT handler, or one ignoring SIGINT, keeps it).
+simulate took 50 to 300 us). It is installed by the first call over
+Python's handler (again when Python has set its handler since, as ipykernel
+does around a cell), and used only while the Python-level handler is
+:func:`signal.default_int_handler` (a program with its own SIGINT handler,
+or one ignoring SIGINT, keeps it). One relay serves the process (the first
+host module's; see :func:`_relay_of`).
 
-Short calls (``rhs``, ``mass_matrix``, ...: microseconds) are not wrapped.
+Limits: 64 calls in progress at once get a flag (more run uncancellable); a
+second Ctrl-C landing between arming and the call can leak one slot; where
+there is no sigaction (Windows) calls run as before. Short calls (``rhs``,
+``mass_matrix``, ...: microseconds) are not wrapped.
 """
 from __future__ import annotations
 
