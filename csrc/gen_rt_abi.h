@@ -47,6 +47,7 @@ typedef struct {
     int proj_max_iter; /* projection: Newton iterations */
     int every; /* simulate: keep every k-th output row and the last (<= 1: all) */
     int final_only; /* simulate: 1 keeps only the row at t_end */
+    const volatile int *cancel; /* flag owned by the caller, read before every step: nonzero stops the run with GEN_RT_ERR_CANCELLED (NULL: never cancelled) */
 } gen_rt_sim_options;
 
 /* Inputs during a simulation (simulate_input): a constant or a table, a linear feedback on the independent state, a controller callback; continuous or sampled. Zero-fill it (memset) and set what you use. */

@@ -376,12 +376,19 @@ static int control_(engine *e, int st, gen_rt_real err, gen_rt_real hh, int last
     return 1;
 }
 
+/* the caller's cancellation flag is set (NULL: never) */
+static int cancelled_(const gen_rt_sim_options *o)
+{
+    return o->cancel != NULL && *o->cancel != 0;
+}
+
 /* the next trial step from t towards t_stop: *hh, and *last when it is
  * clipped to reach t_stop (a step within 0.01% of it stretches to it) */
 static int trial_size_(engine *e, gen_rt_real t, gen_rt_real t_stop, gen_rt_real hmin,
                        gen_rt_real *hh, int *last)
 {
     long max_steps = e->o->max_steps > 0 ? e->o->max_steps : 100000L;
+    if (cancelled_(e->o)) return GEN_RT_ERR_CANCELLED;
     if (e->attempts >= max_steps) return GEN_RT_ERR_MAX_STEPS;
     if (e->h_next < hmin) return GEN_RT_ERR_STEP_UNDERFLOW;
     e->attempts += 1;
@@ -405,6 +412,7 @@ static int step_(engine *e, gen_rt_real t, gen_rt_real t_stop)
     gen_rt_real hmin = o->h_min > 0 ? o->h_min
                                     : 64 * GEN_RT_EPS * rt_max2(GEN_RT_C(1.0), rt_abs(t_stop));
     e->t = t;
+    if (cancelled_(o)) return GEN_RT_ERR_CANCELLED;
     if (o->method == GEN_RT_METHOD_RK4) {
         gen_rt_real *rk = e->iw, *f1 = rk + GEN_RT_RK4_WORK(nx);
         gen_rt_real h = t_stop - t;

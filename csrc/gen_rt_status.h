@@ -29,7 +29,9 @@
                                     "configuration (with Euler angles: gimbal lock)")  \
     X(ERR_DIVERGED, -11, "the state diverged: it grew beyond the range of the scalar "  \
                          "type (overflow) during integration")                          \
-    X(ERR_CONTROLLER, -12, "the controller callback returned an error")
+    X(ERR_CONTROLLER, -12, "the controller callback returned an error")                \
+    X(ERR_CANCELLED, -13, "cancelled: the caller set the cancellation flag of the "     \
+                          "options (sim_options.cancel)")
 
 /* the message of a code outside the table */
 #define GEN_RT_STATUS_UNKNOWN "unknown status code"

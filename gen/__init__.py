@@ -12,7 +12,8 @@ verified C simulators.
 from ._version import __version__
 
 from .errors import (BuildError, ConvergenceError, DivergenceError, EomgenError,  # noqa: E402
-                     ModelError, SingularError, SolverError, UnusedConstantWarning)
+                     ModelError, SingularError, SolverError, UnusedConstantWarning,
+                     UnusedInputWarning)
 from .model import Model  # noqa: E402
 from .render import generate  # noqa: E402
 from .build import compile  # noqa: E402,A001
@@ -23,6 +24,6 @@ from .fmu import export_fmu  # noqa: E402
 from .ensemble import At, EnsembleResult, Final, Max, Mean, Min, Sampler  # noqa: E402
 
 __all__ = ["Model", "generate", "compile", "EomgenError", "ModelError", "BuildError",
-           "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
+           "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "UnusedInputWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
            "export_fmu", "Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult",
            "__version__"]

@@ -123,7 +123,8 @@ def hold_code(hold, arg="input_hold"):
 class Field:
     name: str
     ctype: str              # "int", "long", "real", "creal*" (const real array),
-                            # "cint*" (const int array), "int*", "real*" (arrays
+                            # "cint*" (const int array), "cvint*" (a const
+                            # volatile int: a flag another thread sets), "int*", "real*" (arrays
                             # written), "controller" (the callback) or "void*"
     doc: str
     default: object = 0     # a number, or "eps16" (16 machine epsilons of the scalar type)
@@ -153,6 +154,10 @@ STRUCTS = (
         Field("proj_max_iter", "int", "projection: Newton iterations", 10),
         Field("every", "int", "simulate: keep every k-th output row and the last (<= 1: all)", 1),
         Field("final_only", "int", "simulate: 1 keeps only the row at t_end", 0),
+        # issue 32 (Ctrl-C): the caller-owned cancellation flag (gen_rt.h reads it
+        # through a volatile pointer; gen/interrupt.py sets it on SIGINT)
+        Field("cancel", "cvint*", "flag owned by the caller, read before every step: nonzero "
+              "stops the run with <P>_ERR_CANCELLED (NULL: never cancelled)", 0),
     )),
     Struct("input", "Input", "Inputs during a simulation (simulate_input): a constant or a "
            "table, a linear feedback on the independent state, a controller callback; "

@@ -18,6 +18,7 @@ import numpy as np
 from .abi import (DERIVATIVE_VERBS, JACOBIAN_METHODS, METHODS, method_name,
                   status_name)
 from .errors import ConvergenceError, DivergenceError, SingularError, SolverError
+from .interrupt import call
 
 __all__ = ["Simulator", "EXCEPTIONS"]
 
@@ -36,6 +37,7 @@ EXCEPTIONS = {
     "ERR_SINGULAR_KINEMATICS": SingularError,
     "ERR_DIVERGED": DivergenceError,
     "ERR_CONTROLLER": SolverError,
+    "ERR_CANCELLED": KeyboardInterrupt,   # Ctrl-C (gen/interrupt.py)
 }
 
 
@@ -271,8 +273,8 @@ class Simulator:
             pairs = ", ".join(f"{n}={float(v):.12g}" for n, v in zip(self.state_names, state))
             text += f", state: {pairs}"
         cls = EXCEPTIONS.get(name, SolverError)
-        if cls is ValueError:
-            raise ValueError(text)
+        if cls in (ValueError, KeyboardInterrupt):
+            raise cls(text)
         raise cls(text, status=status, status_name=name, time=t,
                   state=None if state is None else np.array(state, dtype=float))
 
@@ -883,26 +885,28 @@ class Simulator:
             raise ValueError("terminal= and return_events= need events={name: direction}")
         if evplan is not None:
             for _ in range(2):
-                st = self._fn("simulate_events")(
-                    self._ptr(x0), t0, t_end, dt, plan.struct, evplan.struct,
-                    self._ptr(self._params(p)), opts, rows, self._ptr(t), self._ptr(X),
-                    self._ptr(lam), self._ptr(R), stats)
+                st = call(self, opts, self._fn("simulate_events"),  # Ctrl-C: gen/interrupt.py
+                          self._ptr(x0), t0, t_end, dt, plan.struct, evplan.struct,
+                          self._ptr(self._params(p)), opts, rows, self._ptr(t), self._ptr(X),
+                          self._ptr(lam), self._ptr(R), stats)
                 if plan.error is not None:
                     raise plan.error
                 if stats.n_events <= evplan.capacity:
                     break
                 evplan.resize(stats.n_events)   # the same run again, with room for all
         elif plan is None:
-            st = self._fn("simulate")(self._ptr(x0), t0, t_end, dt, self._ptr(r),
-                                      self._ptr(self._params(p)), opts, rows, self._ptr(t),
-                                      self._ptr(X), self._ptr(lam), stats)
+            st = call(self, opts, self._fn("simulate"),  # Ctrl-C: gen/interrupt.py
+                      self._ptr(x0), t0, t_end, dt, self._ptr(r),
+                      self._ptr(self._params(p)), opts, rows, self._ptr(t),
+                      self._ptr(X), self._ptr(lam), stats)
             if return_inputs or return_outputs:
                 R[:, :self.nr] = 0 if r is None else r
         else:
-            st = self._fn("simulate_input")(self._ptr(x0), t0, t_end, dt, plan.struct,
-                                            self._ptr(self._params(p)), opts, rows,
-                                            self._ptr(t), self._ptr(X), self._ptr(lam),
-                                            self._ptr(R), stats)
+            st = call(self, opts, self._fn("simulate_input"),  # Ctrl-C: gen/interrupt.py
+                      self._ptr(x0), t0, t_end, dt, plan.struct,
+                      self._ptr(self._params(p)), opts, rows,
+                      self._ptr(t), self._ptr(X), self._ptr(lam),
+                      self._ptr(R), stats)
             if plan.error is not None:
                 raise plan.error
         if st != 0:
@@ -1207,7 +1211,7 @@ class Simulator:
         raise ValueError(f"{what} must have shape ({width},) or ({n}, {width}), got {a.shape}")
 
     def _batch_fn(self, name):
-        return self._fn(name)
+        return functools.partial(call, self, None, self._fn(name))   # Ctrl-C: gen/interrupt.py
 
     def _batch_check(self, idx, status, where, X, t=None):
         if idx >= 0:

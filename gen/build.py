@@ -45,6 +45,7 @@ from ._version import __version__
 from .errors import BuildError, ModelError
 from .eigen import eigen_version, find_eigen
 from .ir import DERIVATIVE_KERNELS, plan as make_plan, with_derivatives
+from .model import require_model
 from .render import (EIGEN_SOURCES, RUNTIME_HEADERS, RUNTIME_SOURCES, Rendered, plan_lin,
                      render)
 
@@ -685,6 +686,7 @@ def compile(model, backend="c", real="double", verbose=False, sources=None,  # n
     gen.ModelError
         When ``sources`` does not hold this model's files.
     """
+    require_model(model, "gen.compile")
     from .bindings import Simulator
     if backend not in BACKENDS:
         raise ModelError(f"unknown backend {backend!r}: choose one of {list(BACKENDS)}")

@@ -807,6 +807,40 @@ def build_parser():
 
 
 def main(argv=None):
+    """Run the command line; returns the exit status. Every eomgen error,
+    a refused or too large run (ValueError, MemoryError) and a file error is
+    one line on stderr, never a traceback (--debug shows it). A closed pipe
+    (``eomgen ... | head``) ends the run quietly with 141 (128 + SIGPIPE,
+    what a program killed by the signal reports), as Python's documentation
+    recommends: stdout is pointed at devnull so that the interpreter's own
+    flush at exit does not fail again."""
+    try:
+        rc = _main(argv)
+        sys.stdout.flush()    # a closed pipe shows here at the latest
+        return rc
+    except BrokenPipeError:
+        _stdout_to_devnull()
+        return 141
+
+
+def _stdout_to_devnull():
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
+
+
+def _one_line(cmd, text):
+    """eomgen CMD: the first line of text (the rest: --verbose)."""
+    first, _, rest = text.partition("\n")
+    print(f"eomgen {cmd}: {first}", file=sys.stderr)
+    return rest
+
+
+def _main(argv=None):
     ap = build_parser()
     a = ap.parse_args(argv)
     if getattr(a, "samples", 1) is not None and getattr(a, "samples", 1) < 1:
@@ -817,19 +851,30 @@ def main(argv=None):
         rc = a.fn(a, progress)
         progress.summary()
         return rc
+    except BrokenPipeError:
+        raise                 # main(): quiet
     except UsageError as e:
         if a.debug:
             raise
         print(f"eomgen {a.cmd}: {e}", file=sys.stderr)
         return 2
-    except (EomgenError, OSError) as e:
+    except (EomgenError, OSError, ValueError) as e:
+        # ValueError: a refused argument or run (gen.InputError is one)
         if a.debug:
             raise
-        text = str(e)
-        first, _, rest = text.partition("\n")
-        print(f"eomgen {a.cmd}: {first}", file=sys.stderr)
-        if rest and (a.verbose or "compiler log" in text or "CMake" in first):
+        text = str(e) or type(e).__name__
+        rest = _one_line(a.cmd, text)
+        if rest and (a.verbose or "compiler log" in text or "CMake" in text.partition("\n")[0]):
             print(rest, file=sys.stderr)
+        return 1
+    except MemoryError as e:
+        if a.debug:
+            raise
+        detail = f" ({e})" if str(e) else ""
+        way_out = ("the run is too large for this machine; keep fewer rows (a larger --dt, "
+                   "a shorter --t-end)" if a.cmd in ("simulate", "ensemble")
+                   else "the job is too large for this machine")
+        _one_line(a.cmd, f"out of memory{detail}: {way_out}")
         return 1
     except KeyboardInterrupt:
         print("eomgen: interrupted", file=sys.stderr)

@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .abi import JACOBIAN_METHODS, METHODS, method_name, status_name
+from .interrupt import call
 
 __all__ = ["Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult", "run_ensemble"]
 
@@ -57,7 +58,9 @@ class At:
     Parameters
     ----------
     times : float or sequence of float
-        The times, each rounded to the nearest output row (t0 + k dt).
+        The times, each taken at the nearest output row (t0 + k dt, or
+        t_end); a UserWarning names a time that is not an output time and
+        the row's time used.
     names : sequence of str, optional
         States or outputs by name (None: every state).
 
@@ -328,7 +331,7 @@ def _quantities(sim, names):
     return out
 
 
-def _reducers(sim, reduce, rows, t0, dt):
+def _reducers(sim, reduce, rows, t0, dt, t_rows=None):
     """{key: (kind, sel, at_rows, shape of one run, python fn)}."""
     from .host import host_module
     lib = host_module(sim.real).lib
@@ -350,6 +353,8 @@ def _reducers(sim, reduce, rows, t0, dt):
             at = [int(round((t - t0) / dt)) for t in rd.times]
             if any(not 0 <= k < rows for k in at):
                 raise ValueError(f"At: times {rd.times} outside the run [{t0}, t_end]")
+            if t_rows is not None:   # the nearest row; a warning when it is not the time asked
+                at = _snap_warn(rd.times, t_rows, dt)
             out[key] = (lib.EOMGEN_REDUCE_AT, sel, at, (len(at), len(sel)), None)
         elif isinstance(rd, _Over):
             kind = {"Min": lib.EOMGEN_REDUCE_MIN, "Max": lib.EOMGEN_REDUCE_MAX,
@@ -361,6 +366,23 @@ def _reducers(sim, reduce, rows, t0, dt):
         else:
             raise ValueError(f"reduce[{key!r}]: not a reducer: {rd!r}")
     return out
+
+
+def _snap_warn(times, t_rows, dt):
+    """The output rows nearest the times of gen.At; a warning names each
+    time that is not an output time and the row's time used instead."""
+    at = [int(np.argmin(np.abs(t_rows - t))) for t in times]
+    off = [(t, float(t_rows[k])) for t, k in zip(times, at)
+           if abs(t_rows[k] - t) > 1e-9 * dt + 4 * np.finfo(float).eps * abs(t)]
+    if off:
+        import warnings
+
+        from .model import user_stacklevel
+        pairs = ", ".join(f"t = {t:.12g} -> {u:.12g}" for t, u in off)
+        warnings.warn(f"gen.At: not an output time (t0 + k dt, dt = {dt:g}, and t_end), the "
+                      f"nearest output row is used: {pairs}; ask for output times, or choose "
+                      "dt so that they are", UserWarning, stacklevel=user_stacklevel())
+    return at
 
 
 # ------------------------------------------------------------------ a chunk
@@ -433,7 +455,7 @@ def run_chunk(sim, job):
         rds[i].n_rows, rds[i].rows = len(at), ptr(a_, "int[]")
         rds[i].out = ptr(out)
     e.n_reducers, e.reducers = len(reducers), rds
-    lib.eomgen_ensemble_run(sim._api, e)
+    call(sim, opts, lib.eomgen_ensemble_run, sim._api, e)   # Ctrl-C: gen/interrupt.py
     if plan is not None and plan.error is not None:
         raise plan.error
     t_rows = job["t_rows"]
@@ -505,7 +527,7 @@ def run_ensemble(sim, x0, t_end, dt, p=None, r=None, controller=None, reduce="fi
     if rows < 0:
         sim._check(rows, "simulate_rows")
     t_rows = np.minimum(t0 + dt * np.arange(rows), t_end)
-    reducers = _reducers(sim, reduce, rows, t0, dt)
+    reducers = _reducers(sim, reduce, rows, t0, dt, t_rows)
     workers = workers or os.cpu_count() or 1
     if chunk is None:
         # a few chunks per worker (load balance), and a chunk's full rows (a

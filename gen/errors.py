@@ -82,3 +82,9 @@ class UnusedConstantWarning(UserWarning):
     """A constant given in ``constants`` appears in no expression of the
     model (a misspelt or stale entry); it is kept as a parameter but has no
     effect on the results."""
+
+
+class UnusedInputWarning(UserWarning):
+    """An input given in ``inputs`` appears in no expression of the model (a
+    misspelt or stale entry); it is kept as an input but has no effect on
+    the results."""

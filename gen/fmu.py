@@ -48,6 +48,8 @@ from ._version import __version__
 from .dependencies import dependencies
 from .errors import BuildError, MissingDependencyError, ModelError
 from .abi import ADAPTIVE_METHODS
+from .model import require_model
+from .render import mode_for_umask
 from .resources import csrc_dir, templates_dir
 
 __all__ = ["export_fmu", "describe", "fmi_headers", "platform_folder", "FmuDescription",
@@ -566,6 +568,7 @@ def _write_zip(entries, path):
                 info.external_attr = (0o755 if name.startswith("binaries/") else 0o644) << 16
                 info.create_system = 3
                 zf.writestr(info, entries[name])
+        os.chmod(tmp, mode_for_umask())   # mkstemp's 0600 -> the umask's (0644 under 022)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -646,6 +649,7 @@ def export_fmu(model, path, fmi_version="2.0", kind="both", real="double", start
     gen.BuildError
         When the binary does not compile.
     """
+    require_model(model, "gen.export_fmu")
     from .model import Model
     if not isinstance(model, Model):
         raise ModelError(f"export_fmu needs a gen.Model, got {type(model).__name__}")

@@ -44,7 +44,8 @@ _libraries = {}        # path -> ctypes handle (kept open for the process)
 # hand-written parts of the host (csrc/host): declarations, definitions, and
 # whether the definitions use Python's and numpy's C API (the fast path of
 # Simulator.rhs) rather than plain C
-HOST_PARTS = [("gen_host_ensemble.h", "gen_host_ensemble.c", False),
+HOST_PARTS = [("gen_host_interrupt.h", "gen_host_interrupt.c", False),
+              ("gen_host_ensemble.h", "gen_host_ensemble.c", False),
               ("gen_host_fast.h", "gen_host_fast.c", True)]
 
 

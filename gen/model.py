@@ -171,7 +171,7 @@ def _lagrange_partition(system, lm, partition):
     return out
 
 
-def _user_stacklevel():
+def user_stacklevel():
     """warnings.warn's stacklevel, from the function calling this, of the
     first frame outside the gen package (the user's call)."""
     import os
@@ -181,6 +181,37 @@ def _user_stacklevel():
     while f is not None and os.path.dirname(os.path.abspath(f.f_code.co_filename)) == here:
         f, level = f.f_back, level + 1
     return level
+
+
+_user_stacklevel = user_stacklevel
+
+
+# what turns a sympy object into a gen.Model: the constructor to call first
+_CONSTRUCTORS = (("KanesMethod", "gen.Model.from_kanes(km, constants={...}, inputs=[...])"),
+                 ("LagrangesMethod", "gen.Model.from_lagrange(lm, constants={...}, "
+                  "inputs=[...])"),
+                 ("JointsMethod", "gen.Model.from_system(method, constants={...}, "
+                  "inputs=[...])"),
+                 ("System", "gen.Model.from_system(system, constants={...}, inputs=[...])"))
+
+
+def require_model(obj, caller):
+    """obj itself when it is a gen.Model; otherwise a ModelError that says
+    what was given and, for a sympy mechanics object, the constructor to
+    call first (gen.compile(km) used to fail with "AttributeError: ... has
+    no attribute 'M'")."""
+    if isinstance(obj, Model):
+        return obj
+    kind = type(obj).__name__
+    for name, ctor in _CONSTRUCTORS:
+        cls = getattr(me, name, None)
+        if (cls is not None and isinstance(obj, cls)) or (name == "System"
+                                                          and _is_pydy_system(obj)):
+            raise ModelError(
+                f"{caller} takes a gen.Model, got a sympy {kind}: make the model first with "
+                f"{ctor}, then {caller}(model, ...)")
+    raise ModelError(f"{caller} takes a gen.Model (from gen.Model.from_kanes, from_lagrange "
+                     f"or from_system), got {kind}")
 
 
 def _constant_value(c, v):
@@ -793,7 +824,7 @@ class Model:
                 mat = _xreplace_shared(mat, qd_subs, memo_qd)
             out = _xreplace_shared(mat, sub, memo)
             check_printable(out, what, {v: k for k, v in sub.items()}, T)
-            _check_expressions(out, what, set(Q) | set(U) | set(R) | set(P) | {T})
+            _check_expressions(out, what, set(Q) | set(U) | set(R) | set(P) | {T}, inputs)
             return out
 
         Kqd_, Ku_, kf_ = conv(Kqd, "kinematic equations (q' coefficients)"), conv(Ku, "kinematic equations (u coefficients)"), conv(kf, "kinematic equations")
@@ -824,7 +855,7 @@ class Model:
                     mat = mat.xreplace(qd_subs)
                 mat = mat.xreplace(usub).xreplace(sub)     # u' before u
                 check_printable(mat, what, back, T)
-                _check_expressions(mat, what, allowed)
+                _check_expressions(mat, what, allowed, inputs)
                 return mat
 
             aux_F_ = conv_aux(aux[0], "auxiliary equations (reaction coefficients)")
@@ -851,6 +882,19 @@ class Model:
                 "constraints, energy); kept as parameter(s) without effect"),
                 stacklevel=_user_stacklevel())
 
+        # ---- inputs that no equation uses: a warning naming them ---------
+        unused_r = [str(r_) for r_, d in zip(inputs, R) if d not in used]
+        if unused_r:
+            import warnings
+
+            from .errors import UnusedInputWarning
+            warnings.warn(UnusedInputWarning(
+                f"model '{name}': input{'s' if len(unused_r) > 1 else ''} "
+                f"{', '.join(unused_r)} appear{'' if len(unused_r) > 1 else 's'} in no "
+                "expression of the model (forcing, outputs, ...): kept as input(s) without "
+                "effect (a misspelt or stale entry of inputs=[...]?)"),
+                stacklevel=_user_stacklevel())
+
         # ---- structure checks -------------------------------------------
         if M_.shape != (nu, nu):
             raise ModelError(f"mass matrix has shape {M_.shape}, expected ({nu}, {nu})")
@@ -858,6 +902,21 @@ class Model:
             raise ModelError(f"forcing has shape {f_.shape}, expected ({nu}, 1)")
         if any(e.has(*U) for e in M_):
             raise ModelError("the mass matrix depends on the speeds; such models are not supported")
+        # a speed whose row of M is identically zero (and that no velocity
+        # constraint involves) has no acceleration equation: M (or the
+        # constrained system) is singular at every state
+        zero = [i for i in range(nu) if all(M_[i, j] == 0 for j in range(nu))
+                and all(A_[k, i] == 0 for k in range(A_.shape[0]))]
+        if zero:
+            names = [str(speed_names[i]) for i in zero]
+            whole = len(zero) == nu
+            raise ModelError(
+                f"model '{name}': the mass matrix is {'identically zero' if whole else 'zero'}"
+                f"{'' if whole else ' in the row(s) of'} {'(speeds ' if whole else 'speed(s) '}"
+                f"{', '.join(names)}{')' if whole else ''}: the equations of motion do not "
+                "determine those accelerations at any state (every simulation would fail "
+                "as singular). Give the bodies their masses and inertias (particles, rigid "
+                "bodies) in the equations you formed")
         for mat, what in ((Kqd_, "kinematic q' coefficients"), (Ku_, "kinematic u coefficients"),
                           (A_, "velocity-constraint matrix")):
             if any(e.has(*U) for e in mat) or any(e.has(*R) for e in mat):
@@ -1200,11 +1259,21 @@ def _scan(mat):
     return free, derivs, undef
 
 
-def _check_expressions(mat, what, allowed):
+def _check_expressions(mat, what, allowed, inputs=()):
     """Refuse free symbols, leftover derivatives and unknown functions,
-    naming the culprit."""
+    naming the culprit (and, when inputs holds the same name as a plain
+    Symbol where the model has a function of time, or the other way round,
+    the mix-up)."""
     free, derivs, undef = _scan(mat)
     extra = free - allowed
+    functions = {str(r_.func): r_ for r_ in inputs if isinstance(r_, sm.core.function.AppliedUndef)}
+    for s_ in sorted(extra, key=str):
+        if str(s_) in functions:    # the other mix-up: T(t) declared, the plain T used
+            raise ModelError(
+                f"the {what} contain {s_}, a plain Symbol, but inputs=[...] gives "
+                f"{functions[str(s_)]}, a function of time (a dynamicsymbol): declare the "
+                "input as the model writes it (the same object), or use "
+                f"dynamicsymbols('{s_}') in the model")
     if extra:
         names = sorted(str(s) for s in extra)
         raise ModelError(
@@ -1215,7 +1284,15 @@ def _check_expressions(mat, what, allowed):
         raise ModelError(
             f"the {what} contain derivative term(s) {sorted(map(str, derivs))[:3]}: "
             "express them through the speeds (kinematic equations) or declare them")
+    plain = {str(r_): r_ for r_ in inputs if isinstance(r_, sm.Symbol)}
     for fn in sorted(undef, key=str):
+        name = str(fn.func)
+        if name in plain:
+            raise ModelError(
+                f"the {what} contain {name}(t), a function of time (a dynamicsymbol), but "
+                f"inputs=[...] gives {name}, a plain Symbol: the model uses {name}(t); list "
+                f"dynamicsymbols('{name}') in inputs=[...] (sympy.physics.mechanics) "
+                f"instead of Symbol('{name}')")
         raise ModelError(
             f"the {what} contain {fn.func}(t), a function of time that is not a "
             "coordinate, "

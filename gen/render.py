@@ -25,6 +25,7 @@ from ._version import __version__
 from .abi import interface
 from .errors import ModelError
 from .ir import DERIVATIVE_KERNELS, plan as make_plan
+from .model import require_model
 from .printers import ModelCPrinter, ModelCxxPrinter, kernel_statements, print_kernel_body
 from .resources import csrc_dir, templates_dir
 from .solvers import demand_order, ldlt_lines, ldlt_work_index, ldlt_program
@@ -459,6 +460,28 @@ def plan_lin(backend):
     return "auto" if backend == "c" else "unrolled"
 
 
+def current_umask():
+    """The process's umask, read without changing it where the system shows
+    it (Linux: /proc/self/status), else by setting and restoring it."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def mode_for_umask(directory=False):
+    """The mode a file (0o666) or a folder (0o777) created with open() or
+    mkdir() gets under the current umask: what a temporary file or folder
+    (0o600 / 0o700) moved into place must be given."""
+    return (0o777 if directory else 0o666) & ~current_umask()
+
+
 def write_atomic(files, out_dir):
     """Write files into out_dir through a temporary sibling directory that
     is moved into place only when complete; a failure leaves out_dir as it
@@ -469,6 +492,10 @@ def write_atomic(files, out_dir):
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
     try:
+        # mkdtemp's folder is 0700: the folder moved into place gets the mode
+        # of the one it replaces, or of a new folder under the umask
+        os.chmod(tmp, (out.stat().st_mode & 0o7777) if out.is_dir()
+                 else mode_for_umask(directory=True))
         if out.exists():
             for item in out.iterdir():
                 if item.name not in files:
@@ -516,5 +543,6 @@ def generate(model, out_dir, backend="c", real="double", timings=None):
     list of Path
         The paths written.
     """
+    require_model(model, "gen.generate")
     files = render_files(model, real=real, backend=backend, timings=timings)
     return write_atomic(files, out_dir)

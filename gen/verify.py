@@ -19,6 +19,7 @@ import numpy as np
 import sympy as sm
 
 from .errors import EomgenError
+from .model import require_model
 
 __all__ = ["verify", "VerifyReport"]
 
@@ -197,6 +198,7 @@ def verify(model, samples=20, backend="c", real="double", sources=None, seed=0, 
     gen.VerifyReport
         ``report.ok``, ``report.table()``.
     """
+    require_model(model, "gen.verify")
     from .build import compile as compile_model
     from .symbolic import linearize_symbolic
 

@@ -568,7 +568,9 @@ struct BasicEvents {
  *   Opts:  int method (METHOD_RK4, METHOD_DOPRI5, METHOD_RODAS4), project
  *          (nonzero: project onto the constraints after each step), S rtol,
  *          atol, h_init, h_min, h_max, long max_steps, S proj_tol, int
- *          proj_max_iter, every, final_only;
+ *          proj_max_iter, every, final_only, const int *cancel (the
+ *          caller's flag, read before every step: nonzero stops the run
+ *          with ERR_CANCELLED; nullptr: never);
  *   Stats: long n_accepted, n_rejected, n_rhs, n_jac, int n_out, n_events,
  *          terminal, S t_last, h_next, State x_last; a value-initialized
  *          Stats is all zeros but terminal (-1: no terminal event).
@@ -1847,11 +1849,18 @@ struct Runtime {
         }
 
         /* the trial step: hh, within the step budget and above hmin */
+        // the caller's cancellation flag (Opts::cancel, NULL: never) is set
+        bool cancelled() const noexcept
+        {
+            return o.cancel != nullptr && *static_cast<const volatile int *>(o.cancel) != 0;
+        }
+
         // the next trial step from t towards t_stop: hh, and last when it is
         // clipped to reach t_stop (a step within 0.01% of it stretches to it)
         int trial_size(S t, S t_stop, S hmin, S &hh, bool &last) noexcept
         {
             const long max_steps = o.max_steps > 0 ? o.max_steps : 100000L;
+            if (cancelled()) return ERR_CANCELLED;
             if (attempts >= max_steps) return ERR_MAX_STEPS;
             if (h_next < hmin) return ERR_STEP_UNDERFLOW;
             attempts += 1;
@@ -1873,6 +1882,7 @@ struct Runtime {
                                        : 64 * Tol::eps * rt_max(S(1.0), rt_abs(t_stop));
             int st;
             t = t_;
+            if (cancelled()) return ERR_CANCELLED;
             if (o.method == METHOD_RK4) {
                 const S hh = t_stop - t;
                 xn = x;

@@ -2,9 +2,15 @@
  * gen_host_ensemble.c - many simulations of one model in one call, each
  * through the model's plugin table exactly as one sim.simulate call makes
  * it (simulate, or simulate_input with a table, a feedback), then reduced
- * into the caller's arrays (gen_host_ensemble.h). Hand-written; compiled
+ * into the caller's arrays (gen_host_ensemble.h). The options' cancel flag
+ * (Ctrl-C, gen/interrupt.py) is read before each run and, inside a run, by
+ * the runtime before each step. Hand-written; compiled
  * into eomgen's Python host module after its declarations.
  */
+
+/* the status of a run not made because the caller cancelled the call
+ * (sim_options.cancel set): the runtime's GEN_RT_ERR_CANCELLED */
+#define EOMGEN_ERR_CANCELLED_ (-13)
 
 /* the sim_stats fields before x_last, as the host declares them */
 #define EOMGEN_STATS_(s) ((eomgen_sim_stats *)(s))
@@ -98,6 +104,22 @@ int eomgen_ensemble_run(const eomgen_api *api, const eomgen_ensemble *e)
     capacity = api->simulate_rows_kept(e->rows, opts.every, opts.final_only);
     for (i = 0; i < e->n; ++i) {
         const eomgen_real *x0 = e->x0 + (long)i * e->x0_stride;
+        if (opts.cancel && *(const volatile int *)opts.cancel) {
+            /* cancelled by the caller: this run and the rest are not made */
+            for (; i < e->n; ++i) {
+                e->status[i] = EOMGEN_ERR_CANCELLED_;
+                e->t_last[i] = e->t0;
+                for (k = 0; k < nx; ++k)
+                    e->x_last[(long)i * nx + k] = e->x0[(long)i * e->x0_stride + k];
+                for (q = 0; q < e->n_reducers; ++q) {
+                    const eomgen_reducer *rd = e->reducers + q;
+                    long w = eomgen_reducer_width_(api, rd, e->rows), j;
+                    for (j = 0; j < w; ++j) rd->out[(long)i * w + j] = eomgen_nan_();
+                }
+                ++failed;
+            }
+            break;
+        }
         const eomgen_real *p = e->p ? e->p + (long)i * e->p_stride : NULL;
         const eomgen_real *r = e->r ? e->r + (long)i * e->r_stride : NULL;
         eomgen_sim_stats *s = EOMGEN_STATS_(e->stats);

@@ -54,5 +54,6 @@ typedef struct {
 /* The n runs of e in order; returns the number of failed runs (their
  * status, time and last state in e->status, e->t_last, e->x_last; their
  * reducer rows NaN). The runs are independent: any split of an ensemble
- * into calls gives the same numbers. */
+ * into calls gives the same numbers. When opts->cancel is set, the run in
+ * progress stops and the rest are not made (status ERR_CANCELLED). */
 int eomgen_ensemble_run(const eomgen_api *api, const eomgen_ensemble *e);

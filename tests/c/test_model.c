@@ -326,7 +326,7 @@ static void pendulum_tests(int accel)
         o.method = GEN_RT_METHOD_RK4; o.project = 1; o.rtol = GEN_RT_C(1e-8);
         o.atol = GEN_RT_C(1e-10); o.h_init = 0; o.h_min = 0; o.h_max = 0;
         o.max_steps = 100000L; o.proj_tol = 0; o.proj_max_iter = 10;
-        o.every = 1; o.final_only = 0;
+        o.every = 1; o.final_only = 0; o.cancel = NULL;
         s.x_last = last;
         x[0] = (gen_rt_real)(PL * cos(1.0)); x[1] = (gen_rt_real)(PL * sin(1.0));
         x[2] = 0; x[3] = 0;
@@ -349,6 +349,36 @@ static void pendulum_tests(int accel)
         st = gen_rt_model_simulate(&m, x, 0, 2, GEN_RT_C(0.01), NULL, p, &o, 200, work, iwork,
                                    t_out, x_out, NULL, &s);
         CHECK_INT(st, GEN_RT_ERR_OUTPUT_FULL);
+        /* the caller's cancellation flag: set, the run stops before its first
+         * step (RK4 and DOPRI5) with ERR_CANCELLED, row 0 written and x0 as
+         * the last good state; clear, the run is the one above bit for bit */
+        {
+            static gen_rt_real t_c[201], x_c[201 * 4];
+            volatile int stop = 1;
+            int meth;
+            o.cancel = &stop;
+            for (meth = 0; meth < 2; ++meth) {
+                o.method = meth == 0 ? GEN_RT_METHOD_RK4 : GEN_RT_METHOD_DOPRI5;
+                st = gen_rt_model_simulate(&m, x, 0, 2, GEN_RT_C(0.01), NULL, p, &o, 201, work,
+                                           iwork, t_c, x_c, NULL, &s);
+                CHECK_INT(st, GEN_RT_ERR_CANCELLED);
+                CHECK_INT(s.n_out, 1);
+                CHECK_NEAR(s.t_last, 0, 0);
+                CHECK_NEAR(s.x_last[0], x[0], 0);
+                CHECK_NEAR(s.x_last[1], x[1], 0);
+                for (k = 0; k < 4; ++k) last[k] = x[k];
+                st = gen_rt_model_advance(&m, 0, 1, NULL, p, &o, work, iwork, &s, last);
+                CHECK_INT(st, GEN_RT_ERR_CANCELLED);
+                CHECK_NEAR(last[0], x[0], 0);
+            }
+            stop = 0;
+            o.method = GEN_RT_METHOD_RK4;
+            st = gen_rt_model_simulate(&m, x, 0, 2, GEN_RT_C(0.01), NULL, p, &o, 201, work,
+                                       iwork, t_c, x_c, NULL, &s);
+            CHECK_INT(st, GEN_RT_OK);
+            for (k = 0; k < 4; ++k) CHECK_NEAR(x_c[800 + k], x_out[800 + k], 0);
+            o.cancel = NULL;
+        }
         /* DOPRI5 to the same end: agrees with RK4 at h = 0.01 to its error */
         o.method = GEN_RT_METHOD_DOPRI5; o.rtol = (gen_rt_real)TOL(1e-10, 1e-5);
         o.atol = (gen_rt_real)TOL(1e-12, 1e-6);
@@ -399,7 +429,7 @@ static void oscillator_tests(int accel)
         o.method = GEN_RT_METHOD_DOPRI5; o.project = 1; o.rtol = GEN_RT_C(1e-10);
         o.atol = GEN_RT_C(1e-12); o.h_init = 0; o.h_min = 0; o.h_max = 0;
         o.max_steps = 100000L; o.proj_tol = 0; o.proj_max_iter = 10;
-        o.every = 1; o.final_only = 0;
+        o.every = 1; o.final_only = 0; o.cancel = NULL;
         s.n_accepted = 0; s.n_rejected = 0; s.n_rhs = 0; s.n_out = 0; s.t_last = 0;
         s.h_next = 0; s.x_last = last;
         x[0] = 1; x[1] = 0;
@@ -513,7 +543,7 @@ static void controller_tests(int accel)
     x0[0] = 1; x0[1] = 0;
     o.method = GEN_RT_METHOD_RK4; o.project = 0; o.rtol = GEN_RT_C(1e-8); o.atol = GEN_RT_C(1e-10);
     o.h_init = 0; o.h_min = 0; o.h_max = 0; o.max_steps = 1000; o.proj_tol = 0; o.proj_max_iter = 0;
-    o.every = 1; o.final_only = 0;
+    o.every = 1; o.final_only = 0; o.cancel = NULL;
     s.x_last = x;
     memset(&in, 0, sizeof in);
     d.c = (gen_rt_real)c; d.calls = 0;

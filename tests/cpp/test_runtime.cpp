@@ -43,6 +43,7 @@ struct Options {
     S proj_tol = 16 * gen_rt::Tolerances<S>::eps;
     int proj_max_iter = 10;
     int every = 1, final_only = 0;
+    const int *cancel = nullptr;
 };
 
 template <class S, int NX>

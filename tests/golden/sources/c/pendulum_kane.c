@@ -39,6 +39,7 @@ typedef char pendulum_kane_abi_matches_runtime[(
     offsetof(pendulum_kane_sim_options, proj_max_iter) == offsetof(gen_rt_sim_options, proj_max_iter) &&
     offsetof(pendulum_kane_sim_options, every) == offsetof(gen_rt_sim_options, every) &&
     offsetof(pendulum_kane_sim_options, final_only) == offsetof(gen_rt_sim_options, final_only) &&
+    offsetof(pendulum_kane_sim_options, cancel) == offsetof(gen_rt_sim_options, cancel) &&
     sizeof(pendulum_kane_input) == sizeof(gen_rt_input) &&
     offsetof(pendulum_kane_input, r) == offsetof(gen_rt_input, r) &&
     offsetof(pendulum_kane_input, n_table) == offsetof(gen_rt_input, n_table) &&
@@ -314,6 +315,7 @@ void pendulum_kane_sim_options_default(pendulum_kane_sim_options *opts)
     opts->proj_max_iter = 10;
     opts->every = 1;
     opts->final_only = 0;
+    opts->cancel = 0;
 }
 
 int pendulum_kane_step_rk4(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, int project, pendulum_kane_real *x)
@@ -359,6 +361,7 @@ int pendulum_kane_advance(pendulum_kane_real t0, pendulum_kane_real t1, const pe
     opts_rt.proj_max_iter = opts->proj_max_iter;
     opts_rt.every = opts->every;
     opts_rt.final_only = opts->final_only;
+    opts_rt.cancel = opts->cancel;
     stats_rt.n_accepted = stats->n_accepted;
     stats_rt.n_rejected = stats->n_rejected;
     stats_rt.n_rhs = stats->n_rhs;
@@ -422,6 +425,7 @@ int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, 
     opts_rt.proj_max_iter = opts->proj_max_iter;
     opts_rt.every = opts->every;
     opts_rt.final_only = opts->final_only;
+    opts_rt.cancel = opts->cancel;
     stats_rt.n_accepted = stats->n_accepted;
     stats_rt.n_rejected = stats->n_rejected;
     stats_rt.n_rhs = stats->n_rhs;
@@ -485,6 +489,7 @@ int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_rea
     opts_rt.proj_max_iter = opts->proj_max_iter;
     opts_rt.every = opts->every;
     opts_rt.final_only = opts->final_only;
+    opts_rt.cancel = opts->cancel;
     stats_rt.n_accepted = stats->n_accepted;
     stats_rt.n_rejected = stats->n_rejected;
     stats_rt.n_rhs = stats->n_rhs;
@@ -559,6 +564,7 @@ int pendulum_kane_simulate_events(const pendulum_kane_real *x0, pendulum_kane_re
     opts_rt.proj_max_iter = opts->proj_max_iter;
     opts_rt.every = opts->every;
     opts_rt.final_only = opts->final_only;
+    opts_rt.cancel = opts->cancel;
     stats_rt.n_accepted = stats->n_accepted;
     stats_rt.n_rejected = stats->n_rejected;
     stats_rt.n_rhs = stats->n_rhs;

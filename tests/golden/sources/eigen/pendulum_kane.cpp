@@ -54,6 +54,7 @@ mdl::SimOptions<S> options_from(const pendulum_kane_sim_options *o) noexcept
     t.proj_max_iter = o->proj_max_iter;
     t.every = o->every;
     t.final_only = o->final_only;
+    t.cancel = o->cancel;
     return t;
 }
 
@@ -390,6 +391,7 @@ void pendulum_kane_sim_options_default(pendulum_kane_sim_options *opts)
     opts->proj_max_iter = d.proj_max_iter;
     opts->every = d.every;
     opts->final_only = d.final_only;
+    opts->cancel = d.cancel;
 }
 
 int pendulum_kane_step_rk4(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, int project, pendulum_kane_real *x)

@@ -41,7 +41,8 @@ typedef double pendulum_kane_real;
 #define PENDULUM_KANE_ERR_SINGULAR_KINEMATICS (-10) /* singular kinematic equations: q' cannot be solved from Kqd(q) q' + Ku(q) u + kf = 0 at this configuration (with Euler angles: gimbal lock) */
 #define PENDULUM_KANE_ERR_DIVERGED (-11) /* the state diverged: it grew beyond the range of the scalar type (overflow) during integration */
 #define PENDULUM_KANE_ERR_CONTROLLER (-12) /* the controller callback returned an error */
-#define PENDULUM_KANE_STATUS_MIN (-12) /* the most negative code */
+#define PENDULUM_KANE_ERR_CANCELLED (-13) /* cancelled: the caller set the cancellation flag of the options (sim_options.cancel) */
+#define PENDULUM_KANE_STATUS_MIN (-13) /* the most negative code */
 
 /* Integration methods for pendulum_kane_sim_options.method */
 #define PENDULUM_KANE_METHOD_RK4 0
@@ -96,6 +97,7 @@ typedef struct {
     int proj_max_iter; /* projection: Newton iterations */
     int every; /* simulate: keep every k-th output row and the last (<= 1: all) */
     int final_only; /* simulate: 1 keeps only the row at t_end */
+    const volatile int *cancel; /* flag owned by the caller, read before every step: nonzero stops the run with PENDULUM_KANE_ERR_CANCELLED (NULL: never cancelled) */
 } pendulum_kane_sim_options;
 
 /* Inputs during a simulation (simulate_input): a constant or a table, a linear feedback on the independent state, a controller callback; continuous or sampled. Zero-fill it (memset) and set what you use. */

@@ -134,6 +134,7 @@ struct SimOptions {
     int proj_max_iter = 10; // projection: Newton iterations
     int every = 1; // simulate: keep every k-th output row and the last (<= 1: all)
     int final_only = 0; // simulate: 1 keeps only the row at t_end
+    const volatile int * cancel = nullptr; // flag owned by the caller, read before every step: nonzero stops the run with ERR_CANCELLED (NULL: never cancelled)
 };
 
 /* Input: the C API's pendulum_kane_input, typed (gen/abi.py). */

@@ -15,6 +15,7 @@ typedef struct {
     int proj_max_iter;
     int every;
     int final_only;
+    const volatile int *cancel;
 } eomgen_sim_options;
 typedef struct {
     const eomgen_real *r;
@@ -117,6 +118,10 @@ int eomgen_mass_matrix_batch(const eomgen_api *api, int n, const eomgen_real *q,
 int eomgen_linearize_batch(const eomgen_api *api, int n, const eomgen_real *x, const eomgen_real *r, int r_stride, const eomgen_real *p, int p_stride, eomgen_real t, eomgen_real *A, eomgen_real *B, int *status);
 
 
+
+/* a batch loop stops at a SIGINT (Ctrl-C: gen/interrupt.py, the relay of
+   csrc/host/gen_host_interrupt.c) with the runtime's ERR_CANCELLED */
+#define EOMGEN_CANCELLED_ (-13)
 
 const char * eomgen_status_message(const eomgen_api *api, int status)
 {
@@ -259,8 +264,10 @@ int eomgen_rhs_batch(const eomgen_api *api, int n, const eomgen_real *t, int t_s
 {
     const long nx = api->nx;
     int i, st;
+    const long sigints = eomgen_interrupt_count();
     *status = 0;
     for (i = 0; i < n; ++i) {
+        if (eomgen_interrupt_count() != sigints) { *status = EOMGEN_CANCELLED_; return i; }
         st = api->eval_rhs(t ? t[(long)i * t_stride] : 0, x + i * nx,
                            r ? r + (long)i * r_stride : NULL, p ? p + (long)i * p_stride : NULL,
                            dxdt + i * nx, NULL);
@@ -274,8 +281,10 @@ int eomgen_mass_matrix_batch(const eomgen_api *api, int n, const eomgen_real *q,
 {
     const long nm = (long)api->nu * api->nu;
     int i, st;
+    const long sigints = eomgen_interrupt_count();
     *status = 0;
     for (i = 0; i < n; ++i) {
+        if (eomgen_interrupt_count() != sigints) { *status = EOMGEN_CANCELLED_; return i; }
         st = api->eval_mass_matrix(q + (long)i * q_stride, p ? p + (long)i * p_stride : NULL, 0,
                                    M + i * nm);
         if (st) { *status = st; return i; }
@@ -291,8 +300,10 @@ int eomgen_linearize_batch(const eomgen_api *api, int n, const eomgen_real *x,
     const long nx = api->nx, na = (long)api->ns * api->ns, nb = (long)api->ns * api->nr;
     eomgen_real Bdummy[1];
     int i, st;
+    const long sigints = eomgen_interrupt_count();
     *status = 0;
     for (i = 0; i < n; ++i) {
+        if (eomgen_interrupt_count() != sigints) { *status = EOMGEN_CANCELLED_; return i; }
         st = api->linearize(x + i * nx, r ? r + (long)i * r_stride : NULL,
                             p ? p + (long)i * p_stride : NULL, t, A + i * na,
                             B && nb ? B + i * nb : Bdummy);

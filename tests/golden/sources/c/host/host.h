@@ -13,6 +13,7 @@ typedef struct {
     int proj_max_iter;
     int every;
     int final_only;
+    const volatile int *cancel;
 } eomgen_sim_options;
 typedef struct {
     const eomgen_real *r;
