@@ -33,12 +33,11 @@ from pathlib import Path
 
 from ._version import __version__
 from .backends import (C_FLAGS, C_LIN_FLAGS, RUNTIME_FLAGS, RUNTIME_HEADERS, RUNTIME_SOURCES,
-                       STRICT_FLAGS, c_compiler, cxx_compiler, get_backend)
+                       c_compiler, cxx_compiler, get_backend)
 from .cache import cache_dir, cache_error, new_build_dir, publish, write_marker
 from .errors import BuildError
 
-__all__ = ["build", "build_derivatives", "Built", "compile_units", "link_library",
-           "C_FLAGS", "STRICT_FLAGS"]
+__all__ = ["build", "build_derivatives", "Built", "compile_units", "link_library"]
 
 
 @dataclass
@@ -92,7 +91,7 @@ def build(rendered, verbose=False, timings=None):
     iface = rendered.interface
     name, files = iface.name, rendered.files
     backend = get_backend(rendered.backend)
-    includes = tuple(str(d) for d in getattr(rendered, "includes", ()))
+    includes = tuple(str(d) for d in rendered.includes)
     _check_platform()
     t1 = time.perf_counter()
     parts = [__version__, *backend.cache_parts(), *includes]
