@@ -30,8 +30,8 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "examples"))
 
 import gen  # noqa: E402
-from gen.build import eigen_include_dir  # noqa: E402
-from gen.render import RUNTIME_SOURCES  # noqa: E402
+from gen.backends import eigen_include_dir  # noqa: E402
+from gen.backends import RUNTIME_SOURCES  # noqa: E402
 
 DRIVER = r"""
 // bench driver for {P}: C backend ({pc}_*) against the typed Eigen API ({pe}::)

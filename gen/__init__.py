@@ -16,7 +16,7 @@ from .errors import (BuildError, ConvergenceError, DivergenceError, EomgenError,
                      UnusedInputWarning)
 from .model import Model  # noqa: E402
 from .render import generate  # noqa: E402
-from .build import compile  # noqa: E402,A001
+from .pipeline import compile  # noqa: E402,A001
 from .symbolic import linearize_symbolic  # noqa: E402
 from .verify import VerifyReport, verify  # noqa: E402
 from .control import LinearFeedback  # noqa: E402

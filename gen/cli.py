@@ -20,6 +20,7 @@ from pathlib import Path
 from . import __version__, abi
 from .cli_output import (MissingDependency, Progress, plot_simulation, print_csv,
                          print_events, print_linearization, write_csv, write_events_csv)
+from .backends import backend_names, get_backend
 from .errors import EomgenError
 
 EXAMPLES = """examples:
@@ -115,7 +116,7 @@ def _pairs(items, names, what, labels=()):
 
 def _compile(model, a, progress):
     """gen.compile, shown as one stage; --verbose adds the time of each."""
-    from .build import compile as compile_model
+    from .pipeline import compile as compile_model
     backend = getattr(a, "backend", "c") or "c"
     timings = {}
     with progress.stage("kernels, printing, templates, compile (cffi, cached)"):
@@ -232,13 +233,13 @@ def cmd_build(a, progress):
     from .render import generate
     if a.stack_limit is not None and a.stack_limit < 0:
         raise UsageError(f"--stack-limit must be a number of bytes >= 0, got {a.stack_limit}")
-    if a.stack_limit and a.backend != "c":
+    if a.stack_limit and not get_backend(a.backend).stack_limit:
         raise UsageError("--stack-limit bounds the C library's frames: it needs --backend c")
     m = load_model(a.file, progress)
     out = Path(a.output)
     bld = out / "build"
     cfg = ["cmake", "-S", str(out), "-B", str(bld), "-DCMAKE_BUILD_TYPE=Release"]
-    if a.backend == "c":
+    if get_backend(a.backend).stack_limit:
         # always given, so that a limit from an earlier run is not kept in the cache
         cfg.append(f"-D{m.name.upper()}_STACK_LIMIT={a.stack_limit or 0}")
     with _folder_lock(out.resolve(), progress):
@@ -262,7 +263,7 @@ def _megabytes(n):
 
 
 def cmd_cache(a, progress):
-    from .build import cache_info, clear_cache
+    from .cache import cache_info, clear_cache
     if a.action == "clear":
         info = cache_info()
         removed, freed = clear_cache()
@@ -531,7 +532,7 @@ def cmd_ensemble(a, progress):
 def cmd_verify(a, progress):
     from .verify import verify
     m = load_model(a.file, progress)
-    backends = ["c", "eigen"] if a.backend == "both" else [a.backend]
+    backends = {"both": backend_names("loadable")}.get(a.backend, [a.backend])
     ok = True
     for backend in backends:
         with progress.stage(f"verify {backend} against sympy ({a.samples} states)"):
@@ -641,7 +642,7 @@ def build_parser():
              "eomgen generate examples/seed_pendulum.py -o out/pend --real float", common)
     g.add_argument("file", help="model file (FILE.py or FILE.py:function)")
     g.add_argument("-o", "--output", required=True, help="output folder")
-    g.add_argument("--backend", default="c", choices=["c", "eigen"])
+    g.add_argument("--backend", default="c", choices=backend_names("project"))
     _add_real(g)
     g.add_argument("--name", help="C prefix (default: the model's name)")
     g.set_defaults(fn=cmd_generate)
@@ -651,7 +652,7 @@ def build_parser():
              "eomgen build examples/seed_pendulum.py:lagrange_model -o out/pl", common)
     b.add_argument("file", help="model file (FILE.py or FILE.py:function)")
     b.add_argument("-o", "--output", required=True, help="output folder (build in OUTPUT/build)")
-    b.add_argument("--backend", default="c", choices=["c", "eigen"])
+    b.add_argument("--backend", default="c", choices=backend_names("project"))
     _add_real(b)
     b.add_argument("--stack-limit", type=int, default=None, metavar="BYTES",
                    help="fail the library build on a function frame above BYTES "
@@ -715,7 +716,7 @@ def build_parser():
              "eomgen verify examples/seed_pendulum.py --samples 50 --sources out/pend", common)
     v.add_argument("file", help="model file (FILE.py or FILE.py:function)")
     v.add_argument("--samples", type=int, default=20, help="random states (default 20)")
-    v.add_argument("--backend", default="c", choices=["c", "eigen", "both"])
+    v.add_argument("--backend", default="c", choices=[*backend_names("loadable"), "both"])
     v.add_argument("--sources", help="check the sources in this generated folder instead")
     v.add_argument("--tol", type=float, help="relative tolerance (default 1e-9; float 2e-4)")
     v.add_argument("--seed", type=int, default=0, help="random seed")

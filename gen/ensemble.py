@@ -609,7 +609,8 @@ def simulator_from_bundle(bundle):
     """The Simulator of a bundle in this process: built into this machine's
     eomgen cache if it is not there (by content), loaded once per process."""
     from .bindings import Simulator
-    from .build import build, load
+    from .build import build
+    from .host import load
     from .render import Rendered
     rendered = Rendered(dict(bundle["files"]), bundle["interface"], bundle["backend"],
                         bundle["real"], bundle["derivatives"])

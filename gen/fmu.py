@@ -42,15 +42,16 @@ import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import jinja2
-
 from ._version import __version__
+from .abi import ADAPTIVE_METHODS
+from .backends import get_backend
+from .build import build
 from .dependencies import dependencies
 from .errors import BuildError, MissingDependencyError, ModelError
-from .abi import ADAPTIVE_METHODS
+from .ir import plan as make_plan
 from .model import require_model
-from .render import mode_for_umask
-from .resources import csrc_dir, templates_dir
+from .render import Rendered, mode_for_umask, render, template_env
+from .resources import csrc_dir
 
 __all__ = ["export_fmu", "describe", "fmi_headers", "platform_folder", "FmuDescription",
            "Variable", "MissingDependencyError", "FMI_VERSIONS", "KINDS", "CS_METHODS"]
@@ -59,19 +60,11 @@ FMI_VERSIONS = ("2.0", "3.0")
 KINDS = ("cs", "me", "both")
 CS_METHODS = ADAPTIVE_METHODS      # gen/abi.py
 
-# the hand-written glue (csrc/fmu): the core and one layer per FMI version
-GLUE_SOURCES = ["gen_fmu.h", "gen_fmu.c"]
-GLUE_LAYER = {"2.0": "gen_fmu_fmi2.c", "3.0": "gen_fmu_fmi3.c"}
-# (file in the FMU, template): the list is data
-TEMPLATES = {
-    "2.0": [("modelDescription.xml", "fmu/fmi2/modelDescription.xml.j2"),
-            ("sources/gen_fmu_model.h", "fmu/gen_fmu_model.h.j2")],
-    "3.0": [("modelDescription.xml", "fmu/fmi3/modelDescription.xml.j2"),
-            ("sources/buildDescription.xml", "fmu/fmi3/buildDescription.xml.j2"),
-            ("sources/gen_fmu_model.h", "fmu/gen_fmu_model.h.j2")],
-}
-# files of the generated project that are not the model library
-NOT_SOURCES = {"main.c", "CMakeLists.txt", "arm-none-eabi.cmake"}
+# the FMU as a backend (gen/backends.py FmuBackend): the model's sources
+# (the C backend's, without the plugin table), the hand-written glue
+# (csrc/fmu, FMU.glue) and the FMU's own templates (FMU.fmu_templates), built
+# through gen.build into the cache like every other library
+FMU = get_backend("fmu")
 # the FMI headers the binary is compiled against (the importer's)
 HEADERS = {"2.0": ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
            "3.0": ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")}
@@ -440,37 +433,36 @@ def describe(model, fmi_version="2.0", kind="both", real="double", start=None, u
 
 
 # ------------------------------------------------------------- rendering
-def _env():
-    """Templates of the FMU: XML ones escape every value (& < > " ')."""
-    return jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(templates_dir())),
-        trim_blocks=True, lstrip_blocks=True, keep_trailing_newline=True,
-        undefined=jinja2.StrictUndefined,
-        autoescape=lambda name: bool(name) and name.endswith(".xml.j2"))
-
-
-def render_fmu_files(model, description, real="double"):
-    """{path in the FMU: text} of the sources and XML files (no binary)."""
-    from .render import render_files
+def render_fmu(model, description, real="double", headers=()):
+    """(files, rendered): {path in the FMU: text} of the sources and XML
+    files (no binary), and the Rendered of its sources/ that gen.build
+    compiles (the FMU backend; headers: the FMI headers' folder)."""
     d = description
-    project = render_files(model, real=real, backend="c")
-    # not the plugin table (<name>_api.c): the FMU's entry points are FMI's
-    files = {f"sources/{name}": text for name, text in sorted(project.items())
-             if name not in NOT_SOURCES and name != f"{model.name}_api.c"}
+    rendered = render(make_plan(model, lin=FMU.lin), real=real, backend=FMU, project=False)
+    files = {f"sources/{name}": text for name, text in sorted(rendered.files.items())}
     glue = csrc_dir() / "fmu"
-    for name in GLUE_SOURCES + [GLUE_LAYER[d.fmi_version]]:
+    for name in FMU.glue[d.fmi_version]:
         files[f"sources/{name}"] = (glue / name).read_text()
     names = sorted(Path(p).name for p in files) + ["gen_fmu_model.h"]
     d.sources = [n for n in sorted(set(names)) if n.endswith(".c")]
-    env = _env()
+    env = template_env()
     P = model.name.upper()
     ctx = {"d": d, "P": P, "version": __version__,
            "method_macro": f"{P}_METHOD_{d.cs_method.upper()}",
            "names": [v.name for v in sorted(d.variables, key=lambda v: v.vr)],
            "dep_text": ", ".join(d.state_names[i] for i in d.dependent) or "none"}
-    for path, template in TEMPLATES[d.fmi_version]:
+    for path, template in FMU.fmu_templates[d.fmi_version]:
         files[path] = env.get_template(template).render(**ctx)
-    return files
+    sources = {p[len("sources/"):]: text for p, text in files.items()
+               if p.startswith("sources/")}
+    rendered = Rendered(sources, rendered.interface, FMU.name, real, True,
+                        includes=tuple(str(h) for h in headers))
+    return files, rendered
+
+
+def render_fmu_files(model, description, real="double"):
+    """{path in the FMU: text} of the sources and XML files (no binary)."""
+    return render_fmu(model, description, real=real)[0]
 
 
 # ---------------------------------------------------------------- binary
@@ -513,44 +505,18 @@ def platform_folder(fmi_version):
     return fmi2
 
 
-# the binary's flags: those of gen.compile, position independent, and only
-# the FMI functions exported (two FMUs in one process cannot clash)
-def _flags():
-    from .build import C_FLAGS, C_LIN_FLAGS
-    return [*C_FLAGS, "-fPIC", "-fvisibility=hidden"], C_LIN_FLAGS
-
-
-def _compile(files, headers, name, out):
-    """Compile the sources/ of files into the shared library out, through
-    gen.build's compile path (the runtime's objects from the build cache)."""
-    from .build import compile_objects, link_library
-    suffix = {"Windows": ".dll", "Darwin": ".dylib"}.get(platform.system(), ".so")
-    if suffix == ".dll":
+def _binary(rendered):
+    """The FMU's shared library: the sources/ of the FMU built by gen.build
+    (the FMU backend's recipe: gen.compile's flags, position independent,
+    only the FMI functions exported, so two FMUs in one process cannot
+    clash), cached by content like every other library. Returns its file."""
+    if platform.system() == "Windows":
         raise BuildError("building the FMU's binary on Windows is not supported: export with "
                          "binary=False (a source FMU) and compile it with the importer")
-    with tempfile.TemporaryDirectory(prefix="eomgen-fmu-") as tmp:
-        tmp = Path(tmp)
-        src = tmp / "sources"
-        src.mkdir()
-        for path, text in files.items():
-            if path.startswith("sources/"):
-                (src / path[len("sources/"):]).write_text(text)
-        own = [p.name for p in src.glob("*.c") if not p.name.startswith("gen_rt_")]
-        # the largest files first: the derivative kernels, the model
-        own.sort(key=lambda f: (-(src / f).stat().st_size, f))
-        objdir = tmp / "obj"
-        objdir.mkdir()
-        base, lin = _flags()
-        flags = [(f, [*base, *(lin if f == f"{name}_lin.c" else []), "-isystem", str(headers)])
-                 for f in own]
-        try:
-            objects = compile_objects(src, objdir, flags, name)
-        except BuildError as e:
-            raise BuildError(f"compiling the FMU's binary failed: {e}") from None
-        lib = link_library(sorted(objects[:len(own)]) + objects[len(own):],
-                           tmp / f"{name}{suffix}")
-        Path(out).write_bytes(lib.read_bytes())
-    return f"{name}{suffix}"
+    try:
+        return build(rendered).path
+    except BuildError as e:
+        raise BuildError(f"compiling the FMU's binary failed: {e}") from None
 
 
 def _write_zip(entries, path):
@@ -658,14 +624,13 @@ def export_fmu(model, path, fmi_version="2.0", kind="both", real="double", start
     d = describe(model, fmi_version=fmi_version, kind=kind, real=real, start=start,
                  units=units, cs_method=cs_method)
     headers = fmi_headers(fmi_version)
-    files = render_fmu_files(model, d, real=real)
+    files, rendered = render_fmu(model, d, real=real, headers=[headers])
     entries = {k: v.encode("utf-8") for k, v in files.items()}
     if not binary:
         return _write_zip(entries, path)
     folder = platform_folder(fmi_version)
-    with tempfile.TemporaryDirectory(prefix="eomgen-fmu-bin-") as tmp:
-        lib = _compile(files, headers, model.name, Path(tmp) / "lib")
-        entries[f"binaries/{folder}/{lib}"] = (Path(tmp) / "lib").read_bytes()
+    lib = _binary(rendered)
+    entries[f"binaries/{folder}/{lib.name}"] = lib.read_bytes()
     # checked under a temporary name: a refused FMU leaves an older file as it was
     path = Path(path)
     trial = path.parent / f".{path.stem}.{os.getpid()}.trial.fmu"

@@ -30,9 +30,10 @@ from pathlib import Path
 
 from ._version import __version__
 from .abi import ABI_TAG, host_interface
+from .cache import cache_dir, cache_error, find_entry_file, new_build_dir, publish
 from .errors import BuildError
 
-__all__ = ["host_module", "host_sources", "open_model", "HOST_FLAGS"]
+__all__ = ["host_module", "host_sources", "open_model", "load", "HOST_FLAGS"]
 
 # the host is glue: every call forwards to the model's table
 HOST_FLAGS = ["-O2"]
@@ -104,20 +105,14 @@ def host_module(real="double"):
 
 
 def _build_and_load(real):
-    from .build import _cache_error, _find_module, _make_temp, cache_dir, clean_stale
     cdef, source = host_sources(real)
     key = _key(real, cdef, source)
     modname = f"_eomgen_host_{real}_{key}"
     root = cache_dir()
     final = root / f"host_{real}_{key}"
-    so = _find_module(final, modname)
+    so = find_entry_file(final, modname)
     if so is None:
-        try:
-            root.mkdir(parents=True, exist_ok=True)
-            clean_stale(root)
-            tmp = _make_temp(root, f"host_{real}_{key}")
-        except OSError as e:
-            raise _cache_error(e, root, "create a build directory") from None
+        tmp = new_build_dir(root, f"host_{real}_{key}")
         try:
             import cffi
             ffi = cffi.FFI()
@@ -138,13 +133,14 @@ def _build_and_load(real):
             try:
                 dest.mkdir()
                 shutil.copy2(built, dest / Path(built).name)
-                os.rename(dest, final)
             except OSError as e:
-                if _find_module(final, modname) is None:
-                    raise _cache_error(e, root, "store the host module") from None
+                if find_entry_file(final, modname) is None:
+                    raise cache_error(e, root, "store the host module") from None
+            publish(dest, final, lambda: find_entry_file(final, modname) is not None,
+                    what="store the host module")
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
-        so = _find_module(final, modname)
+        so = find_entry_file(final, modname)
         if so is None:
             raise BuildError(f"eomgen's host module is missing from {final}")
     if modname in sys.modules:
@@ -186,3 +182,10 @@ def open_model(path, name, host, real_size=None):
         raise BuildError(f"the model library {path} is built for {api.real_size}-byte reals, "
                          f"the host for {want}-byte reals")
     return api
+
+
+def load(built):
+    """(host module, table): a built model library's plugin table
+    (gen.build.Built) as a pointer of the host module for its scalar type."""
+    host = host_module(built.interface.real)
+    return host, open_model(built.path, built.interface.name, host)

@@ -23,63 +23,18 @@ import jinja2
 
 from ._version import __version__
 from .abi import interface
+from .backends import C_TEMPLATES, RUNTIME_SOURCES, get_backend
+from .cache import cache_dir
 from .errors import ModelError
 from .ir import DERIVATIVE_KERNELS, plan as make_plan
 from .model import require_model
-from .printers import ModelCPrinter, ModelCxxPrinter, kernel_statements, print_kernel_body
+from .printers import kernel_statements, print_kernel_body
 from .resources import csrc_dir, templates_dir
-from .solvers import demand_order, ldlt_lines, ldlt_work_index, ldlt_program
+from .solvers import demand_order, ldlt_statements, ldlt_work_index, ldlt_program
 
 __all__ = ["Rendered", "render", "render_files", "generate", "write_atomic", "template_env",
-           "model_sources", "RUNTIME_SOURCES", "RUNTIME_HEADERS", "BACKENDS"]
+           "model_sources"]
 
-# the C runtime every C-backend model links (csrc/)
-RUNTIME_SOURCES = ["gen_rt_status.c", "gen_rt_linalg.c", "gen_rt_dynamics.c",
-                   "gen_rt_project.c", "gen_rt_integrate.c", "gen_rt_linearize.c",
-                   "gen_rt_model.c", "gen_rt_simulate.c", "gen_rt_expm.c", "gen_rt_sens.c"]
-RUNTIME_HEADERS = ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h", "gen_rt_rodas4.h", "gen_rt_expm.h",
-                   "gen_rt_sens.h", "gen_rt_ldlt.h"]
-# the C++ runtime of the Eigen backend and the tables it shares with the C one
-EIGEN_RUNTIME_HEADERS = ["eigen/gen_rt_eigen.hpp", "eigen/gen_rt_expm.hpp", "gen_rt_status.h", "gen_rt_rodas4.h",
-                         "gen_rt_dopri5.h"]
-
-# (file name, template, role) for the C backend: the list is data. role:
-# "model" (compiled into the model library by gen.build), "lin" (the
-# derivative kernels, compiled apart; a plan without them gets "stub"
-# instead, which gen.build links until they are built), "project" (the CMake
-# project and the standalone simulator: gen.generate only)
-C_TEMPLATES = [
-    ("{name}.h", "c/model.h.j2", "model"),
-    ("{name}.c", "c/model.c.j2", "model"),
-    ("{name}_kernels.c", "c/model_kern.c.j2", "model"),    # the kernels, compiled apart
-    ("{name}_lin.c", "c/model_lin.c.j2", "lin"),          # the derivative kernels
-    ("{name}_lin_stub.c", "c/model_lin_stub.c.j2", "stub"),  # ... until they are built
-    ("{name}_kernels.h", "c/model_kernels.h.j2", "model"),   # the functions of _lin.c
-    ("{name}_api.c", "c/model_api.c.j2", "model"),        # the plugin table (gen/host.py)
-    ("gen_rt_config.h", "c/gen_rt_config.h.j2", "model"),  # the runtime's scalar type
-    ("gen_rt_abi.h", "c/gen_rt_abi.h.j2", "model"),  # the runtime's structs and codes (gen/abi.py)
-    ("main.c", "c/main.c.j2", "project"),
-    ("CMakeLists.txt", "c/CMakeLists.txt.j2", "project"),
-    ("arm-none-eabi.cmake", "c/arm-none-eabi.cmake.j2", "project"),  # Cortex-M4F toolchain
-]
-
-# The C++17/Eigen backend: the typed API (header-only templates over the
-# scalar type, on the C++ runtime), an extern "C" layer with the C backend's
-# API (the same header, from the same interface description), and the same
-# standalone simulator main.c linked against that layer.
-EIGEN_TEMPLATES = [
-    ("{name}.h", "c/model.h.j2", "model"),
-    ("{name}.hpp", "eigen/model.hpp.j2", "model"),
-    ("{name}.cpp", "eigen/model.cpp.j2", "model"),
-    ("{name}_api.c", "c/model_api.c.j2", "model"),
-    ("gen_rt_abi.h", "c/gen_rt_abi.h.j2", "model"),  # the C runtime's structs (gen/abi.py)
-    ("main.c", "c/main.c.j2", "project"),
-    ("CMakeLists.txt", "eigen/CMakeLists.txt.j2", "project"),
-]
-# the C++ sources of the extern "C" library (compiled by gen.build)
-EIGEN_SOURCES = ["{name}.cpp"]
-
-BACKENDS = {"c": C_TEMPLATES, "eigen": EIGEN_TEMPLATES}
 # the kernels of <name>_lin.c (C backend)
 LIN_KERNELS = DERIVATIVE_KERNELS
 
@@ -90,19 +45,6 @@ def model_sources(name):
     table <name>_api.c is extra)."""
     return [f.format(name=name) for f, _, role in C_TEMPLATES
             if role in ("model", "lin") and f.endswith(".c") and f != "{name}_api.c"]
-
-# the model prefix is also the C++ namespace of the Eigen backend
-CXX_RESERVED = frozenset("""
-alignas alignof and and_eq asm auto bitand bitor bool break case catch char char8_t
-char16_t char32_t class compl concept const consteval constexpr constinit const_cast
-continue co_await co_return co_yield decltype default delete do double dynamic_cast
-else enum explicit export extern false float for friend goto if inline int long
-mutable namespace new noexcept not not_eq nullptr operator or or_eq private
-protected public register reinterpret_cast requires return short signed sizeof
-static static_assert static_cast struct switch template this thread_local throw
-true try typedef typeid typename union unsigned using virtual void volatile
-wchar_t while xor xor_eq std Eigen eomgen detail gen_rt
-""".split())
 
 _KERNEL_DOCS = {
     "mass_matrix": "M(q)",
@@ -127,13 +69,16 @@ class Rendered:
     """The output of rendering: the files (the whole project, or with
     project=False only what gen.build compiles) and the interface
     description. derivatives: whether the derivative kernels are among the
-    files (else the build links <name>_lin_stub.c in their place)."""
+    files (else the build links <name>_lin_stub.c in their place). backend:
+    the backend's name (gen/backends.py); includes: folders of headers the
+    build compiles against that are not among the files (the FMI headers)."""
     files: dict
     interface: object
     backend: str
     real: str
     derivatives: bool = True
     timings: dict = field(default_factory=dict)
+    includes: tuple = ()
 
 
 class _BytecodeCache(jinja2.FileSystemBytecodeCache):
@@ -158,8 +103,8 @@ class _BytecodeCache(jinja2.FileSystemBytecodeCache):
 def _bytecode_cache():
     import hashlib
     import sys
-    from .build import cache_dir
-    key = hashlib.sha256(f"{__version__}\0{jinja2.__version__}\0{sys.version}".encode())
+    key = hashlib.sha256(f"{__version__}\0{jinja2.__version__}\0{sys.version}\0xml-escaped"
+                         .encode())
     return _BytecodeCache(str(cache_dir() / f"templates_{key.hexdigest()[:16]}"))
 
 
@@ -168,13 +113,18 @@ def _env(root):
     return jinja2.Environment(
         loader=jinja2.FileSystemLoader(root),
         trim_blocks=True, lstrip_blocks=True, keep_trailing_newline=True,
-        undefined=jinja2.StrictUndefined, autoescape=False,
+        undefined=jinja2.StrictUndefined, autoescape=_xml,
         bytecode_cache=_bytecode_cache())
+
+
+def _xml(name):
+    """XML templates (the FMU's) escape every value (& < > " '); C does not."""
+    return bool(name) and name.endswith(".xml.j2")
 
 
 def template_env():
     """The Jinja2 environment of templates/ (SymForce's settings: strict
-    undefined, no autoescape, trailing newlines kept)."""
+    undefined, trailing newlines kept; no autoescape but in *.xml.j2)."""
     return _env(str(templates_dir()))
 
 
@@ -186,14 +136,16 @@ def template_env():
 CLONE_MIN_STATEMENTS = 300
 
 
-def _kernel_context(kernels, printer, fused=None, real_type="double"):
+def _kernel_context(kernels, printer, fused=None):
     """Kernels as data: names, arguments, outputs and the printed body
     (print_kernel_body). fused: the plan of the unrolled LDL^T
     (solvers.ldlt_program) when rhs_terms is the fused right-hand side: its
     body is then the solve's statements with the kernel's temporaries and
     its M and f (as locals m_<k>, f_<k>) each where the solve first reads
-    them (solvers.demand_order), and "bound" lists M and f for the
-    template's stores; the solve's locals are of real_type."""
+    them (solvers.demand_order; the solve's statements as (name, expression),
+    declared by the template), "fill" the work array's entries (the looped
+    solve), "stores" its other outputs' stores, and "bound" lists M and f
+    for the template's stores."""
     out = []
     for k in kernels.values():
         ctx = {
@@ -206,25 +158,29 @@ def _kernel_context(kernels, printer, fused=None, real_type="double"):
         if fused is not None and k.name == "rhs_terms":
             bind = {"M": "m_", "f": "f_"}
             temps, stores = kernel_statements(k, printer, bind=bind, reads=not fused["loop"])
+            ctx["fill"] = []
             if fused["loop"]:
                 # a large dense M: its lower triangle and f into the work
                 # array of the runtime's LDL^T in loops (gen_rt_ldlt.h)
                 n = fused["n"]
-                fill = [f"work_[{ldlt_work_index(n, i, j)}] = m_{i * n + j};"
-                        for j in range(n) for i in range(j, n)]
-                fill += [f"work_[{ldlt_work_index(n, i)}] = f_{i};" for i in range(n)]
-                ctx["body"] = ["    " + line for line in [t for _, t, _ in temps] + fill + stores]
+                ctx["fill"] = ([(ldlt_work_index(n, i, j), f"m_{i * n + j}")
+                                for j in range(n) for i in range(j, n)]
+                               + [(ldlt_work_index(n, i), f"f_{i}") for i in range(n)])
+                body = [t for _, t, _ in temps]
             else:
-                solve = ldlt_lines(fused, real_type, M=lambda i: f"m_{i}",
-                                   f=lambda i: f"f_{i}")
-                ctx["body"] = ["    " + line for line in demand_order(solve, temps) + stores]
+                body = demand_order(ldlt_statements(fused, M=lambda i: f"m_{i}",
+                                                    f=lambda i: f"f_{i}"), temps)
+            ctx["body"] = [("    " + line) if isinstance(line, str) else line for line in body]
+            ctx["stores"] = ["    " + line for line in stores]
             ctx["bound"] = [{"name": o.name, "local": bind[o.name], "size": len(o.exprs)}
                             for o in k.outputs if o.name in bind]
+            n_lines = len(ctx["body"]) + len(ctx["fill"]) + len(ctx["stores"])
         else:
             ctx["body"] = print_kernel_body(k, printer)
+            n_lines = len(ctx["body"])
         # the right-hand side of a large model: built for the baseline and
         # for AVX, picked at load time (GEN_RT_CLONES in gen_rt.h)
-        ctx["clones"] = k.name == "rhs_terms" and len(ctx["body"]) >= CLONE_MIN_STATEMENTS
+        ctx["clones"] = k.name == "rhs_terms" and n_lines >= CLONE_MIN_STATEMENTS
         out.append(ctx)
     return out
 
@@ -280,22 +236,20 @@ def _comment_label(names, labels, i):
 def build_context(plan, iface, timings=None, backend="c"):
     """The Jinja2 context of a plan: plain data and the interface."""
     t1 = time.perf_counter()
+    b = get_backend(backend)
     m = plan.model
     kernels = plan.kernels
     real = iface.real
-    if backend == "eigen":
-        printer = ModelCxxPrinter(_symbol_map(m, kernels), "Scalar")
-    else:
-        printer = ModelCPrinter(_symbol_map(m, kernels), real)
+    printer = b.printer(_symbol_map(m, kernels), real)
     p = m.name
-    # the fused right-hand side (C backend, unconstrained, explicit
-    # kinematics, the unrolled LDL^T): rhs_terms also solves for u', its M
-    # and f bound to locals the solve reads (gen_rt_model.rhs_solve)
-    fused = (backend == "c" and plan.accel == "ldlt" and m.qdot is not None
+    # the fused right-hand side (a backend whose templates have it,
+    # unconstrained, explicit kinematics, the unrolled LDL^T): rhs_terms also
+    # solves for u', its M and f bound to locals the solve reads
+    # (gen_rt_model.rhs_solve)
+    fused = (b.fused_rhs and plan.accel == "ldlt" and m.qdot is not None
              and "rhs_terms" in kernels)
     mass_plan = ldlt_program(m.nu, plan.mass_nonzero) if plan.accel == "ldlt" else None
-    kctx = _kernel_context(kernels, printer, fused=mass_plan if fused else None,
-                           real_type=f"{p}_real")
+    kctx = _kernel_context(kernels, printer, fused=mass_plan if fused else None)
     t2 = time.perf_counter()
     mx = lambda n: max(1, n)  # noqa: E731  C99 has no zero-length arrays
     nq, nu, nr, mc, mv = m.nq, m.nu, m.nr, m.mc, m.mv
@@ -349,8 +303,8 @@ def build_context(plan, iface, timings=None, backend="c"):
         # the arguments of the runtime's work-size macros
         "accel_c": iface.accel_macro,
         "mass_solve": mass_plan,
-        "mass_solve_lines": (ldlt_lines(mass_plan, f"{p}_real")
-                             if mass_plan and not mass_plan["loop"] else None),
+        "mass_solve_statements": (ldlt_statements(mass_plan)
+                                  if mass_plan and not mass_plan["loop"] else None),
         "fused_rhs": fused,
         # q' is u itself (the usual q' = u): the fused right-hand side's q'
         # is finite when the checked state is, so only its u' is checked
@@ -370,8 +324,7 @@ def build_context(plan, iface, timings=None, backend="c"):
         "runtime_sources": RUNTIME_SOURCES,
     }
     ctx.update(abi_context())
-    if backend == "eigen":
-        ctx.update(_eigen_context(m, kernels))
+    ctx.update(b.context(m, kernels))
     if timings is not None:
         timings["printing"] = t2 - t1
     return ctx
@@ -397,23 +350,6 @@ def runtime_abi_header():
     return template_env().get_template("c/gen_rt_abi.h.j2").render(**abi_context())
 
 
-def _eigen_context(model, kernels):
-    """What the C++ templates need beyond the C context."""
-    m = model
-    if m.name in CXX_RESERVED:
-        raise ModelError(f"model name {m.name!r} is a C++ keyword or reserved namespace; the "
-                         f"Eigen backend uses the name as a namespace: choose another "
-                         f"(for example 'my_{m.name}')")
-    return {
-        "nqi": m.nq - m.mc, "nui": m.nu - m.mv,
-        # how gen_rt::Runtime solves the accelerations (the traits' ACCEL)
-        "accel": ("spd" if not m.mv else "partitioned" if m.method == "kane" else "kkt"),
-        # the lin_terms kernel's outputs in its parameter order (gen_rt::LinOut fields)
-        "lin_outputs": [o.name for o in kernels["lin_terms"].outputs],
-        "cxx_sources": [f.format(name=m.name) for f in EIGEN_SOURCES],
-    }
-
-
 def render(plan, real="double", backend="c", timings=None, project=True, only=None):
     """Render a Plan (gen.ir.plan) to a Rendered: the project's files and
     the interface description. project=False: only what gen.build compiles
@@ -423,11 +359,10 @@ def render(plan, real="double", backend="c", timings=None, project=True, only=No
     Nothing is written and nothing is stored on the model."""
     if real not in ("double", "float"):
         raise ModelError(f"real must be 'double' or 'float', got {real!r}")
-    if backend not in BACKENDS:
-        raise ModelError(f"unknown backend {backend!r}: choose one of {sorted(BACKENDS)}")
+    b = get_backend(backend)
     timings = {} if timings is None else timings
     iface = interface(plan.model, real=real, accel=plan.accel)
-    ctx = build_context(plan, iface, timings=timings, backend=backend)
+    ctx = build_context(plan, iface, timings=timings, backend=b)
     env = template_env()
     t0 = time.perf_counter()
     name = plan.model.name
@@ -436,28 +371,21 @@ def render(plan, real="double", backend="c", timings=None, project=True, only=No
                          "with derivatives=True")
     roles = {"model", "lin" if plan.derivatives else "stub"} | ({"project"} if project else set())
     files = {fname.format(name=name): env.get_template(tname).render(**ctx)
-             for fname, tname, role in BACKENDS[backend] if role in (only or roles)}
-    runtime = (RUNTIME_SOURCES + RUNTIME_HEADERS) if backend == "c" else EIGEN_RUNTIME_HEADERS
-    for src in runtime if only is None else ():
+             for fname, tname, role in b.templates if role in (only or roles)}
+    for src in b.runtime_files if only is None else ():
         files[Path(src).name] = (csrc_dir() / src).read_text()
     timings["templates"] = time.perf_counter() - t0
-    return Rendered(files, iface, backend, real, plan.derivatives, timings)
+    return Rendered(files, iface, b.name, real, plan.derivatives, timings)
 
 
 def render_files(model, real="double", backend="c", timings=None):
     """{file name: text} of a model (nothing written)."""
+    b = get_backend(backend)
     timings = {} if timings is None else timings
     t0 = time.perf_counter()
-    plan = make_plan(model, lin=plan_lin(backend))
+    plan = make_plan(model, lin=b.lin)
     timings["kernels"] = time.perf_counter() - t0
-    return render(plan, real=real, backend=backend, timings=timings).files
-
-
-def plan_lin(backend):
-    """How a backend's plan generates the Jacobian blocks: the C backend
-    chooses by size (gen/ir.py JVP_MIN_VARIABLES); the Eigen backend's
-    templates print the unrolled kernel."""
-    return "auto" if backend == "c" else "unrolled"
+    return render(plan, real=real, backend=b, timings=timings).files
 
 
 def current_umask():
@@ -544,5 +472,6 @@ def generate(model, out_dir, backend="c", real="double", timings=None):
         The paths written.
     """
     require_model(model, "gen.generate")
-    files = render_files(model, real=real, backend=backend, timings=timings)
+    files = render_files(model, real=real, backend=get_backend(backend, need="project"),
+                         timings=timings)
     return write_atomic(files, out_dir)

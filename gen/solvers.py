@@ -6,8 +6,9 @@ unconstrained model) for one right-hand side. The structural zeros of the
 matrix (known at generation time) are skipped, and so is the fill-in they
 spare, so a banded or block-diagonal mass matrix costs what its pattern
 costs. ``ldlt_statements`` spells the plan out as straight-line
-assignments, and the template ``templates/c/mass_solve.j2`` writes them
-with the pivot test: sizes are literals, no loops, no work arrays.
+assignments (name, expression), and the template
+``templates/c/mass_solve.j2`` declares them and writes the pivot test:
+sizes are literals, no loops, no work arrays.
 
 The statements are written for a short dependency chain, which is what
 bounds the solve at small n (the divisions of the pivots follow each
@@ -23,8 +24,8 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["ldlt_pattern", "ldlt_program", "ldlt_statements", "ldlt_lines", "ldlt_solve_c",
-           "demand_order", "LDLT_LOOP_MIN", "ldlt_work_index"]
+__all__ = ["ldlt_pattern", "ldlt_program", "ldlt_statements", "demand_order", "LDLT_LOOP_MIN",
+           "ldlt_work_index"]
 
 # a dense mass matrix of at least this many speeds is solved by the
 # runtime's LDL^T in loops (csrc/gen_rt_ldlt.h: the same operations in the
@@ -102,12 +103,13 @@ def ldlt_program(n, nonzero):
     }
 
 
-def ldlt_statements(s, M, f):
+def ldlt_statements(s, M=lambda i: f"M[{i}]", f=lambda i: f"f[{i}]"):
     """The solve of plan s (ldlt_program) as straight-line assignments
     [(name, expression)], in the plan's order: per column the pivot d<j>,
     its reciprocal id<j> and the entries c<i>_<j>, l<i>_<j>; then y<i>
     (L y = f) and z<i> (the solution). M(i) and f(i) give the text that
-    reads M's row-major entry i and f's entry i."""
+    reads M's row-major entry i and f's entry i. The templates declare them
+    (templates/c/mass_solve.j2: ldlt_decl)."""
     out = []
     for c in s["cols"]:
         j = c["j"]
@@ -137,15 +139,17 @@ _NAME = re.compile(r"[A-Za-z_]\w*")
 
 
 def demand_order(spine, temps):
-    """Straight-line statements in one order: the lines of spine, in their
-    order, each preceded by the temporaries it reads that are not yet
+    """Straight-line statements in one order: the items of spine, in their
+    order (lines, or (name, expression) statements such as ldlt_statements
+    gives), each preceded by the temporaries it reads that are not yet
     written (and theirs); then the temporaries nothing in the spine read,
     in their own order. temps: [(name, line, reads)] in a valid order
     (reads: the names the temporary's expression reads). So the fused
     right-hand side computes M's entries, and the trigonometric calls
     behind them, where the solve first needs them, in its columns' order,
     and the processor overlaps the solve's chain of divisions with them.
-    Returns the lines. Iterative (kernels have chains of thousands)."""
+    Returns the temporaries' lines and the spine's items. Iterative
+    (kernels have chains of thousands)."""
     info = {n: (i, t, rd) for i, (n, t, rd) in enumerate(temps)}
     done, out = set(), []
 
@@ -165,29 +169,8 @@ def demand_order(spine, temps):
                 (d for d in info[n][2] if d in info and d not in done),
                 key=lambda d: -info[d][0]))
 
-    for line in spine:
-        need(_NAME.findall(line))
-        out.append(line)
+    for item in spine:
+        need(_NAME.findall(item if isinstance(item, str) else " ".join(item)))
+        out.append(item)
     need([n for n, _, _ in temps])
     return out
-
-
-def ldlt_solve_c(prefix, n, nonzero, real, rtol_macro="GEN_RT_PIVOT_RTOL"):
-    """C99 source of
-
-        static int <prefix>_mass_solve(const real *M, const real *f, real *x)
-
-    solving M x = f for a symmetric positive definite M (row-major; only the
-    lower triangle and the diagonal are read). Returns GEN_RT_ERR_SINGULAR
-    when a pivot is not positive relative to the largest diagonal entry
-    (also for NaN); x is written only on success. Rendered from the
-    template the generated models use."""
-    from .render import template_env
-    macro = template_env().get_template("c/mass_solve.j2").module.mass_solve
-    plan = ldlt_program(n, nonzero)
-    return str(macro(prefix, real, plan, ldlt_lines(plan, real), rtol_macro))
-
-
-def ldlt_lines(s, real, M=lambda i: f"M[{i}]", f=lambda i: f"f[{i}]"):
-    """ldlt_statements as C declarations of type real."""
-    return [f"const {real} {name} = {expr};" for name, expr in ldlt_statements(s, M, f)]

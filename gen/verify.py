@@ -199,7 +199,7 @@ def verify(model, samples=20, backend="c", real="double", sources=None, seed=0, 
         ``report.ok``, ``report.table()``.
     """
     require_model(model, "gen.verify")
-    from .build import compile as compile_model
+    from .pipeline import compile as compile_model
     from .symbolic import linearize_symbolic
 
     t_start = time.perf_counter()

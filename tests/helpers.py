@@ -41,3 +41,21 @@ def pendulum_state(theta, thetadot, L, order):
     if order == "kane":
         return np.array([y, x, vy, vx])
     return np.array([x, y, vx, vy])
+
+
+def ldlt_solve_c(prefix, n, nonzero, real, rtol_macro="GEN_RT_PIVOT_RTOL"):
+    """C99 source of
+
+        static int <prefix>_mass_solve(const real *M, const real *f, real *x)
+
+    solving M x = f for a symmetric positive definite M (row-major; only the
+    lower triangle and the diagonal are read). Returns GEN_RT_ERR_SINGULAR
+    when a pivot is not positive relative to the largest diagonal entry
+    (also for NaN); x is written only on success. Rendered from the
+    template the generated models use (templates/c/mass_solve.j2), for the
+    tests of the solve on its own."""
+    from gen.render import template_env
+    from gen.solvers import ldlt_program, ldlt_statements
+    macro = template_env().get_template("c/mass_solve.j2").module.mass_solve
+    plan = ldlt_program(n, nonzero)
+    return str(macro(prefix, real, plan, ldlt_statements(plan), rtol_macro))

@@ -261,4 +261,4 @@ def test_compile_failure_raises_build_error_with_the_log(kane_model):
         build(rendered)
     assert "compiling the model 'pendulum_kane' failed" in str(e.value)
     assert "error" in e.value.log and name in e.value.log
-    assert f"$ {gen.build._compiler()} " in e.value.log       # the compiler's command line
+    assert f"$ {gen.backends.c_compiler()} " in e.value.log       # the compiler's command line

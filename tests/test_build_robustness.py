@@ -28,7 +28,7 @@ import numpy as np
 import pytest
 
 import gen
-import gen.build
+import gen.cache
 import gen.footprint
 import gen.render
 from conftest import require_tool
@@ -203,7 +203,7 @@ def test_stale_temp_dirs_are_cleaned_by_the_next_build(tmp_path, monkeypatch, ka
     dead = _fake_temp(cache, _dead_pid())
     dead_no_owner = _fake_temp(cache, _dead_pid(), owner=False,
                                name="_eomgen_other_fedcba9876543210")
-    legacy_old = _fake_temp(cache, None, age=2 * gen.build.STALE_SECONDS,
+    legacy_old = _fake_temp(cache, None, age=2 * gen.cache.STALE_SECONDS,
                             name="_eomgen_legacy_00112233445566ff")
     legacy_new = _fake_temp(cache, None, name="_eomgen_recent_00112233445566ff")
     live = _fake_temp(cache, os.getpid(), name="_eomgen_live_0123456789abcdef")
@@ -238,7 +238,7 @@ def test_unwritable_cache_is_one_clear_error(tmp_path, monkeypatch, kane_model):
 
     def read_only(*a, **k):
         raise OSError(errno.EROFS, os.strerror(errno.EROFS), str(ro))
-    monkeypatch.setattr(gen.build.tempfile, "mkdtemp", read_only)
+    monkeypatch.setattr(gen.cache.tempfile, "mkdtemp", read_only)
     with pytest.raises(gen.BuildError, match="EOMGEN_CACHE") as ei:
         gen.compile(kane_model)
     assert str(ro) in str(ei.value) and os.strerror(errno.EROFS) in str(ei.value)
@@ -269,7 +269,7 @@ def test_cache_subcommand(tmp_path):
     live = _fake_temp(cache, os.getpid(), name="_eomgen_live_0123456789abcdef")
     keep = cache / "notes.txt"
     keep.write_text("not eomgen's")
-    info = gen.build.cache_info()   # the test session's cache: just the shape
+    info = gen.cache.cache_info()   # the test session's cache: just the shape
     assert {"path", "entries", "bytes"} <= set(info)
     p = eomgen("cache", "info", cache=cache)
     assert p.returncode == 0, p.stderr
@@ -318,14 +318,14 @@ def test_runtime_object_cache_key_covers_every_runtime_file(tmp_path, monkeypatc
     cache folder, never stale objects."""
     import shutil
     from gen import build as b
-    from gen.render import RUNTIME_HEADERS, RUNTIME_SOURCES
+    from gen.backends import RUNTIME_HEADERS, RUNTIME_SOURCES, c_compiler
     from gen.resources import csrc_dir
     monkeypatch.setenv("EOMGEN_CACHE", str(tmp_path / "cache"))
     src = tmp_path / "src"
     src.mkdir()
-    for f in RUNTIME_SOURCES + RUNTIME_HEADERS + ["gen_rt_config.h"]:
+    for f in RUNTIME_SOURCES + RUNTIME_HEADERS + ["gen_rt_config.h", "gen_rt_abi.h"]:
         shutil.copy(csrc_dir() / f, src / f)
-    cc = b._compiler()
+    cc = c_compiler()
     _, base = b._runtime_objects(src, cc)
     for f in RUNTIME_SOURCES + RUNTIME_HEADERS:
         text = (src / f).read_text()

@@ -12,6 +12,7 @@ from sympy.physics import mechanics as me
 
 import gen
 import gen.build
+import gen.pipeline
 import gen.ir
 import gen.render
 from gen.errors import UnusedConstantWarning
@@ -128,8 +129,8 @@ def test_nan_constant_never_reaches_the_compiler(monkeypatch, tmp_path, capsys):
     def forbidden(*a, **k):
         raise AssertionError("the generator or compiler was reached")
     monkeypatch.setattr(gen.build.subprocess, "run", forbidden)
-    monkeypatch.setattr(gen.build, "build", forbidden)
-    monkeypatch.setattr(gen.build, "make_plan", forbidden)
+    monkeypatch.setattr(gen.pipeline, "build", forbidden)
+    monkeypatch.setattr(gen.pipeline, "make_plan", forbidden)
     monkeypatch.setattr(gen.render, "make_plan", forbidden)
     monkeypatch.setattr(gen.ir, "plan", forbidden)
     km, s = _oscillator()

@@ -33,7 +33,8 @@ import gen
 import n_link_cart as nl
 import rolling_disc as rd
 import seed_pendulum as sp
-from gen.render import model_sources, RUNTIME_SOURCES
+from gen.backends import RUNTIME_SOURCES
+from gen.render import model_sources
 from conftest import require_eigen
 from helpers import pendulum_state, rel_err
 

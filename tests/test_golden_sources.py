@@ -20,6 +20,7 @@ from pathlib import Path
 
 import pytest
 
+import gen.backends
 import gen.host
 import gen.ir
 import gen.render
@@ -33,8 +34,8 @@ HOW_TO_UPDATE = ("if the change is intended: EOMGEN_UPDATE_GOLDEN=1 python -m py
 
 # the runtime's files are copied into the project verbatim (csrc/ has its own
 # tests): the golden files are what the templates produce
-RUNTIME_COPIES = {Path(f).name for f in (gen.render.RUNTIME_SOURCES + gen.render.RUNTIME_HEADERS
-                                         + gen.render.EIGEN_RUNTIME_HEADERS)}
+RUNTIME_COPIES = {Path(f).name for f in (gen.backends.RUNTIME_SOURCES + gen.backends.RUNTIME_HEADERS
+                                         + gen.backends.EIGEN_RUNTIME_HEADERS)}
 
 
 def render(model, backend, real="double"):

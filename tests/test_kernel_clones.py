@@ -15,7 +15,7 @@ import gen
 import gen.render
 import n_link_cart
 import seed_pendulum
-from gen.build import C_FLAGS, STRICT_FLAGS, _compiler
+from gen.backends import C_FLAGS, STRICT_FLAGS, c_compiler
 
 DRIVER = r"""
 #include <stdio.h>
@@ -55,7 +55,7 @@ def _build(src, prefix, nx, states, name, flags):
     srcs = [str(drv)] + [str(src / f) for f in model_sources(prefix)] + sorted(
         str(f) for f in src.glob("gen_rt_*.c"))
     exe = src / f"drv_{name}"
-    cmd = [_compiler(), *C_FLAGS, *STRICT_FLAGS, *flags, "-I", str(src), *srcs, "-o", str(exe),
+    cmd = [c_compiler(), *C_FLAGS, *STRICT_FLAGS, *flags, "-I", str(src), *srcs, "-o", str(exe),
            "-lm"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     assert proc.returncode == 0 and not proc.stderr.strip(), " ".join(cmd) + "\n" + proc.stderr

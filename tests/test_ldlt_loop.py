@@ -12,8 +12,9 @@ import pytest
 import gen
 import gen.solvers
 import n_link_cart
-from gen.build import C_FLAGS, STRICT_FLAGS, _compiler
-from gen.solvers import ldlt_program, ldlt_solve_c
+from gen.backends import C_FLAGS, STRICT_FLAGS, c_compiler
+from gen.solvers import ldlt_program
+from helpers import ldlt_solve_c
 
 CSRC = Path(__file__).resolve().parents[1] / "csrc"
 
@@ -48,7 +49,7 @@ int main(void) {{
 }}
 """)
     (tmp_path / "t.c").write_text(src)
-    cmd = [_compiler(), *C_FLAGS, *STRICT_FLAGS, *flags, "-I", str(CSRC), str(tmp_path / "t.c"),
+    cmd = [c_compiler(), *C_FLAGS, *STRICT_FLAGS, *flags, "-I", str(CSRC), str(tmp_path / "t.c"),
            "-o", str(tmp_path / "t"), "-lm"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     assert proc.returncode == 0 and not proc.stderr.strip(), proc.stderr
@@ -171,7 +172,7 @@ def test_work_index_is_the_headers(tmp_path):
         f'    printf("W %d %d\\n", {n}, GEN_RT_LDLT_WORK({n}));\n' for n in ns)
     (tmp_path / "w.c").write_text('#include <stdio.h>\n#include "gen_rt_ldlt.h"\n'
                                   "int main(void) {\n    int i, j;\n" + body + "    return 0;\n}\n")
-    subprocess.run([_compiler(), *STRICT_FLAGS, "-I", str(CSRC), str(tmp_path / "w.c"), "-o",
+    subprocess.run([c_compiler(), *STRICT_FLAGS, "-I", str(CSRC), str(tmp_path / "w.c"), "-o",
                     str(tmp_path / "w")], check=True)
     out = subprocess.run([str(tmp_path / "w")], capture_output=True, text=True).stdout
     seen = {n: set() for n in ns}

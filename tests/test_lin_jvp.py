@@ -14,7 +14,8 @@ import gen.ir as ir
 import rolling_disc
 import seed_pendulum
 from gen.bindings import Simulator
-from gen.build import build, load
+from gen.build import build
+from gen.host import load
 from gen.render import render
 
 MODELS = {

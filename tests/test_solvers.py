@@ -10,8 +10,8 @@ import sympy as sm
 import gen
 import n_link_cart
 from gen.ir import collect_constants, mass_structure
-from gen.solvers import ldlt_pattern, ldlt_solve_c
-from helpers import rel_err
+from gen.solvers import ldlt_pattern
+from helpers import ldlt_solve_c, rel_err
 
 HEAD = ("#include <math.h>\n#include <stdio.h>\n#define GEN_RT_OK 0\n"
         "#define GEN_RT_ERR_SINGULAR (-3)\n")

@@ -1,0 +1,373 @@
+"""Backends: the faces of the one engine, one object each, in one registry.
+
+A backend is what differs between the outputs of a plan (after SymForce's
+per-language config objects): the printer of its kernels, its templates
+(data: (file, template, role)), the runtime files its project carries, its
+compile recipe (the compilers, the flags, which of its files are C and
+which C++, the runtime sources it links) and its capabilities. Everything
+else (the plan, the rendering loop, the build cache, the loading) is
+shared: gen/render.py and gen/build.py ask the backend and never compare
+its name.
+
+    b = get_backend("eigen")       # the object; unknown -> ModelError naming the known ones
+    b.printer(symbol_map, "double")
+    b.units("pend", files, derivatives=True)   # what gen.build compiles, and how
+
+    C      "c"      C99 over the C runtime (csrc/): gen.compile, gen.generate
+    Eigen  "eigen"  C++17 over Eigen 3.4, an extern "C" layer with the C API
+    FMU    "fmu"    the C model with the FMI glue, for gen.export_fmu (gen/fmu.py)
+
+A new backend is a subclass here (its templates under templates/<name>/)
+and one line in BACKENDS.
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import sys
+import sysconfig
+
+from .eigen import eigen_version, find_eigen
+from .errors import BuildError, ModelError
+from .printers import ModelCPrinter, ModelCxxPrinter
+
+__all__ = ["Backend", "CBackend", "EigenBackend", "FmuBackend", "BACKENDS", "get_backend",
+           "backend_names", "c_compiler", "cxx_compiler", "eigen_include_dir",
+           "RUNTIME_SOURCES", "RUNTIME_HEADERS", "EIGEN_RUNTIME_HEADERS", "C_FLAGS",
+           "C_LIN_FLAGS", "RUNTIME_FLAGS", "STRICT_FLAGS", "CXX_FLAGS", "CXX_STRICT_FLAGS",
+           "LIB_SUFFIX", "CXX_RESERVED"]
+
+# ------------------------------------------------------------ the runtime
+# the C runtime every C-backend model links (csrc/)
+RUNTIME_SOURCES = ["gen_rt_status.c", "gen_rt_linalg.c", "gen_rt_dynamics.c",
+                   "gen_rt_project.c", "gen_rt_integrate.c", "gen_rt_linearize.c",
+                   "gen_rt_model.c", "gen_rt_simulate.c", "gen_rt_expm.c", "gen_rt_sens.c"]
+RUNTIME_HEADERS = ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h", "gen_rt_rodas4.h", "gen_rt_expm.h",
+                   "gen_rt_sens.h", "gen_rt_ldlt.h"]
+# the C++ runtime of the Eigen backend and the tables it shares with the C one
+EIGEN_RUNTIME_HEADERS = ["eigen/gen_rt_eigen.hpp", "eigen/gen_rt_expm.hpp", "gen_rt_status.h", "gen_rt_rodas4.h",
+                         "gen_rt_dopri5.h"]
+
+# ------------------------------------------------------------- the flags
+# -ffp-contract=off: no fused multiply-add where the target has one (GCC's
+# default for ISO C already; clang's is to contract), so every compiler and
+# target computes the same IEEE operations. -fno-math-errno: the generated
+# code never reads errno (it checks for NaN and inf), so the math functions
+# need not set it; the compilers then pair sin and cos of one angle into one
+# sincos call and inline sqrt, with the same IEEE results (the golden numbers
+# are bit for bit). clang's eval_rhs of the 4-link cart took 1.19-1.21x gcc's
+# without it (eight libm calls where gcc makes four), 1.05-1.07x with it.
+C_FLAGS = ["-std=c99", "-O2", "-fno-strict-aliasing", "-ffp-contract=off", "-fno-math-errno"]
+# added for <name>_lin.c, the derivative kernels: gcc's time on their
+# straight-line code is the largest cost of a build, and -O1 takes a quarter
+# less (n = 20 cart: 8.8 -> 6.6 s) for a linearize 4-12% slower; IEEE
+# semantics are the same at every level (no -ffast-math), so the numbers are
+# too (tests/golden/seed_numbers.json, bit for bit)
+C_LIN_FLAGS = ["-O1"]
+# the runtime's objects (shared by every model library and FMU binary of a
+# scalar type): position independent, and hidden, so that a library exports
+# only its model's own functions
+RUNTIME_FLAGS = [*C_FLAGS, "-fPIC", "-fvisibility=hidden"]
+STRICT_FLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"]
+# the C++/Eigen backend (Eigen's own headers are -isystem: their warnings are not ours)
+CXX_FLAGS = ["-std=c++17", "-O2", "-fno-strict-aliasing", "-ffp-contract=off",
+             "-fno-math-errno"]
+CXX_STRICT_FLAGS = ["-std=c++17", "-Wall", "-Wextra", "-Werror", "-pedantic"]
+# a shared library's file name ends in this on this platform
+LIB_SUFFIX = ".dylib" if sys.platform == "darwin" else ".so"
+
+
+def c_compiler():
+    """$CC; else clang when it is installed (it compiles a model's large
+    straight-line kernels about three times faster than GCC: n = 20 cart
+    right-hand side 3.1 -> 1.0 s; the arithmetic is the same IEEE
+    arithmetic, -ffp-contract=off, and the golden numbers are bit for bit
+    the same); else the compiler Python was built with."""
+    cc = os.environ.get("CC")
+    if not cc:
+        cc = "clang" if shutil.which("clang") else (sysconfig.get_config_var("CC") or "cc")
+    return cc.split()[0]
+
+
+def cxx_compiler():
+    """$CXX; else clang++ when it is installed (as c_compiler); else the
+    C++ compiler Python was built with, or g++."""
+    cxx = os.environ.get("CXX")
+    if not cxx:
+        cxx = ("clang++" if shutil.which("clang++")
+               else (sysconfig.get_config_var("CXX") or "g++"))
+    return cxx.split()[0]
+
+
+def eigen_include_dir():
+    """The Eigen 3.4 include directory the eigen backend compiles against
+    (BuildError when there is none)."""
+    d, why = find_eigen()
+    if d is None:
+        raise BuildError(f"the eigen backend needs Eigen 3.4: {why}")
+    return d
+
+
+# --------------------------------------------------------- the templates
+# (file name, template, role) for the C backend: the list is data. role:
+# "model" (compiled into the model library by gen.build), "lin" (the
+# derivative kernels, compiled apart; a plan without them gets "stub"
+# instead, which gen.build links until they are built), "project" (the CMake
+# project and the standalone simulator: gen.generate only)
+C_TEMPLATES = [
+    ("{name}.h", "c/model.h.j2", "model"),
+    ("{name}.c", "c/model.c.j2", "model"),
+    ("{name}_kernels.c", "c/model_kern.c.j2", "model"),    # the kernels, compiled apart
+    ("{name}_lin.c", "c/model_lin.c.j2", "lin"),          # the derivative kernels
+    ("{name}_lin_stub.c", "c/model_lin_stub.c.j2", "stub"),  # ... until they are built
+    ("{name}_kernels.h", "c/model_kernels.h.j2", "model"),   # the functions of _lin.c
+    ("{name}_api.c", "c/model_api.c.j2", "model"),        # the plugin table (gen/host.py)
+    ("gen_rt_config.h", "c/gen_rt_config.h.j2", "model"),  # the runtime's scalar type
+    ("gen_rt_abi.h", "c/gen_rt_abi.h.j2", "model"),  # the runtime's structs and codes (gen/abi.py)
+    ("main.c", "c/main.c.j2", "project"),
+    ("CMakeLists.txt", "c/CMakeLists.txt.j2", "project"),
+    ("arm-none-eabi.cmake", "c/arm-none-eabi.cmake.j2", "project"),  # Cortex-M4F toolchain
+]
+
+# The C++17/Eigen backend: the typed API (header-only templates over the
+# scalar type, on the C++ runtime), an extern "C" layer with the C backend's
+# API (the same header, from the same interface description), and the same
+# standalone simulator main.c linked against that layer.
+EIGEN_TEMPLATES = [
+    ("{name}.h", "c/model.h.j2", "model"),
+    ("{name}.hpp", "eigen/model.hpp.j2", "model"),
+    ("{name}.cpp", "eigen/model.cpp.j2", "model"),
+    ("{name}_api.c", "c/model_api.c.j2", "model"),
+    ("gen_rt_abi.h", "c/gen_rt_abi.h.j2", "model"),  # the C runtime's structs (gen/abi.py)
+    ("main.c", "c/main.c.j2", "project"),
+    ("CMakeLists.txt", "eigen/CMakeLists.txt.j2", "project"),
+]
+
+# The FMU's model sources: the C backend's, without the plugin table (the
+# FMU's entry points are FMI's) and the project; gen/fmu.py adds the FMI
+# glue (csrc/fmu) and the files of FMU_TEMPLATES.
+FMU_MODEL_TEMPLATES = [t for t in C_TEMPLATES
+                       if t[2] != "project" and t[0] != "{name}_api.c"]
+# (file in the FMU, template), per FMI version: the list is data
+FMU_TEMPLATES = {
+    "2.0": [("modelDescription.xml", "fmu/fmi2/modelDescription.xml.j2"),
+            ("sources/gen_fmu_model.h", "fmu/gen_fmu_model.h.j2")],
+    "3.0": [("modelDescription.xml", "fmu/fmi3/modelDescription.xml.j2"),
+            ("sources/buildDescription.xml", "fmu/fmi3/buildDescription.xml.j2"),
+            ("sources/gen_fmu_model.h", "fmu/gen_fmu_model.h.j2")],
+}
+# the hand-written glue (csrc/fmu): the core and one layer per FMI version
+FMU_GLUE = {"2.0": ["gen_fmu.h", "gen_fmu.c", "gen_fmu_fmi2.c"],
+            "3.0": ["gen_fmu.h", "gen_fmu.c", "gen_fmu_fmi3.c"]}
+
+# the model prefix is also the C++ namespace of the Eigen backend
+CXX_RESERVED = frozenset("""
+alignas alignof and and_eq asm auto bitand bitor bool break case catch char char8_t
+char16_t char32_t class compl concept const consteval constexpr constinit const_cast
+continue co_await co_return co_yield decltype default delete do double dynamic_cast
+else enum explicit export extern false float for friend goto if inline int long
+mutable namespace new noexcept not not_eq nullptr operator or or_eq private
+protected public register reinterpret_cast requires return short signed sizeof
+static static_assert static_cast struct switch template this thread_local throw
+true try typedef typeid typename union unsigned using virtual void volatile
+wchar_t while xor xor_eq std Eigen eomgen detail gen_rt
+""".split())
+
+
+# ------------------------------------------------------------ the types
+class Backend:
+    """One face of the engine. Subclasses set the class attributes and
+    override what differs; gen.render and gen.build use only these."""
+    name = ""
+    #: (file name with {name}, template, role) rendered for this backend
+    templates = ()
+    #: runtime files (under csrc/) copied into its sources
+    runtime_files = ()
+    #: runtime C sources linked into its library (objects shared in the cache)
+    runtime_sources = ()
+    #: how the plan generates the Jacobian blocks (gen/ir.py plan(lin=...))
+    lin = "auto"
+    #: the derivative kernels may be built on first use (gen.compile)
+    lazy_derivatives = False
+    #: the right-hand side kernel may fuse the unrolled LDL^T (templates/c)
+    fused_rhs = False
+    #: gen.compile can load its library (it has the plugin table)
+    loadable = True
+    #: gen.generate writes a project (CMake, main.c) for it
+    project = True
+    #: its CMake project bounds the library's frames (<P>_STACK_LIMIT)
+    stack_limit = False
+    #: what names its cache folder: _eomgen_<model><tag>_<key>
+    tag = ""
+    #: its library links with the C++ compiler
+    link_cxx = False
+
+    def __repr__(self):
+        return f"<backend {self.name!r}>"
+
+    def printer(self, symbol_map, real):
+        """The sympy printer of its kernels."""
+        raise NotImplementedError
+
+    def context(self, model, kernels):
+        """What its templates need beyond the shared context."""
+        return {}
+
+    def cache_parts(self):
+        """What its build depends on besides the files (flags, compilers,
+        libraries): part of the cache key."""
+        return [" ".join(C_FLAGS + ["lin:"] + C_LIN_FLAGS), c_compiler()]
+
+    def units(self, name, files, derivatives, includes=()):
+        """What gen.build compiles of files (the rendered sources), the
+        largest first: [(file, compiler, flags)]; the runtime_sources come
+        from the shared runtime objects."""
+        raise NotImplementedError
+
+    def diagnose(self, name, units):
+        """(compiler, flags, files) that rerun a failed compile for a
+        readable log (strict warnings, no Python)."""
+        return (c_compiler(), STRICT_FLAGS,
+                [f for f, _, _ in units if f.startswith(name)] + list(self.runtime_sources))
+
+    def library_file(self, modname, name):
+        """The library's file name in its cache folder."""
+        return modname + LIB_SUFFIX
+
+    def link_order(self, own, runtime):
+        """The objects in link order (own: the units' objects in order)."""
+        return [*own, *runtime]
+
+
+class CBackend(Backend):
+    """C99 over the C runtime: the model's kernels, its wiring and the
+    plugin table, the derivative kernels in a unit of their own (-O1)
+    that may be built on first use."""
+    name = "c"
+    templates = tuple(C_TEMPLATES)
+    runtime_files = tuple(RUNTIME_SOURCES + RUNTIME_HEADERS)
+    runtime_sources = tuple(RUNTIME_SOURCES)
+    lin = "auto"
+    lazy_derivatives = True
+    fused_rhs = True
+    stack_limit = True
+
+    def printer(self, symbol_map, real):
+        return ModelCPrinter(symbol_map, real)
+
+    def units(self, name, files, derivatives, includes=()):
+        cc = c_compiler()
+        own = [(f"{name}_lin.c", C_LIN_FLAGS)] if derivatives else []
+        own += [(f"{name}_kernels.c", ()), (f"{name}.c", ()), (f"{name}_api.c", ())]
+        if not derivatives:
+            own.append((f"{name}_lin_stub.c", ()))
+        return [(f, cc, [*C_FLAGS, "-fPIC", *extra]) for f, extra in own]
+
+
+class EigenBackend(Backend):
+    """C++17 over Eigen 3.4: a typed header and an extern "C" layer with
+    the C backend's API (the same plugin table, the same Simulator)."""
+    name = "eigen"
+    templates = tuple(EIGEN_TEMPLATES)
+    runtime_files = tuple(EIGEN_RUNTIME_HEADERS)
+    runtime_sources = ()
+    # its templates print the unrolled Jacobian kernel
+    lin = "unrolled"
+    tag = "_eigen"
+    link_cxx = True
+    #: the C++ sources of the extern "C" library
+    sources = ("{name}.cpp",)
+
+    def printer(self, symbol_map, real):
+        return ModelCxxPrinter(symbol_map, "Scalar")
+
+    def include_dir(self):
+        """Eigen's include directory (gen/eigen.py finds it)."""
+        return eigen_include_dir()
+
+    def context(self, model, kernels):
+        m = model
+        if m.name in CXX_RESERVED:
+            raise ModelError(f"model name {m.name!r} is a C++ keyword or reserved namespace; "
+                             f"the Eigen backend uses the name as a namespace: choose another "
+                             f"(for example 'my_{m.name}')")
+        return {
+            "nqi": m.nq - m.mc, "nui": m.nu - m.mv,
+            # how gen_rt::Runtime solves the accelerations (the traits' ACCEL)
+            "accel": ("spd" if not m.mv else "partitioned" if m.method == "kane" else "kkt"),
+            # the lin_terms kernel's outputs in its parameter order (gen_rt::LinOut fields)
+            "lin_outputs": [o.name for o in kernels["lin_terms"].outputs],
+            "cxx_sources": [f.format(name=m.name) for f in self.sources],
+        }
+
+    def cache_parts(self):
+        d = self.include_dir()
+        # the backend, its flags and the Eigen it compiles against
+        return [*super().cache_parts(),
+                f"backend={self.name}\0{' '.join(CXX_FLAGS)}\0{cxx_compiler()}\0"
+                f"eigen={d}:{eigen_version(d)}"]
+
+    def units(self, name, files, derivatives, includes=()):
+        cxx_flags = [*CXX_FLAGS, "-fPIC", "-isystem", str(self.include_dir())]
+        return ([(f.format(name=name), cxx_compiler(), cxx_flags) for f in self.sources]
+                + [(f"{name}_api.c", c_compiler(), [*C_FLAGS, "-fPIC"])])
+
+    def diagnose(self, name, units):
+        return (cxx_compiler(), [*CXX_STRICT_FLAGS, "-isystem", str(self.include_dir())],
+                [f.format(name=name) for f in self.sources])
+
+
+class FmuBackend(CBackend):
+    """The C model for a Functional Mock-up Unit: the C backend's sources
+    without the plugin table, the FMI glue, compiled against the importer's
+    FMI headers (includes) with only the FMI functions exported; its
+    library is <model>.so, the FMU's binary (gen/fmu.py)."""
+    name = "fmu"
+    templates = tuple(FMU_MODEL_TEMPLATES)
+    lazy_derivatives = False
+    loadable = False
+    project = False
+    stack_limit = False
+    tag = "_fmu"
+    fmu_templates = FMU_TEMPLATES
+    glue = FMU_GLUE
+
+    def cache_parts(self):
+        return [*super().cache_parts(), f"backend={self.name}\0-fvisibility=hidden"]
+
+    def units(self, name, files, derivatives, includes=()):
+        cc = c_compiler()
+        own = [f for f in files if f.endswith(".c") and not f.startswith("gen_rt_")]
+        # the largest files first: the derivative kernels, the model
+        own.sort(key=lambda f: (-len(files[f].encode()), f))
+        inc = [x for d in includes for x in ("-isystem", str(d))]
+        return [(f, cc, [*C_FLAGS, "-fPIC", "-fvisibility=hidden",
+                         *(C_LIN_FLAGS if f == f"{name}_lin.c" else []), *inc]) for f in own]
+
+    def library_file(self, modname, name):
+        # FMI: binaries/<platform>/<modelIdentifier>.so
+        return name + LIB_SUFFIX
+
+    def link_order(self, own, runtime):
+        return [*sorted(own), *runtime]
+
+
+#: the registry: every backend, by name
+BACKENDS = {b.name: b for b in (CBackend(), EigenBackend(), FmuBackend())}
+
+
+def backend_names(need=None):
+    """The known backends' names; need: only those with that capability
+    ("loadable", "project")."""
+    return [n for n, b in BACKENDS.items() if need is None or getattr(b, need)]
+
+
+def get_backend(backend, need=None):
+    """The Backend of a name (or the object itself). An unknown name, or
+    one without the capability need ("loadable": gen.compile loads it;
+    "project": gen.generate writes it), is a ModelError listing the known
+    ones."""
+    b = backend if isinstance(backend, Backend) else BACKENDS.get(backend)
+    if b is None or (need is not None and not getattr(b, need)):
+        raise ModelError(f"unknown backend {backend!r}: choose one of {backend_names(need)}")
+    return b

@@ -1,0 +1,139 @@
+"""The pipeline from a model to a loaded Simulator, one stage per module:
+
+    model -> plan (gen/ir.py) -> render (gen/render.py) -> build (gen/build.py)
+          -> load (gen/host.py) -> Simulator (gen/bindings.py)
+
+compile() runs it (gen.compile is this function). A model is compiled
+without its derivative kernels when its backend can add them later
+(Backend.lazy_derivatives): the Simulator gets derive(), which plans and
+renders them (derivatives_source), builds the complete library
+(gen.build.build_derivatives) and loads it, on first use.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from pathlib import Path
+
+from .backends import get_backend
+from .bindings import Simulator
+from .build import build, build_derivatives
+from .errors import ModelError
+from .host import load
+from .ir import DERIVATIVE_KERNELS, plan as make_plan, with_derivatives
+from .model import require_model
+from .render import render
+
+__all__ = ["compile", "derivatives_source", "simulator"]
+
+
+def derivatives_source(plan, real="double", timings=None):
+    """<name>_lin.c of a plan made without derivatives (the kernels are
+    generated now: sympy's share of what a first linearize costs)."""
+    t0 = time.perf_counter()
+    full = with_derivatives(plan)
+    t1 = time.perf_counter()
+    lin_only = replace(full, kernels={k: v for k, v in full.kernels.items()
+                                      if k in DERIVATIVE_KERNELS})
+    tm = {}
+    files = render(lin_only, real=real, backend="c", project=False, only={"lin"}, timings=tm)
+    if timings is not None:
+        timings["kernels_derivatives"] = t1 - t0
+        timings["printing_derivatives"] = tm.get("printing", 0.0) + tm.get("templates", 0.0)
+    return files.files[f"{plan.model.name}_lin.c"]
+
+
+def simulator(built, derive=None):
+    """The Simulator of a Built (gen.build.build): its library loaded
+    through the host module (gen.host.load)."""
+    host, api = load(built)
+    return Simulator(host, api, built.interface, derivatives=derive)
+
+
+def compile(model, backend="c", real="double", verbose=False, sources=None,  # noqa: A001
+            timings=None, derivatives="lazy"):
+    """Generate, build (cached by content) and load a model.
+
+    The one path from a model to compiled code (the command line and
+    :func:`gen.verify` call it).
+
+    Parameters
+    ----------
+    model : gen.Model
+        The model.
+    backend : {"c", "eigen"} or gen.backends.Backend, optional
+        C99 over the C runtime, or C++17 over Eigen 3.4 through its
+        ``extern "C"`` layer (the same API, the same Simulator).
+    real : {"double", "float"}, optional
+        The scalar type.
+    verbose : bool, optional
+        Print the compiler's commands.
+    sources : str or Path, optional
+        A folder written by :func:`gen.generate` (possibly edited since): its
+        files are compiled instead of freshly generated ones.
+    timings : dict, optional
+        Receives the time of each stage (kernels, printing, templates,
+        compile; later the derivatives') and whether the build was cached.
+    derivatives : {"lazy", True}, optional
+        ``"lazy"`` (C backend): the derivative kernels (linearize, jacobian,
+        step_sensitivity, RODAS4) are built on their first use; True: now.
+        The Eigen backend always builds them.
+
+    Returns
+    -------
+    gen.bindings.Simulator
+        The loaded model library.
+
+    Raises
+    ------
+    gen.BuildError
+        When the compiler fails (with its full log).
+    gen.ModelError
+        When ``sources`` does not hold this model's files.
+    """
+    require_model(model, "gen.compile")
+    b = get_backend(backend, need="loadable")
+    if derivatives not in ("lazy", True):
+        raise ModelError(f"derivatives must be 'lazy' or True, got {derivatives!r}")
+    timings = {} if timings is None else timings
+    lazy = b.lazy_derivatives and sources is None and derivatives == "lazy"
+    t0 = time.perf_counter()
+    plan = make_plan(model, lin=b.lin, derivatives=not lazy)
+    timings["kernels"] = time.perf_counter() - t0
+    rendered = render(plan, real=real, backend=b, timings=timings, project=False)
+    if sources is not None:
+        rendered.files = _read_sources(sources, rendered.files, model.name, b)
+        rendered.derivatives = True
+    built = build(rendered, verbose=verbose, timings=timings)
+    t0 = time.perf_counter()
+
+    def derive():
+        tm = {}
+        lin = derivatives_source(plan, real=real, timings=tm)
+        full = build_derivatives(built, lin, timings=tm)
+        return load(full)[1], full, tm
+
+    sim = simulator(built, derive=None if built.derivatives else derive)
+    timings["load"] = time.perf_counter() - t0
+    sim.build_info = {"module": str(built.path), "derivatives": built.derivatives, **timings,
+                      "backend": b.name}
+    return sim
+
+
+def _read_sources(folder, expected, name, backend):
+    """The files of a generated folder that the build compiles: those
+    rendering produces, with the derivative kernels (<name>_lin.c) in place
+    of their stand-ins."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise ModelError(f"sources folder {folder} does not exist")
+    names = [f for f in expected if f != f"{name}_lin_stub.c"]
+    lin = [f.format(name=name) for f, _, role in backend.templates if role == "lin"]
+    names += [f for f in lin if f not in names]
+    files = {}
+    for fname in names:
+        path = folder / fname
+        if not path.is_file():
+            raise ModelError(f"{path} is missing: {folder} is not a generated '{name}' project")
+        files[fname] = path.read_text()
+    return files

@@ -1,0 +1,101 @@
+"""A backend is a type (issue 31): one object per backend in one registry
+(gen/backends.py), asked by rendering and the build, never compared by
+name; and the pipeline's modules import one way."""
+import ast
+from pathlib import Path
+
+import pytest
+
+import gen
+from gen.backends import (BACKENDS, Backend, CBackend, EigenBackend, FmuBackend, backend_names,
+                          get_backend)
+
+GEN = Path(gen.__file__).resolve().parent
+
+
+def test_one_object_per_backend_in_one_registry():
+    assert list(BACKENDS) == ["c", "eigen", "fmu"]
+    assert type(get_backend("c")) is CBackend
+    assert type(get_backend("eigen")) is EigenBackend
+    assert type(get_backend("fmu")) is FmuBackend
+    b = get_backend("eigen")
+    assert get_backend(b) is b                      # the object is accepted as well
+    assert backend_names("loadable") == ["c", "eigen"]
+    assert backend_names("project") == ["c", "eigen"]
+    # the capabilities the pipeline asks for
+    assert [n for n, b in BACKENDS.items() if b.lazy_derivatives] == ["c"]
+    assert [n for n, b in BACKENDS.items() if b.link_cxx] == ["eigen"]
+    assert get_backend("c").lin == "auto" and get_backend("eigen").lin == "unrolled"
+
+
+def test_unknown_backend_names_the_known_ones(kane_model, tmp_path):
+    with pytest.raises(gen.ModelError, match=r"unknown backend 'cuda': choose one of "
+                                             r"\['c', 'eigen', 'fmu'\]"):
+        get_backend("cuda")
+    # gen.compile loads a library with a plugin table: the FMU has none
+    with pytest.raises(gen.ModelError, match=r"unknown backend 'fmu': choose one of "
+                                             r"\['c', 'eigen'\]"):
+        gen.compile(kane_model, backend="fmu")
+    with pytest.raises(gen.ModelError, match=r"unknown backend 'fmu': choose one of "
+                                             r"\['c', 'eigen'\]"):
+        gen.generate(kane_model, tmp_path / "out", backend="fmu")
+    assert not (tmp_path / "out").exists()
+
+
+def test_recipe_is_data_of_the_backend():
+    """What the build compiles, with which compiler: the C backend's own
+    files in C (the derivative kernels at -O1, or their stand-ins), the
+    FMU's with only the FMI functions exported and the FMI headers."""
+    c = get_backend("c")
+    lazy = [f for f, _, _ in c.units("m", {}, derivatives=False)]
+    assert lazy == ["m_kernels.c", "m.c", "m_api.c", "m_lin_stub.c"]
+    full = c.units("m", {}, derivatives=True)
+    assert full[0][0] == "m_lin.c" and "-O1" in full[0][2]
+    files = {"m.c": "x" * 10, "m_lin.c": "x" * 100, "gen_rt_model.c": "x", "gen_fmu.c": "xx",
+             "m.h": ""}
+    fmu = get_backend("fmu").units("m", files, True, includes=("/fmi",))
+    assert [f for f, _, _ in fmu] == ["m_lin.c", "m.c", "gen_fmu.c"]   # largest first
+    assert all("-fvisibility=hidden" in fl and fl[-2:] == ["-isystem", "/fmi"]
+               for _, _, fl in fmu)
+    assert get_backend("fmu").library_file("_eomgen_m_fmu_0", "m").startswith("m.")
+
+
+def _sources():
+    return sorted(GEN.glob("*.py"))
+
+
+def test_no_backend_name_compared_outside_the_registry():
+    bad = [f"{p.name}:{i}" for p in _sources() if p.name != "backends.py"
+           for i, line in enumerate(p.read_text().splitlines(), 1)
+           if "backend ==" in line or "backend !=" in line]
+    assert bad == []
+    # BACKENDS is defined once
+    defs = [p.name for p in _sources() for node in ast.walk(ast.parse(p.read_text()))
+            if isinstance(node, ast.Assign)
+            for t in node.targets if isinstance(t, ast.Name) and t.id == "BACKENDS"]
+    assert defs == ["backends.py"]
+    assert issubclass(CBackend, Backend)
+
+
+def _imports(path):
+    """{module of gen: [names]} that path imports (at any depth)."""
+    out = {}
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.level == 1 and node.module:
+            out.setdefault(node.module, []).extend(a.name for a in node.names)
+    return out
+
+
+# the stages, first to last: a stage imports only those before it
+STAGES = ["cache", "backends", "render", "build", "host", "bindings", "pipeline"]
+
+
+def test_stages_import_one_way_and_no_private_names():
+    for i, stage in enumerate(STAGES):
+        later = set(STAGES[i + 1:])
+        got = set(_imports(GEN / f"{stage}.py")) & later
+        assert not got, f"gen/{stage}.py imports the later stage(s) {sorted(got)}"
+    # no module takes another's underscore name (but the package's version)
+    private = [(p.name, mod, n) for p in _sources() for mod, names in _imports(p).items()
+               for n in names if n.startswith("_") and mod != "_version"]
+    assert private == []
