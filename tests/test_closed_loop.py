@@ -100,7 +100,7 @@ def test_sampled_paths_agree(cart, period, dt, method):
 
 def test_sampled_feedback_is_a_zero_order_hold(cart):
     """At period = dt the sampled loop is RK4 steps with the input computed
-    at the start of each step and held: a Python loop of sim.step_rk4."""
+    at the start of each step and held: a Python loop of sim.step(method="rk4")."""
     sim, K = cart
     dt = 1e-3
     x = np.array([0.0, 0.3, 0.0, 0.0])

@@ -1,6 +1,6 @@
 """Issue 15: model outputs. Model.from_kanes(..., outputs={name: expr})
 compiles measured quantities with the model: sim.outputs, simulate(...,
-return_outputs=True), C and D of linearize(outputs=True), a python-control
+sol.outputs), C and D of linearize(outputs=True), a python-control
 StateSpace.
 
 References: sympy's own expressions lambdified (the user's symbols, not the
