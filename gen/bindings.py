@@ -1000,10 +1000,55 @@ class Simulator:
         return Solution(self, t, X, R[:, :self.nr], lam[:, :self.mv],
                         pp, found, status, message, info, o.method)
 
-    def step(self, t, x, h, *, r=None, p=None, method="rk4", sensitivities=False, project=None):
-        """One integrator step of size h from (t, x), optionally with its exact
-        derivatives by the step's variational equations (the generated Jacobian
-        kernels, not finite differences).
+    def step(self, t, x, h, *, r=None, p=None, method="rk4", project=True):
+        """One integrator step of size h from (t, x).
+
+        Parameters
+        ----------
+        t : float
+            Time.
+        x : array_like, shape (nx,)
+            The state ``[q, u]`` (layout: ``state_names``).
+        h : float
+            The step size.
+        r : array_like, shape (nr,), optional
+            The inputs (None: zero).
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        method : {"rk4"}, optional
+            The integrator: the classic RK4 step (the C ``<p>_step_rk4``).
+        project : bool, optional
+            Project the new state onto the constraints (default True).
+
+        Returns
+        -------
+        numpy.ndarray, shape (nx,)
+            The state after the step.
+
+        Raises
+        ------
+        gen.InputError
+            On a wrong shape (the message names the expected one), a NaN or
+            infinite input, or a method other than rk4.
+        gen.SolverError
+            When the C function returns a failure status (a
+            :class:`gen.SingularError` at a singular configuration, ...).
+        """
+        if method != "rk4":
+            raise InputError(f"step supports method='rk4' (a fixed step); got {method!r}",
+                             "method", None, method)
+        x1 = self._vec(x, self.nx, "state x").copy()
+        r = None if r is None else self._vec(r, self.nr, "inputs r")
+        pp = self._params(p)
+        st = self._fn("step_rk4")(t, h, self._ptr(r), self._ptr(pp), 1 if project else 0,
+                                  self._ptr(x1))
+        self._check(st, "step_rk4", t, x, args={"x": x1, "r": r, "p": pp})
+        return x1
+
+    def step_sensitivity(self, t, x, h, *, r=None, p=None, method="rk4"):
+        """One integrator step of size h from (t, x) and its exact derivatives
+        by the step's variational equations (the generated Jacobian kernels,
+        not finite differences); the step is not projected.
 
         For a constrained model the dependent entries of x follow the
         constraints to first order (perturb ``x_ind``, complete with
@@ -1023,45 +1068,31 @@ class Simulator:
         p : array_like, shape (np,), optional
             The constants (None: the defaults given at model creation).
         method : {"rk4"}, optional
-            The integrator: the classic RK4 step (the C ``<p>_step_rk4``).
-        sensitivities : bool, optional
-            Also return ``Fx = dx1_ind/dx_ind`` (ns, ns) and ``Fr = dx1_ind/dr``
-            (ns, nr) on the independent state.
-        project : bool, optional
-            Project the plain step onto the constraints (default: True without
-            sensitivities; a step with sensitivities is not projected).
+            The integrator (the sensitivities are those of RK4).
 
         Returns
         -------
         x1 : numpy.ndarray, shape (nx,)
-            The state after the step.
-        Fx, Fr : numpy.ndarray
-            With ``sensitivities=True``: ``(x1, Fx, Fr)``.
+            The state after the (unprojected) step.
+        Fx : numpy.ndarray, shape (ns, ns)
+            ``dx1_ind/dx_ind`` on the independent state.
+        Fr : numpy.ndarray, shape (ns, nr)
+            ``dx1_ind/dr``.
 
         Raises
         ------
         gen.InputError
-            On a wrong shape (the message names the expected one), a NaN or
-            infinite input, or a method other than rk4.
+            On a wrong shape, a NaN or infinite input, or a method other than
+            rk4.
         gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
+            When the C function returns a failure status.
         """
         if method != "rk4":
-            raise InputError(f"step supports method='rk4' (a fixed step); got {method!r}",
-                             "method", None, method)
+            raise InputError(f"step_sensitivity supports method='rk4' (a fixed step); got "
+                             f"{method!r}", "method", None, method)
         x1 = self._vec(x, self.nx, "state x").copy()
         r = None if r is None else self._vec(r, self.nr, "inputs r")
         pp = self._params(p)
-        if not sensitivities:
-            project = True if project is None else project
-            st = self._fn("step_rk4")(t, h, self._ptr(r), self._ptr(pp), 1 if project else 0,
-                                      self._ptr(x1))
-            self._check(st, "step_rk4", t, x, args={"x": x1, "r": r, "p": pp})
-            return x1
-        if project:
-            raise InputError("step(sensitivities=True) differentiates the unprojected step; "
-                             "project=True is not available with it", "project")
         Fx = np.empty(self.ns * self.ns, dtype=self.dtype)
         Fr = np.zeros(max(1, self.ns * self.nr), dtype=self.dtype)
         st = self._fn("step_sensitivity")(t, h, self._ptr(r), self._ptr(pp),
@@ -1135,7 +1166,7 @@ class Simulator:
         return Jx.reshape(self.nx, self.nx), Jr[:self.nx * self.nr].reshape(self.nx, self.nr).copy()
 
     # ---------------------------------------------------- linearization
-    def linearize(self, x, *, r=None, p=None, t=0.0, dt=None, outputs=False):
+    def linearize(self, x, *, r=None, p=None, t=0.0, dt=None):
         """Linearize about any operating point (it need not be an equilibrium),
         in C, on the independent state ``[q_ind, u_ind]`` (sympy's
         ``A_and_B=True`` partition).
@@ -1154,9 +1185,6 @@ class Simulator:
             Return the zero-order-hold discretization over a step dt instead:
             ``Ad = exp(A dt)``, ``Bd = int_0^dt exp(A s) ds B`` (scaling and
             squaring, in C).
-        outputs : bool, optional
-            Also return ``C = dy/dx_ind`` (ny, ns) and ``D = dy/dr`` (ny, nr) of
-            the model's outputs.
 
         Returns
         -------
@@ -1164,18 +1192,53 @@ class Simulator:
             (or Ad with dt)
         B : numpy.ndarray, shape (ns, nr)
             (or Bd with dt)
-        C, D : numpy.ndarray
-            With ``outputs=True``: ``(A, B, C, D)``.
 
         Raises
         ------
-        ValueError
+        gen.InputError
             On a wrong shape (the message names the expected one) or a NaN or
             infinite input.
         gen.SolverError
             When the C function returns a failure status (a
             :class:`gen.SingularError` at a singular configuration, ...).
         """
+        return self._linearize(x, r, p, t, dt, False)
+
+    def linearize_outputs(self, x, *, r=None, p=None, t=0.0, dt=None):
+        """:meth:`linearize` and the outputs' ``C = dy/dx_ind`` (ny, ns) and
+        ``D = dy/dr`` (ny, nr), in one C call (the dependent entries follow
+        the constraints, as for A).
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,)
+            The operating state (consistent with the constraints).
+        r : array_like, shape (nr,), optional
+            The operating inputs (None: zero).
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        t : float, optional
+            Time (default 0), for models that depend on it.
+        dt : float, optional
+            A and B as the zero-order-hold discretization over dt (C and D
+            are the same).
+
+        Returns
+        -------
+        A, B : numpy.ndarray, shapes (ns, ns), (ns, nr)
+            As :meth:`linearize`.
+        C, D : numpy.ndarray, shapes (ny, ns), (ny, nr)
+
+        Raises
+        ------
+        gen.InputError
+            On a wrong shape or a NaN or infinite input.
+        gen.SolverError
+            When the C function returns a failure status.
+        """
+        return self._linearize(x, r, p, t, dt, True)
+
+    def _linearize(self, x, r, p, t, dt, outputs):
         x = self._vec(x, self.nx, "state x")
         r = None if r is None else self._vec(r, self.nr, "inputs r")
         A = np.empty(self.ns * self.ns, dtype=self.dtype)
@@ -1229,7 +1292,7 @@ class Simulator:
         Returns
         -------
         control.StateSpace
-            Outputs are the model's (C, D of ``linearize(outputs=True)``), or the
+            Outputs are the model's (C, D of :meth:`linearize_outputs`), or the
             independent state (C = I, D = 0) for a model without outputs.
 
         Raises
@@ -1244,7 +1307,7 @@ class Simulator:
                               "'eomgen[control]' (or pip install control)") from None
         names = list(self.independent_state_names)
         if self.ny:
-            A, B, C, D = self.linearize(x, r=r, p=p, t=t, dt=dt, outputs=True)
+            A, B, C, D = self.linearize_outputs(x, r=r, p=p, t=t, dt=dt)
             out_names = list(self.output_names)
         else:
             A, B = self.linearize(x, r=r, p=p, t=t, dt=dt)

@@ -390,7 +390,7 @@ def _check_dependencies(name):
         x = sim.consistent_state(_x0(name) + 0.1 * rng.standard_normal(m.nx))
         r = rng.standard_normal(m.nr)
         if m.ny:
-            A, B, C, D = sim.linearize(x, r=r, outputs=True)
+            A, B, C, D = sim.linearize_outputs(x, r=r)
         else:
             A, B = sim.linearize(x, r=r)
         for k, d in enumerate(deps.derivative):

@@ -1,6 +1,6 @@
 """Issue 15: model outputs. Model.from_kanes(..., outputs={name: expr})
 compiles measured quantities with the model: sim.outputs, simulate(...,
-sol.outputs), C and D of linearize(outputs=True), a python-control
+sol.outputs), C and D of linearize_outputs, a python-control
 StateSpace.
 
 References: sympy's own expressions lambdified (the user's symbols, not the
@@ -111,7 +111,7 @@ def test_C_and_D_against_central_differences(cart, measured):
                 x[sim.q_ind] = rng.uniform(0.2, 0.8, len(sim.q_ind))
                 x = sim.consistent_state(x)
             r = rng.uniform(-2, 2, sim.nr)
-            A, B, C, D = sim.linearize(x, r=r, outputs=True)
+            A, B, C, D = sim.linearize_outputs(x, r=r)
             A0, B0 = sim.linearize(x, r=r)
             assert np.array_equal(A, A0) and np.array_equal(B, B0)
             Cn, Dn = _fd_CD(sim, x, r)
@@ -121,7 +121,7 @@ def test_C_and_D_against_central_differences(cart, measured):
 
 
 def test_discrete_with_outputs(cart):
-    Ad, Bd, C, D = cart.linearize(np.zeros(4), dt=0.01, outputs=True)
+    Ad, Bd, C, D = cart.linearize_outputs(np.zeros(4), dt=0.01)
     Ad0, Bd0 = cart.linearize(np.zeros(4), dt=0.01)
     assert np.array_equal(Ad, Ad0) and np.array_equal(Bd, Bd0) and C.shape == (2, 4)
 
@@ -130,7 +130,7 @@ def test_to_statespace(cart, measured):
     control = pytest.importorskip("control", reason="python-control not installed "
                                                     "(pip install 'eomgen[control]')")
     sys = cart.to_statespace(np.zeros(4))
-    A, B, C, D = cart.linearize(np.zeros(4), outputs=True)
+    A, B, C, D = cart.linearize_outputs(np.zeros(4))
     assert np.array_equal(sys.A, A) and np.array_equal(sys.C, C)
     assert sys.input_labels == ["F"] and sys.output_labels == ["tip_x", "tip_y"]
     assert sys.state_labels == ["x", "theta", "v", "omega"]
@@ -185,5 +185,5 @@ def test_eigen_backend_outputs(cart, measured):
                 x = sim.consistent_state(x)
             r = rng.uniform(-2, 2, sim.nr)
             assert np.max(np.abs(sim.outputs(0.3, x, r=r) - e.outputs(0.3, x, r=r))) < 1e-14
-            for a, b in zip(sim.linearize(x, r=r, outputs=True), e.linearize(x, r=r, outputs=True)):
+            for a, b in zip(sim.linearize_outputs(x, r=r), e.linearize_outputs(x, r=r)):
                 assert a.shape == b.shape and np.all(np.abs(a - b) < 1e-12)
