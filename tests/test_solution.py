@@ -244,3 +244,14 @@ def test_modules_use_no_private_simulator_names_and_no_import_circle():
         imports = [n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)]
         assert "bindings" not in imports, name
     assert re.search(r"^from \.ensemble import", (ROOT / "gen" / "bindings.py").read_text(), re.M)
+
+
+def test_a_failure_at_the_start_names_x0_not_zeros(kane_sim):
+    """The seed's Kane partition is singular at q1 = 0: the run fails at t0,
+    before any row, and the message and .state are the x0 passed (the C
+    runtime's last-state buffer holds nothing yet)."""
+    x0 = np.array([1.0, 0.0, 0.0, 0.3])
+    with pytest.raises(gen.SingularError) as e:
+        kane_sim.simulate(x0, 1.0, 0.01)
+    assert "at t = 0, state: q2=1, q1=0, u2=0, u1=0.3" in str(e.value)
+    assert np.array_equal(e.value.state, x0) and e.value.time == 0.0
