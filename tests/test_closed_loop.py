@@ -86,10 +86,10 @@ def test_sampled_paths_agree(cart, period, dt, method):
         return -K @ x
 
     sol = sim.simulate(x0, 2.0, dt, method=method,
-                             controller=gen.LinearFeedback(K, period=period))
+                       controller=gen.LinearFeedback(K, period=period))
     _, Xc, Rc = sol.t, sol.x, sol.r
     sol = sim.simulate(x0, 2.0, dt, method=method, r=law,
-                             input_period=period)
+                       input_period=period)
     _, Xp, Rp = sol.t, sol.x, sol.r
     assert np.max(np.abs(Xc - Xp)) <= 1e-12 and np.max(np.abs(Rc - Rp)) <= 1e-11
     # each sample is taken once, at t = k Ts

@@ -58,7 +58,7 @@ def test_long_run_drift_and_energy(lagrange_sim):
     for project in (True, False):
         t0 = time.perf_counter()
         sol = lagrange_sim.simulate(x0, 1000 * T, T / 8, method="dopri5", rtol=1e-10,
-                                         atol=1e-10, p=P, project=project)
+                                    atol=1e-10, p=P, project=project)
         t, X, st = sol.t, sol.x, sol.stats
         wall = time.perf_counter() - t0
         drift = np.max(np.abs(X[:, 0] ** 2 + X[:, 1] ** 2 - L ** 2))
@@ -147,7 +147,7 @@ def test_rk4_order_and_dopri5_tolerance(lagrange_sim):
 def test_multipliers_match_tension(lagrange_sim):
     th0 = np.radians(75.0)
     sol = lagrange_sim.simulate(pendulum_state(th0, 0, L, "lagrange"), 3.0, 0.01,
-                                      method="dopri5", rtol=1e-11, atol=1e-11, p=P)
+                                method="dopri5", rtol=1e-11, atol=1e-11, p=P)
     t, X, lam = sol.t, sol.x, sol.lam
     x, y, vx, vy = X.T
     theta = np.arctan2(y, x)

@@ -146,7 +146,7 @@ def test_many_events_are_all_returned(kane_sim):
     with room for all; they come every T/2."""
     x0 = pendulum_state(TH0, 0.0, L, "kane")
     sol = kane_sim.simulate(x0, 300.0, 1.0, method="dopri5", rtol=1e-10, atol=1e-10,
-                                     events={"q2": 0})
+                            events={"q2": 0})
     t, X, ev, st = sol.t, sol.x, sol.events, sol.stats
     T4 = quarter_period()
     times = np.array([e[1] for e in ev])
@@ -275,7 +275,7 @@ def test_rodas4_closed_loop_with_linear_feedback():
     ctl = gen.LinearFeedback(K)
     _, Xd = sim.simulate(x0, 5.0, 0.01, method="dopri5", rtol=1e-11, atol=1e-11, controller=ctl)
     sol = sim.simulate(x0, 5.0, 0.01, method="rodas4", rtol=1e-8, atol=1e-10,
-                             controller=ctl)
+                       controller=ctl)
     _, Xr, st = sol.t, sol.x, sol.stats
     assert np.max(np.abs(Xr - Xd)) < 1e-6
     assert np.max(np.abs(Xr[-1])) < 1e-3

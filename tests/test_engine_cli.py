@@ -103,7 +103,7 @@ def test_binary_events_match_python_and_the_exact_period(binary, kane_sim, x0, t
     t_b, X_b = rows(out)
     ev_b = events_csv(ev)
     sol = kane_sim.simulate(x0, 3.0, 0.01, method="dopri5", rtol=1e-12, atol=1e-12,
-                                    events={"q2": 0})
+                            events={"q2": 0})
     t, X, found = sol.t, sol.x, sol.events
     assert len(t_b) == len(t) == 301
     assert rel_err(t_b, t) <= 1e-12 and rel_err(X_b, X) <= 1e-12
@@ -133,8 +133,8 @@ def test_binary_terminal_event_ends_the_rows(binary, kane_sim, x0, tmp_path):
     t_b, X_b = rows(out)
     ev_b = events_csv(ev)
     sol = kane_sim.simulate(
-        x0, 3.0, 0.01, method="dopri5", rtol=1e-12, atol=1e-12,
-        events={"q2": -1, "u2": 1}, terminal={"q2": True})
+                            x0, 3.0, 0.01, method="dopri5", rtol=1e-12, atol=1e-12,
+                            events={"q2": -1, "u2": 1}, terminal={"q2": True})
     t, X, found, info = sol.t, sol.x, sol.events, sol.stats
     assert info["terminal"] == "q2"
     assert len(t_b) == len(t) == int(np.floor(T4 / 0.01)) + 2   # the grid, then the event
@@ -155,8 +155,8 @@ def test_binary_event_level_and_direction_words(binary, kane_sim, x0, tmp_path):
         "--event", "q2=0.5:down:terminal", "--event", "u2=-1e0:-1", "--output", out,
         "--events-csv", ev)
     sol = kane_sim.simulate(x0, 1.0, 0.05, method="dopri5", rtol=1e-12, atol=1e-12,
-                                    events={"q2": (-1, 0.5), "u2": (-1, -1.0)},
-                                    terminal={"q2": True})
+                            events={"q2": (-1, 0.5), "u2": (-1, -1.0)},
+                            terminal={"q2": True})
     t, X, found = sol.t, sol.x, sol.events
     ev_b = events_csv(ev)
     same_events(ev_b, found)
@@ -197,7 +197,7 @@ def test_binary_rodas4_matches_python(binary, kane_sim, x0, tmp_path):
         "--events-csv", ev)
     t_b, X_b = rows(out)
     sol = kane_sim.simulate(x0, 2.0, 0.02, method="rodas4", rtol=1e-9, atol=1e-11,
-                                    events={"q2": 0}, terminal=True)
+                            events={"q2": 0}, terminal=True)
     t, X, found = sol.t, sol.x, sol.events
     assert len(t_b) == len(t) < 101
     assert rel_err(X_b, X) <= 1e-12
@@ -270,7 +270,7 @@ def test_eomgen_simulate_events_match_the_binary(binary, kane_sim, x0, tmp_path)
     # and from Python directly
     x = kane_sim.consistent_state(x0)
     sol = kane_sim.simulate(x, 2.5, 0.01, method="dopri5", rtol=1e-12, atol=1e-12,
-                                    events={"q2": 0, "u2": -1}, terminal={"u2": True})
+                            events={"q2": 0, "u2": -1}, terminal={"u2": True})
     t, X, found = sol.t, sol.x, sol.events
     same_events(ev_c, found)
     assert rel_err(X_c, X) <= 1e-12
@@ -312,7 +312,7 @@ def test_binary_event_on_an_output(tmp_path):
     assert lines[0] == "event,t," + ",".join(sim.state_names)
     name, *vals = lines[1].split(",")
     sol = sim.simulate(x0, 3.0, 0.01, method="dopri5", rtol=1e-12, atol=1e-12,
-                               r=[0.0], events={"tip_y": (-1, 0.5)}, terminal=True)
+                       r=[0.0], events={"tip_y": (-1, 0.5)}, terminal=True)
     t, X, found = sol.t, sol.x, sol.events
     assert name == "tip_y" and len(lines) == 2 and len(found) == 1
     assert abs(float(vals[0]) - found[0][1]) <= 1e-12
