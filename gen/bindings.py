@@ -316,7 +316,7 @@ class Simulator:
         names = {"state": self.state_names, "inputs": self.input_names,
                  "constants": self.constant_names}.get(kind)
         if names is None:
-            raise InputError(f"{what} cannot be given as a dict")
+            raise InputError(f"{what} cannot be given as a dict", what.split()[-1])
         labels = self._labels[kind]
         base = {"state": np.zeros(self.nx), "inputs": np.zeros(self.nr),
                 "constants": self.constants.copy()}[kind]
@@ -327,7 +327,8 @@ class Simulator:
             elif k in labels:                  # the sympy spelling works too
                 base[labels.index(k)] = float(v)
             else:
-                raise InputError(f"unknown name {k!r} in {what}; known: {names}")
+                raise InputError(f"unknown name {k!r} in {what}; known: {names}",
+                                 what.split()[-1], None, k)
         return base
 
     def _ptr(self, a):
@@ -1331,7 +1332,8 @@ class Simulator:
             return a, 0
         if a.shape == (n, width):
             return a, width
-        raise InputError(f"{what} must have shape ({width},) or ({n}, {width}), got {a.shape}")
+        raise InputError(f"{what} must have shape ({width},) or ({n}, {width}), got {a.shape}",
+                         what.split()[-1])
 
     def _batch_fn(self, name):
         return self._fn(name)
