@@ -55,6 +55,11 @@ BIG = 10 ** 7
 
 
 # ---------------------------------------------------------------- helpers
+
+def tsx(sol, events=False):
+    """(t, X[, events], stats) of a gen.Solution."""
+    return (sol.t, sol.x) + ((sol.events,) if events else ()) + (sol.stats,)
+
 def timed(fn):
     t0 = time.perf_counter()
     out = fn()
@@ -137,8 +142,8 @@ def bench_cart(sim, reps, sweep_factors):
     grid = np.linspace(0.0, CART_T, nrows)
 
     def eom():
-        return sim.simulate(x0, CART_T, CART_DT, method="dopri5", rtol=CART_RTOL,
-                            atol=CART_ATOL, return_stats=True)
+        return tsx(sim.simulate(x0, CART_T, CART_DT, method="dopri5", rtol=CART_RTOL,
+                                atol=CART_ATOL))
 
     def rk45():
         return solve_ivp(sim.rhs, (0.0, CART_T), x0, method="RK45", rtol=CART_RTOL,
@@ -178,11 +183,11 @@ def bench_cart(sim, reps, sweep_factors):
     grids = {}
     gfns = {}
     for dt in (0.1, 0.01, 0.001):
-        gfns[dt] = (lambda dt=dt: sim.simulate(x0, CART_T, dt, method="dopri5", rtol=CART_RTOL,
-                                                atol=CART_ATOL, return_stats=True))
-    gfns["final_only"] = lambda: sim.simulate(x0, CART_T, CART_DT, method="dopri5",
-                                              rtol=CART_RTOL, atol=CART_ATOL, return_stats=True,
-                                              final_only=True)
+        gfns[dt] = (lambda dt=dt: tsx(sim.simulate(x0, CART_T, dt, method="dopri5",
+                                                    rtol=CART_RTOL, atol=CART_ATOL)))
+    gfns["final_only"] = lambda: tsx(sim.simulate(x0, CART_T, CART_DT, method="dopri5",
+                                                  rtol=CART_RTOL, atol=CART_ATOL,
+                                                  final_only=True))
     gmed, _, glast = interleaved(gfns, reps)
     for k, (Tg, Xg, stg) in glast.items():
         grids[str(k)] = {"dt": CART_DT if k == "final_only" else k, "rows": len(Tg),
@@ -201,8 +206,8 @@ def bench_cart(sim, reps, sweep_factors):
     sweep = []
     for f in sweep_factors:
         rt = CART_RTOL * f
-        _, Xf, stf = sim.simulate(x0, CART_T, CART_DT, method="dopri5", rtol=rt, atol=CART_ATOL,
-                                  return_stats=True)
+        sol = sim.simulate(x0, CART_T, CART_DT, method="dopri5", rtol=rt, atol=CART_ATOL)
+        _, Xf, stf = sol.t, sol.x, sol.stats
         sf = solve_ivp(sim.rhs, (0.0, CART_T), x0, method="RK45", rtol=rt, atol=CART_ATOL,
                        t_eval=grid)
         sh = solve_ivp(sim.rhs, (0.0, CART_T), x0, method="RK45", rtol=rt, atol=CART_ATOL,
@@ -281,8 +286,8 @@ def bench_stiff(sim, reps):
         return sim.jacobian(t, x)[0]
 
     def eom(method):
-        return lambda: sim.simulate(x0, STIFF_T, STIFF_DT, method=method, rtol=STIFF_TOL,
-                                    atol=STIFF_TOL, return_stats=True, max_steps=BIG)
+        return lambda: tsx(sim.simulate(x0, STIFF_T, STIFF_DT, method=method, rtol=STIFF_TOL,
+                                        atol=STIFF_TOL, max_steps=BIG))
 
     def sp(method):
         return lambda: solve_ivp(sim.rhs, (0.0, STIFF_T), x0, method=method, rtol=STIFF_TOL,
@@ -292,12 +297,12 @@ def bench_stiff(sim, reps):
            "bdf": sp("BDF")}
     med, mins, last = interleaved(fns, reps)
     # references
-    tr1, (Tr, Xr, str1) = timed(lambda: sim.simulate(x0, STIFF_T, STIFF_DT, method="rodas4",
-                                                     rtol=1e-10, atol=1e-10, return_stats=True,
-                                                     max_steps=BIG))
-    tr2, (_, Xd, str2) = timed(lambda: sim.simulate(x0, STIFF_T, STIFF_DT, method="dopri5",
-                                                    rtol=1e-11, atol=1e-11, return_stats=True,
-                                                    max_steps=BIG))
+    tr1, (Tr, Xr, str1) = timed(lambda: tsx(sim.simulate(x0, STIFF_T, STIFF_DT,
+                                                         method="rodas4", rtol=1e-10,
+                                                         atol=1e-10, max_steps=BIG)))
+    tr2, (_, Xd, str2) = timed(lambda: tsx(sim.simulate(x0, STIFF_T, STIFF_DT, method="dopri5",
+                                                        rtol=1e-11, atol=1e-11,
+                                                        max_steps=BIG)))
     res = {"reference": "eomgen RODAS4 rtol = atol = 1e-10",
            "reference_stats": str1, "reference_time": tr1,
            "check": "eomgen DOPRI5 rtol = atol = 1e-11", "check_stats": str2, "check_time": tr2,
@@ -373,10 +378,9 @@ def bench_events(sims, reps):
         iq2 = list(sim.state_names).index("q2")
 
         def eom(method, rtol, dt, project=True):
-            return lambda: sim.simulate(x0, EV_T_END, dt, method=method, rtol=rtol,
-                                        atol=EV_ATOL, events={"q2": 0}, terminal=True,
-                                        return_events=True, return_stats=True,
-                                        max_steps=BIG, project=project)
+            return lambda: tsx(sim.simulate(x0, EV_T_END, dt, method=method, rtol=rtol,
+                                            atol=EV_ATOL, events={"q2": 0}, terminal=True,
+                                            max_steps=BIG, project=project), events=True)
 
         def ev(t, x):
             return x[iq2]

@@ -7,7 +7,7 @@ Printed, all measured in this run (the peers on subsamples, scaled to runs/s):
 
 1. runs/s of sim.ensemble on every core, and on one (the scaling 1 -> 2 cores);
 2. runs/s of a Python loop over sim.simulate(..., final_only=True);
-3. runs/s of sim.simulate_batch (threads over simulate, every row kept: the
+3. runs/s of sim.ensemble(reduce="rows") (every row kept: the
    pre-ensemble path) and its memory per run;
 4. runs/s of SciPy's solve_ivp (RK45, rtol 1e-8, atol 1e-10) over sim.rhs;
 5. peak RSS of ensembles of growing N in fresh processes (reduce="final"):
@@ -133,14 +133,15 @@ def main():
     out["python_loop"] = {"n": k, "runs_per_s": loop}
     print(f"Python loop over sim.simulate(final_only=True) ({k} runs): {loop:.0f} runs/s", flush=True)
 
-    # 3. simulate_batch (every row kept)
+    # 3. every row kept: ensemble(reduce="rows") (what simulate_batch was)
     k = 1000
     t0 = time.perf_counter()
-    t, Xs = sim.simulate_batch(X0[:k], T_END, DT, p=P[:k])
+    Xs = sim.ensemble(X0[:k], T_END, DT, p=P[:k], reduce="rows").rows
     batch = k / (time.perf_counter() - t0)
-    out["simulate_batch"] = {"n": k, "runs_per_s": batch, "bytes_per_run": Xs[0].nbytes,
-                             "matches": bool(np.array_equal(Xs[:, -1], res.final[:k]))}
-    print(f"simulate_batch ({k} runs, every row): {batch:.0f} runs/s, {Xs[0].nbytes / 1e3:.0f} kB "
+    out["rows"] = {"n": k, "runs_per_s": batch, "bytes_per_run": Xs[0].nbytes,
+                   "matches": bool(np.array_equal(Xs[:, -1], res.final[:k]))}
+    print(f"ensemble(reduce='rows') ({k} runs, every row): {batch:.0f} runs/s, "
+          f"{Xs[0].nbytes / 1e3:.0f} kB "
           f"a run ({Xs.nbytes / 1e6:.0f} MB for {k}; {Xs[0].nbytes * args.n / 1e9:.1f} GB for "
           f"{args.n})", flush=True)
     del Xs
@@ -159,7 +160,7 @@ def main():
     print(f"solve_ivp RK45 rtol 1e-8 over sim.rhs ({k} runs): {scipy_rate:.1f} runs/s "
           f"(final states differ from the ensemble's by {err:.1e}: the constraint drifts "
           "without projection)", flush=True)
-    print(f"ensemble / Python loop {res.runs_per_second / loop:.1f}x, / simulate_batch "
+    print(f"ensemble / Python loop {res.runs_per_second / loop:.1f}x, / every row kept "
           f"{res.runs_per_second / batch:.1f}x, / solve_ivp {res.runs_per_second / scipy_rate:.0f}x",
           flush=True)
 

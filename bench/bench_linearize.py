@@ -143,7 +143,7 @@ def time_py_call(sim, reps=7):
     for _ in range(reps):
         t0 = time.perf_counter()
         for _ in range(n):
-            sim.linearize(x, r)
+            sim.linearize(x, r=r)
         out.append((time.perf_counter() - t0) / n)
     return statistics.median(out)
 

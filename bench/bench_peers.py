@@ -108,12 +108,12 @@ def worker_eomgen(n, work, opts):
     # first linearize); PyDy and CasADi build none (their right-hand side only)
     x = np.array(test_state(n))
     t0 = time.perf_counter()
-    sim.linearize(x, np.zeros(1))
+    sim.linearize(x, r=np.zeros(1))
     res["derivatives"] = time.perf_counter() - t0
     res["derivative_stages"] = {k: sim.build_info.get(k) for k in
                                 ("kernels_derivatives", "printing_derivatives",
                                  "compile_derivatives")}
-    res["linearize_call"] = median_call(lambda: sim.linearize(x, np.zeros(1)), 5, 20)
+    res["linearize_call"] = median_call(lambda: sim.linearize(x, r=np.zeros(1)), 5, 20)
     # the sources for the C driver and the op count (not timed)
     out = Path(work) / "eomgen_src"
     gen.generate(model, out)
@@ -145,9 +145,9 @@ def worker_eomgen(n, work, opts):
         res["ops_error"] = str(e)
     x = np.array(test_state(n))
     r = np.zeros(1)
-    res["rhs_test"] = sim.rhs(0.0, x, r).tolist()
+    res["rhs_test"] = sim.rhs(0.0, x, r=r).tolist()
     if opts["py"]:
-        res["py_call"] = median_call(lambda: sim.rhs(0.0, x, r), opts["reps"], opts["calls"])
+        res["py_call"] = median_call(lambda: sim.rhs(0.0, x, r=r), opts["reps"], opts["calls"])
     batch, errors = None, []
     X = np.tile(x, (1000, 1))
     X[:, 1] += np.linspace(0.0, 0.1, len(X))
@@ -162,7 +162,7 @@ def worker_eomgen(n, work, opts):
             continue
         if Y.shape == X.shape:
             per = median_call(lambda: fn(0.0, X, r), opts["reps"], 5) / len(X)
-            one = np.array([sim.rhs(0.0, xi, r) for xi in X[:50]])
+            one = np.array([sim.rhs(0.0, xi, r=r) for xi in X[:50]])
             batch = {"method": name, "per_state": per, "N": len(X),
                      "maxdiff_vs_rhs": float(np.max(np.abs(Y[:50] - one)))}
             break
@@ -190,8 +190,8 @@ def worker_eomgen(n, work, opts):
         times, final, stats = [], None, None
         for _ in range(opts["sim_reps"]):
             t0 = time.perf_counter()
-            T, X, st = sim.simulate(x0, 10.0, 0.01, method="dopri5", rtol=RTOL, atol=ATOL,
-                                    return_stats=True)
+            sol = sim.simulate(x0, 10.0, 0.01, method="dopri5", rtol=RTOL, atol=ATOL)
+            T, X, st = sol.t, sol.x, sol.stats
             times.append(time.perf_counter() - t0)
             final, stats = X[-1].tolist(), st
         # a tight-tolerance reference, to see how far each integrator is from it

@@ -104,7 +104,7 @@ def run_bicycle():
         r = rng.uniform(-2, 2, 3)
         M, f = (np.asarray(m_, dtype=float) for m_ in
                 fun(xr[qi], xr[ui], r, [vals[k] for k in bicycle.MOORE_NAMES]))
-        worst = max(worst, _rel(sim.rhs(0.0, xr, r)[ui], np.linalg.solve(M, f.ravel())))
+        worst = max(worst, _rel(sim.rhs(0.0, xr, r=r)[ui], np.linalg.solve(M, f.ravel())))
     res["rhs_vs_sympy"] = worst
     vw, vc = bicycle.critical_speeds(sim)
     res["weave"], res["capsize"] = vw, vc

@@ -103,7 +103,9 @@ def main(argv=None):
     }
     out = {}
     for label, kw in runs.items():
-        t, X, R, Y = sim.simulate(x0, 5.0, 1e-3, return_inputs=True, return_outputs=True, **kw)
+        sol = sim.simulate(x0, 5.0, 1e-3, **kw)           # a gen.Solution
+        t, X, R = sol.t, sol.x, sol.r                     # times, states, the force applied
+        Y = np.column_stack([sol.outputs[k] for k in sim.output_names])   # tip_x, tip_y
         out[label] = (t, X, R, Y)
         print(f"{label:28s} |x(5)| = {np.max(np.abs(X[-1])):.2e}, "
               f"max |F| = {np.max(np.abs(R)):.2f} N")

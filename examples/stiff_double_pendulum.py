@@ -67,8 +67,8 @@ def main():
     x0 = np.array([1.0, 0.0, 0.0, 0.0])
     for method, rtol in (("dopri5", 1e-6), ("rodas4", 1e-6)):
         t0 = time.perf_counter()
-        t, X, st = sim.simulate(x0, 2.0, 0.01, method=method, rtol=rtol, atol=rtol,
-                                return_stats=True, max_steps=10 ** 7)
+        sol = sim.simulate(x0, 2.0, 0.01, method=method, rtol=rtol, atol=rtol, max_steps=10 ** 7)
+        t, X, st = sol.t, sol.x, sol.stats
         print(f"{method:7s} rtol {rtol:g}: x(2) = {X[-1]}, {st['n_rhs']} rhs, {st['n_jac']} "
               f"Jacobians, {time.perf_counter() - t0:.3f} s")
 

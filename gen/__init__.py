@@ -4,6 +4,7 @@ verified C simulators.
     model = gen.Model.from_kanes(km, constants={...}, name="pend")
     gen.generate(model, "out/")            # C sources + CMake project
     sim = gen.compile(model)               # a model library, numpy in and out
+    t, x = sim.simulate(x0, 5.0, 1e-3)    # a gen.Solution: sol.outputs, sol.events, ...
     A, B = sim.linearize(x_op)
     res = sim.ensemble(x0, 5.0, 1e-3, p=gen.Sampler(1).draw(10**5, m=("uniform", 0.8, 1.2)))
     A, B = gen.linearize_symbolic(model, {q1: L, q2: 0})   # sympy matrices
@@ -12,8 +13,10 @@ verified C simulators.
 from ._version import __version__
 
 from .errors import (BuildError, ConvergenceError, DivergenceError, EomgenError,  # noqa: E402
-                     ModelError, SingularError, SolverError, UnusedConstantWarning,
-                     UnusedInputWarning)
+                     InputError, MissingDependencyError, ModelError, SingularError, SolverError,
+                     UnusedConstantWarning, UnusedInputWarning)
+from .solution import Event, Solution  # noqa: E402
+from .bindings import Simulator  # noqa: E402
 from .model import Model  # noqa: E402
 from .render import generate  # noqa: E402
 from .pipeline import compile  # noqa: E402,A001
@@ -23,7 +26,8 @@ from .control import LinearFeedback  # noqa: E402
 from .fmu import export_fmu  # noqa: E402
 from .ensemble import At, EnsembleResult, Final, Max, Mean, Min, Sampler  # noqa: E402
 
-__all__ = ["Model", "generate", "compile", "EomgenError", "ModelError", "BuildError",
+__all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "EomgenError",
+           "ModelError", "BuildError", "InputError", "MissingDependencyError",
            "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "UnusedInputWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
            "export_fmu", "Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult",
            "__version__"]

@@ -401,6 +401,10 @@ BATCH_FUNCTIONS = (
                                   f"x:value::{_CR}, r:value::{_CR}, r_stride:value::int, "
                                   f"p:value::{_CR}, p_stride:value::int, dxdt:value::{_R}, "
                                   f"status:value::{_I}"), "x' for n states."),
+    Function("outputs_batch", _params(f"n:value::int, t:value::{_CR}, t_stride:value::int, "
+                                      f"x:value::{_CR}, r:value::{_CR}, r_stride:value::int, "
+                                      f"p:value::{_CR}, p_stride:value::int, y:value::{_R}, "
+                                      f"status:value::{_I}"), "the outputs y for n states."),
     Function("mass_matrix_batch", _params(f"n:value::int, q:value::{_CR}, q_stride:value::int, "
                                           f"p:value::{_CR}, p_stride:value::int, M:value::{_R}, "
                                           f"status:value::{_I}"),

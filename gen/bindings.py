@@ -1,5 +1,5 @@
 """The numpy-facing simulator over a compiled model. C status codes become
-exceptions from gen.errors; wrong shapes raise ValueError naming the
+exceptions from gen.errors; wrong shapes raise gen.InputError (a ValueError) naming the
 expected shape. Every call returns fresh arrays (safe with solve_ivp).
 
 A Simulator is made from the host module (gen/host.py), the model
@@ -15,23 +15,25 @@ import threading
 
 import numpy as np
 
-from .abi import (DERIVATIVE_VERBS, JACOBIAN_METHODS, METHODS, method_name,
-                  status_name)
-from .errors import ConvergenceError, DivergenceError, SingularError, SolverError
+from .abi import DERIVATIVE_VERBS, JACOBIAN_METHODS, METHODS, status_name
+from .errors import ConvergenceError, DivergenceError, InputError, SingularError, SolverError
+from .ensemble import run_ensemble
 from .interrupt import call
+from .runs import finite_or_raise, plan_rows, run_options
+from .solution import Event, Solution
 
-__all__ = ["Simulator", "EXCEPTIONS"]
+__all__ = ["Simulator", "ModelLibrary", "EXCEPTIONS"]
 
 # the exception each failure status raises (every status of gen/abi.py has
 # one: tests/test_abi.py checks it)
 EXCEPTIONS = {
     "ERR_NULL": SolverError,
-    "ERR_NONFINITE_INPUT": ValueError,
+    "ERR_NONFINITE_INPUT": InputError,
     "ERR_SINGULAR": SingularError,
     "ERR_NO_CONVERGENCE": ConvergenceError,
     "ERR_STEP_UNDERFLOW": ConvergenceError,
     "ERR_MAX_STEPS": ConvergenceError,
-    "ERR_BAD_ARG": ValueError,
+    "ERR_BAD_ARG": InputError,
     "ERR_NONFINITE_MODEL": SingularError,
     "ERR_OUTPUT_FULL": SolverError,
     "ERR_SINGULAR_KINEMATICS": SingularError,
@@ -55,6 +57,70 @@ def _fast_rhs(host, api, which="rhs"):
     fn = ctypes.cast(ctypes.c_void_p(addr), ctypes.py_object).value
     ctypes.pythonapi.Py_DecRef(ctypes.py_object(fn))     # the new reference made in C
     return fn
+
+
+class ModelLibrary:
+    """The compiled model library under a Simulator (``sim.library``): what
+    eomgen's own modules that fill the C structs themselves need
+    (gen.ensemble, gen.control, gen.events), without the Simulator's
+    private names.
+
+    Attributes
+    ----------
+    ffi : cffi.FFI
+        The host module's ffi (its struct and type declarations).
+    host : object
+        The host module's lib: its functions (``eomgen_<verb>``, each taking
+        the table first) and constants (``EOMGEN_REDUCE_FINAL``, ...).
+    real_array : str
+        The cffi type of an array of the model's reals (``"eomgen_real[]"``).
+    """
+
+    real_array = "eomgen_real[]"
+
+    def __init__(self, sim):
+        self._sim = sim
+        self.ffi = sim._ffi
+        self.host = sim._lib
+
+    @property
+    def table(self):
+        """The model's plugin table (``const eomgen_api *``); it changes once,
+        when :meth:`ensure_derivatives` switches to the complete library."""
+        return self._sim._api
+
+    def new(self, struct):
+        """A zeroed C struct of the interface: ``"sim_options"``, ``"input"``,
+        ``"events"``, ``"sim_stats"`` (sized for the model), or any struct the
+        host declares (``"ensemble"`` is ``eomgen_ensemble``)."""
+        return self._sim._new(struct)
+
+    def function(self, name):
+        """The model's C function ``<p>_<name>``, its table bound: call it with
+        the C function's own arguments. A derivative kernel is built first
+        where the library has none yet."""
+        return self._sim._fn(name)
+
+    def call(self, name, *args):
+        """Call the host's ``eomgen_<name>`` (a host-only loop such as
+        ``ensemble_run``) with the current table first."""
+        return getattr(self.host, f"eomgen_{name}")(self._sim._api, *args)
+
+    def array(self, a, ctype=None):
+        """A C pointer over the buffer of the numpy array a (no copy; keep a
+        alive for the call): the model's reals, or ctype (``"int[]"``)."""
+        return self.ffi.from_buffer(ctype or self.real_array, a)
+
+    def check(self, status, where, t=None, state=None, args=None):
+        """Raise the gen exception of a nonzero C status (see
+        :class:`gen.SolverError`); nothing for 0."""
+        self._sim._check(status, where, t, state, args)
+
+    def ensure_derivatives(self):
+        """Build (or load from the cache) the derivative kernels now, where
+        they are not compiled in yet (RODAS4 and the linearizations need
+        them)."""
+        self._sim._need_derivatives()
 
 
 class Simulator:
@@ -140,6 +206,15 @@ class Simulator:
             if getattr(api, k) != n:
                 raise ValueError(f"the library of '{self.name}' has {k} = {getattr(api, k)}, "
                                  f"its interface {n}: a library of another model")
+
+    @property
+    def library(self):
+        """The compiled library under this Simulator (:class:`ModelLibrary`),
+        for code that fills the C structs itself."""
+        lib = self.__dict__.get("_library")
+        if lib is None:
+            lib = self._library = ModelLibrary(self)
+        return lib
 
     @property
     def state_labels(self):
@@ -234,7 +309,8 @@ class Simulator:
         if a.ndim == 0 and n == 1:
             a = a.reshape(1)
         if a.shape != (n,):
-            raise ValueError(f"{what} must have shape ({n},), got {np.shape(v)}")
+            raise InputError(f"{what} must have shape ({n},), got {np.shape(v)}",
+                             what.split()[-1])
         return a
 
     def _from_dict(self, d, what):
@@ -242,7 +318,7 @@ class Simulator:
         names = {"state": self.state_names, "inputs": self.input_names,
                  "constants": self.constant_names}.get(kind)
         if names is None:
-            raise ValueError(f"{what} cannot be given as a dict")
+            raise InputError(f"{what} cannot be given as a dict", what.split()[-1])
         labels = self._labels[kind]
         base = {"state": np.zeros(self.nx), "inputs": np.zeros(self.nr),
                 "constants": self.constants.copy()}[kind]
@@ -253,7 +329,8 @@ class Simulator:
             elif k in labels:                  # the sympy spelling works too
                 base[labels.index(k)] = float(v)
             else:
-                raise ValueError(f"unknown name {k!r} in {what}; known: {names}")
+                raise InputError(f"unknown name {k!r} in {what}; known: {names}",
+                                 what.split()[-1], None, k)
         return base
 
     def _ptr(self, a):
@@ -261,11 +338,24 @@ class Simulator:
             return self._ffi.NULL
         return self._ffi.from_buffer(self._arr_t, a)
 
-    def _check(self, status, where, t=None, state=None):
+    def _check(self, status, where, t=None, state=None, args=None):
+        """Raise the exception of a failure status: the function, the status,
+        the time and the state. args: {argument name: array} of the call, so
+        that a NaN or infinite input names its argument and entry."""
         if status == 0:
             return
-        msg = self._ffi.string(self._fn("status_message")(status)).decode()
         name = status_name(status)
+        if name == "ERR_NONFINITE_INPUT" and args:
+            labels = {"x": self.state_names, "x0": self.state_names, "r": self.input_names,
+                      "p": self.constant_names}
+            for arg, a in args.items():
+                if a is not None:
+                    try:
+                        finite_or_raise(arg, a, labels.get(arg))
+                    except InputError as e:
+                        raise InputError(f"{self._p}_{where}: {e}", e.argument, e.index,
+                                         e.value) from None
+        msg = self._ffi.string(self._fn("status_message")(status)).decode()
         text = f"{self._p}_{where}: {msg} [{name}]"
         if t is not None:
             text += f" at t = {float(t):.17g}"
@@ -273,6 +363,8 @@ class Simulator:
             pairs = ", ".join(f"{n}={float(v):.12g}" for n, v in zip(self.state_names, state))
             text += f", state: {pairs}"
         cls = EXCEPTIONS.get(name, SolverError)
+        if cls is InputError:
+            raise InputError(text)
         if cls in (ValueError, KeyboardInterrupt):
             raise cls(text)
         raise cls(text, status=status, status_name=name, time=t,
@@ -289,7 +381,7 @@ class Simulator:
         return None if r is None else self._vec(r, self.nr, "inputs r")
 
     # ------------------------------------------------------- evaluation
-    def mass_matrix(self, q, p=None, t=0.0):
+    def mass_matrix(self, q, *, p=None, t=0.0):
         """The mass matrix M(q) of the unconstrained equations.
 
         Parameters
@@ -315,7 +407,7 @@ class Simulator:
         (M,) = self._call("eval_mass_matrix", q, self._params(p), t, t=t)
         return M.reshape(self.nu, self.nu)
 
-    def forcing(self, q, u, r=None, p=None, t=0.0):
+    def forcing(self, q, u, *, r=None, p=None, t=0.0):
         """The forcing f(q, u, r, t), with ``M u' = f + A^T lam``.
 
         Parameters
@@ -346,7 +438,7 @@ class Simulator:
         (f,) = self._call("eval_forcing", q, u, self._inputs(r), self._params(p), t, t=t)
         return f
 
-    def kinematics(self, q, u, p=None, t=0.0):
+    def kinematics(self, q, u, *, p=None, t=0.0):
         """The coordinate rates q' from the kinematic equations.
 
         Parameters
@@ -375,7 +467,7 @@ class Simulator:
         (qd,) = self._call("eval_kinematics", q, u, self._params(p), t, t=t)
         return qd
 
-    def constraints(self, q, p=None, t=0.0):
+    def constraints(self, q, *, p=None, t=0.0):
         """The configuration-constraint residuals f_c(q).
 
         Parameters
@@ -401,7 +493,7 @@ class Simulator:
         (fc,) = self._call("eval_constraints", q, self._params(p), t, t=t)
         return fc.copy()
 
-    def constraint_jacobian(self, q, p=None, t=0.0):
+    def constraint_jacobian(self, q, *, p=None, t=0.0):
         """The configuration-constraint Jacobian d f_c / dq.
 
         Parameters
@@ -427,7 +519,7 @@ class Simulator:
         (J,) = self._call("eval_constraint_jacobian", q, self._params(p), t, t=t)
         return J.reshape(self.mc, self.nq).copy()
 
-    def velocity_constraints(self, q, u, p=None, t=0.0):
+    def velocity_constraints(self, q, u, *, p=None, t=0.0):
         """The velocity-constraint residuals A(q) u + b.
 
         Parameters
@@ -456,7 +548,7 @@ class Simulator:
         (fv,) = self._call("eval_velocity_constraints", q, u, self._params(p), t, t=t)
         return fv.copy()
 
-    def velocity_constraint_matrix(self, q, p=None, t=0.0):
+    def velocity_constraint_matrix(self, q, *, p=None, t=0.0):
         """The velocity constraints as A(q) u + b(q, t) = 0.
 
         Parameters
@@ -483,7 +575,7 @@ class Simulator:
         A, b = self._call("eval_velocity_constraint_matrix", q, self._params(p), t, t=t)
         return A.reshape(self.mv, self.nu).copy(), b.copy()
 
-    def energy(self, x, p=None, t=0.0):
+    def energy(self, x, *, p=None, t=0.0):
         """The total energy at a state.
 
         Parameters
@@ -508,13 +600,13 @@ class Simulator:
             :class:`gen.SingularError` at a singular configuration, ...).
         """
         if not self.has_energy:
-            raise ValueError(f"model '{self.name}' was built without energy=...")
+            raise InputError(f"model '{self.name}' was built without energy=...")
         x = self._vec(x, self.nx, "state x")
         (E,) = self._call("eval_energy", x[:self.nq].copy(), x[self.nq:].copy(),
                           self._params(p), t, t=t, state=x)
         return float(E[0])
 
-    def rhs(self, t, x, r=None, p=None, out=None):
+    def rhs(self, t, x, *, r=None, p=None, out=None):
         """The state derivative x', usable as ``solve_ivp``'s ``fun``.
 
         Parameters
@@ -568,24 +660,24 @@ class Simulator:
                 res = np.empty(self.nx, dtype=self._dt)
                 st = self._rhs_c(self._api, t, xb, rb, null, fb(at, res), null)
                 if st:
-                    self._check(st, "eval_rhs", t, x)
+                    self._check(st, "eval_rhs", t, x, args={"x": x, "r": r})
                 return res
         if np.ndim(x) == 2:
-            return self.rhs_batch(t, x, r, p, out=out)
+            return self.rhs_batch(t, x, r=r, p=p, out=out)
         x = self._vec(x, self.nx, "state x")
         if out is None:
             out = np.empty(self.nx, dtype=self.dtype)
         elif (type(out) is not np.ndarray or out.dtype is not self._dt
                 or out.shape != (self.nx,) or not out.flags.c_contiguous):
-            raise ValueError(f"out must be a C-contiguous {self.dtype.__name__} array of "
+            raise InputError(f"out must be a C-contiguous {self.dtype.__name__} array of "
                              f"shape ({self.nx},)")
         r = None if r is None else self._vec(r, self.nr, "inputs r")
         st = self._fn("eval_rhs")(t, self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
                                   self._ptr(out), self._ffi.NULL)
-        self._check(st, "eval_rhs", t, x)
+        self._check(st, "eval_rhs", t, x, args={"x": x, "r": r, "p": self._params(p)})
         return out
 
-    def multipliers(self, t, x, r=None, p=None):
+    def multipliers(self, t, x, *, r=None, p=None):
         """The multipliers lam of the velocity constraints (:doc:`/guides/multipliers`).
 
         Parameters
@@ -613,7 +705,7 @@ class Simulator:
         _, lam = self._call("eval_rhs", t, x, self._inputs(r), self._params(p), t=t, state=x)
         return lam.copy()
 
-    def auxiliary_forces(self, t, x, r=None, p=None):
+    def auxiliary_forces(self, t, x, *, r=None, p=None):
         """The reaction forces along the auxiliary speeds (Kane's
         ``u_auxiliary``) at a state: u' from the right-hand side, then the
         auxiliary equations ``F reactions + g = 0`` solved.
@@ -646,7 +738,7 @@ class Simulator:
         return F.copy()
 
     # ---------------------------------------------------- the manifold
-    def outputs(self, t, x, r=None, p=None):
+    def outputs(self, t, x, *, r=None, p=None):
         """The outputs y(q, u, r, t) given at model creation (``outputs={...}``).
 
         Parameters
@@ -679,7 +771,7 @@ class Simulator:
         self._check(st, "eval_outputs", t, x)
         return y[:self.ny].copy()
 
-    def project(self, x, p=None, t=0.0, tol=0.0, max_iter=0):
+    def project(self, x, *, p=None, t=0.0, tol=0.0, max_iter=0):
         """Project a state onto the configuration and velocity constraints
         (minimum-norm Gauss-Newton; independent of the partition).
 
@@ -711,7 +803,7 @@ class Simulator:
         self._check(st, "project", t, x)
         return x
 
-    def consistent_state(self, x, p=None, t=0.0, tol=0.0, max_iter=0):
+    def consistent_state(self, x, *, p=None, t=0.0, tol=0.0, max_iter=0):
         """Solve the dependent coordinates and speeds from the independent ones
         (:doc:`/guides/partitions`).
 
@@ -748,64 +840,57 @@ class Simulator:
         return x
 
     # ------------------------------------------------------- simulation
-    def simulate(self, x0, t_end, dt, method="rk4", rtol=1e-8, atol=1e-10, r=None, p=None,
-                 project=True, t0=0.0, max_steps=100000, return_multipliers=False,
-                 return_stats=False, controller=None, input_period=None, input_hold="zoh",
-                 return_inputs=False, return_outputs=False, every=1, final_only=False,
-                 max_rows=None, events=None, terminal=False, return_events=False):
+    def simulate(self, x0, t_end, dt, *, r=None, p=None, controller=None, method="rk4",
+                 rtol=1e-8, atol=1e-10, project=True, t0=0.0, max_steps=100000,
+                 input_period=None, input_hold="zoh", every=1, final_only=False, max_rows=None,
+                 events=None, terminal=False, consistent=False):
         """Simulate from x0 to t_end, in C, with one row per output time.
+
+        ``t, x = sim.simulate(x0, t_end, dt)`` unpacks the result; every
+        other quantity is an attribute of it (:class:`gen.Solution`).
 
         Parameters
         ----------
-        x0 : array_like, shape (nx,)
+        x0 : array_like, shape (nx,), or dict
             The initial state (consistent with the constraints: see
-            :meth:`consistent_state`).
+            :meth:`consistent_state`, or ``consistent=True``).
         t_end : float
             The final time (the last interval is clipped).
         dt : float
             The RK4 step, or the output interval of the adaptive methods (they
             step by their error control alone and write the output times from
             their dense output).
+        r : None, array_like, tuple or callable, optional
+            None or nr constant inputs; a table ``(t_grid, R)`` held or
+            interpolated in C (``input_hold``); or a callable ``r(t, x)``
+            sampled every ``input_period``.
+        p : array_like, shape (np,), or dict, optional
+            The constants (None: the defaults given at model creation).
+        controller : gen.LinearFeedback, optional
+            A feedback computed inside C, continuous or sampled.
         method : {"rk4", "dopri5", "rodas4"}, optional
             Fixed-step RK4; DOPRI5 (explicit, adaptive); RODAS4 (alias
             ``"rodas"``: linearly implicit, L-stable, for stiff models; it uses
             the generated Jacobian).
         rtol, atol : float, optional
             The adaptive methods' tolerances.
-        r : None, array_like, tuple or callable, optional
-            None or nr constant inputs; a table ``(t_grid, R)`` held or
-            interpolated in C (``input_hold``); or a callable ``r(t, x)``
-            sampled every ``input_period``.
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
         project : bool, optional
             Project onto the constraints after every step (default True).
         t0 : float, optional
             The initial time.
         max_steps : int, optional
             The adaptive methods' step budget between two output rows.
-        return_multipliers : bool, optional
-            Also return the multipliers, (rows, mv).
-        return_stats : bool, optional
-            Also return the integrator's statistics (a dict: ``n_rhs``,
-            ``n_accepted``, ``n_rejected``, ``n_jac``, ...).
-        controller : gen.LinearFeedback, optional
-            A feedback computed inside C, continuous or sampled.
         input_period : float, optional
             The sampling period of a callable r (default dt; 0: every stage).
         input_hold : {"zoh", "linear"}, optional
             How a table of inputs is held between its knots.
-        return_inputs : bool, optional
-            Also return the inputs in effect from each output time on, (rows, nr).
-        return_outputs : bool, optional
-            Also return the outputs, (rows, ny).
         every : int, optional
             Keep every k-th output row and the last (dropped in C; the
             integration is unchanged).
         final_only : bool, optional
             Keep only the row at t_end.
         max_rows : int, optional
-            Refuse a run that would return more rows.
+            Refuse a run that would keep more rows.
         events : dict, optional
             ``{name: direction}`` or ``{name: (direction, level)}``: crossings of
             a state or an output through zero (or level), upwards (+1),
@@ -813,23 +898,20 @@ class Simulator:
         terminal : bool or dict, optional
             The first crossing of a terminal event ends the run; its state is
             the last row.
-        return_events : bool, optional
-            Also return the list of ``(name, t, x)`` of the crossings found.
+        consistent : bool, optional
+            Solve the dependent states of x0 first (:meth:`consistent_state`).
 
         Returns
         -------
-        t : numpy.ndarray, shape (rows,)
-            The output times.
-        X : numpy.ndarray, shape (rows, nx)
-            The states.
-        lam, R, Y, events, stats
-            When asked, in this order: the multipliers, the inputs, the outputs,
-            the events and the statistics.
+        gen.Solution
+            ``t``, ``x``, ``r``, ``lam``, ``outputs``, ``events``, ``status``,
+            ``message``, ``stats`` and ``sol(t)``; unpacks as ``t, x``.
 
         Raises
         ------
-        ValueError
-            On a bad argument (shape, method, dt, a run longer than max_rows).
+        gen.InputError
+            On a bad argument (shape, NaN, method, dt, a run longer than
+            max_rows or than the memory available): the message names it.
         gen.SolverError
             When a step fails (:class:`gen.SingularError`,
             :class:`gen.ConvergenceError`, :class:`gen.DivergenceError`): the
@@ -837,109 +919,95 @@ class Simulator:
         """
         from .control import InputPlan, plan_inputs
         from .events import plan_events
-        method = method_name(method)
-        if not (np.isfinite(dt) and dt > 0):
-            raise ValueError(f"dt must be a positive number, got {dt!r}")
-        if not (np.isfinite(t_end) and t_end >= t0):
-            raise ValueError(f"t_end must be a number >= t0 = {t0}, got {t_end!r}")
+        o = run_options(t_end, dt, method=method, rtol=rtol, atol=atol, project=project, t0=t0,
+                        max_steps=max_steps, input_period=input_period,
+                        input_hold=input_hold, every=every, final_only=final_only,
+                        max_rows=max_rows, events=events, terminal=terminal,
+                        consistent=consistent)
         x0 = self._vec(x0, self.nx, "state x0")
-        plan = plan_inputs(self, r, controller, dt, method, input_period, input_hold)
-        if plan is None:
-            r = None if r is None else self._vec(r, self.nr, "inputs r")
-        rows = self._fn("simulate_rows")(t0, t_end, dt)
-        if rows < 0:
-            self._check(rows, "simulate_rows")
-        every = int(every)
-        if every < 1:
-            raise ValueError(f"every must be an integer >= 1, got {every!r}")
-        full = rows
-        rows = self._fn("simulate_rows_kept")(rows, every, 1 if final_only else 0)
-        if max_rows is not None and rows > max_rows:
-            raise ValueError(f"this run would return {rows} rows ({full} output times, every="
-                             f"{every}), more than max_rows={max_rows}: use a larger dt or "
-                             "every=, or final_only=True")
-        if method in JACOBIAN_METHODS:
+        finite_or_raise("x0", x0, self.state_names)
+        pp = self._params(p)
+        if pp is not None:
+            finite_or_raise("p", pp, self.constant_names)
+        plan = plan_inputs(self, r, controller, o.dt, o.method, o.input_period, o.input_hold)
+        if plan is None and r is not None:
+            r = self._vec(r, self.nr, "inputs r")
+            finite_or_raise("r", r, self.input_names)
+        # the rows kept, checked before anything is allocated
+        full = self._fn("simulate_rows")(o.t0, o.t_end, o.dt)
+        row_bytes = self._dt.itemsize * (1 + self.nx + max(1, self.mv) + max(1, self.nr))
+        rows, full = plan_rows(o, full if full >= 0 else None, row_bytes,
+                               self.library.function("simulate_rows_kept"))
+        if o.method in JACOBIAN_METHODS:
             self._need_derivatives()       # its Jacobian
+        if o.consistent:
+            x0 = self.consistent_state(x0, p=pp, t=o.t0)
         opts = self._new("sim_options")
         self._fn("sim_options_default")(opts)
-        opts.method = METHODS[method]
-        opts.project = 1 if project else 0
-        opts.rtol = rtol
-        opts.atol = atol
-        opts.max_steps = int(max_steps)
-        opts.every = every
-        opts.final_only = 1 if final_only else 0
+        opts.method = METHODS[o.method]
+        opts.project = 1 if o.project else 0
+        opts.rtol = o.rtol
+        opts.atol = o.atol
+        opts.max_steps = o.max_steps
+        opts.every = o.every
+        opts.final_only = 1 if o.final_only else 0
+        evplan = None
+        if o.events is not None:
+            evplan = plan_events(self, o.events, o.terminal)
+            if plan is None:
+                plan = InputPlan(self)
+                if r is not None:
+                    plan.struct.r = plan.array(r)
         stats = self._new("sim_stats")
         t = np.empty(rows, dtype=self.dtype)
         X = np.empty((rows, self.nx), dtype=self.dtype)
         lam = np.empty((rows, max(1, self.mv)), dtype=self.dtype)
         R = np.empty((rows, max(1, self.nr)), dtype=self.dtype)
-        evplan = None
-        if events is not None:
-            evplan = plan_events(self, events, terminal)
-            if plan is None:
-                plan = InputPlan(self)
-                if r is not None:
-                    plan.struct.r = plan.array(r)
-        elif terminal is not False or return_events:
-            raise ValueError("terminal= and return_events= need events={name: direction}")
+        P, ptr = self._ptr(pp), self._ptr
         if evplan is not None:
-            for _ in range(2):
-                st = call(self, opts, self._fn("simulate_events"),  # Ctrl-C: gen/interrupt.py
-                          self._ptr(x0), t0, t_end, dt, plan.struct, evplan.struct,
-                          self._ptr(self._params(p)), opts, rows, self._ptr(t), self._ptr(X),
-                          self._ptr(lam), self._ptr(R), stats)
-                if plan.error is not None:
-                    raise plan.error
-                if stats.n_events <= evplan.capacity:
-                    break
-                evplan.resize(stats.n_events)   # the same run again, with room for all
+            verb, args = "simulate_events", (ptr(x0), o.t0, o.t_end, o.dt, plan.struct,
+                                             evplan.struct, P, opts, rows, ptr(t), ptr(X),
+                                             ptr(lam), ptr(R), stats)
         elif plan is None:
-            st = call(self, opts, self._fn("simulate"),  # Ctrl-C: gen/interrupt.py
-                      self._ptr(x0), t0, t_end, dt, self._ptr(r),
-                      self._ptr(self._params(p)), opts, rows, self._ptr(t),
-                      self._ptr(X), self._ptr(lam), stats)
-            if return_inputs or return_outputs:
-                R[:, :self.nr] = 0 if r is None else r
+            verb, args = "simulate", (ptr(x0), o.t0, o.t_end, o.dt, ptr(r), P, opts, rows,
+                                      ptr(t), ptr(X), ptr(lam), stats)
+            R[:, :self.nr] = 0 if r is None else r
         else:
-            st = call(self, opts, self._fn("simulate_input"),  # Ctrl-C: gen/interrupt.py
-                      self._ptr(x0), t0, t_end, dt, plan.struct,
-                      self._ptr(self._params(p)), opts, rows,
-                      self._ptr(t), self._ptr(X), self._ptr(lam),
-                      self._ptr(R), stats)
-            if plan.error is not None:
+            verb, args = "simulate_input", (ptr(x0), o.t0, o.t_end, o.dt, plan.struct, P, opts,
+                                            rows, ptr(t), ptr(X), ptr(lam), ptr(R), stats)
+        while True:
+            st = call(self, opts, self._fn(verb), *args)   # the C call of simulate (Ctrl-C: gen/interrupt.py)
+            if plan is not None and plan.error is not None:
                 raise plan.error
+            if evplan is None or stats.n_events <= evplan.capacity:
+                break
+            evplan.resize(stats.n_events)   # the same run again, with room for all
         if st != 0:
-            last = np.array([stats.x_last[i] for i in range(self.nx)])
-            self._check(st, "simulate", stats.t_last, last)
+            if stats.n_out > 0:
+                self._check(st, verb, stats.t_last,
+                            np.array([stats.x_last[i] for i in range(self.nx)]))
+            self._check(st, verb, o.t0, x0, args={"x0": x0, "p": pp, "r": r})
+        status, message = 0, "the run reached t_end"
         if stats.n_out < rows:   # a terminal event ended the run
             rows = stats.n_out
             t, X, lam, R = t[:rows], X[:rows], lam[:rows], R[:rows]
-        out = [t, X]
-        if return_multipliers:
-            out.append(lam[:, :self.mv].copy())
-        if return_inputs:
-            out.append(R[:, :self.nr].copy())
-        if return_outputs:
-            pp = self._params(p)
-            Y = np.empty((rows, self.ny), dtype=self.dtype)
-            for k in range(rows):
-                Y[k] = self.outputs(t[k], X[k], r=R[k, :self.nr] if self.nr else None, p=pp)
-            out.append(Y)
-        if return_events:
-            out.append(evplan.found(stats.n_events))
-        if return_stats:
-            info = {"n_accepted": stats.n_accepted, "n_rejected": stats.n_rejected,
-                    "n_rhs": stats.n_rhs, "n_jac": stats.n_jac, "n_out": stats.n_out}
-            if evplan is not None:
-                info["n_events"] = stats.n_events
-                info["terminal"] = (evplan.names[stats.terminal] if stats.terminal >= 0
-                                    else None)
-            out.append(info)
-        return tuple(out)
+        info = {"n_steps": stats.n_accepted, "n_accepted": stats.n_accepted,
+                "n_rejected": stats.n_rejected, "n_rhs": stats.n_rhs, "n_jac": stats.n_jac,
+                "n_out": stats.n_out}
+        found = []
+        if evplan is not None:
+            found = evplan.found(stats.n_events)
+            info["n_events"] = stats.n_events
+            info["terminal"] = evplan.names[stats.terminal] if stats.terminal >= 0 else None
+            if info["terminal"] is not None:
+                status = 1
+                message = f"the terminal event {info['terminal']!r} ended the run at " \
+                          f"t = {float(t[-1]):.17g}"
+        return Solution(self, t, X, R[:, :self.nr], lam[:, :self.mv],
+                        pp, found, status, message, info, o.method)
 
-    def step_rk4(self, t, x, h, r=None, p=None, project=True):
-        """One classic RK4 step.
+    def step(self, t, x, h, *, r=None, p=None, method="rk4", project=True):
+        """One integrator step of size h from (t, x).
 
         Parameters
         ----------
@@ -953,31 +1021,40 @@ class Simulator:
             The inputs (None: zero).
         p : array_like, shape (np,), optional
             The constants (None: the defaults given at model creation).
+        method : {"rk4"}, optional
+            The integrator: the classic RK4 step (the C ``<p>_step_rk4``).
         project : bool, optional
             Project the new state onto the constraints (default True).
 
         Returns
         -------
         numpy.ndarray, shape (nx,)
-            The new state.
+            The state after the step.
 
         Raises
         ------
+        gen.InputError
+            On a wrong shape (the message names the expected one), a NaN or
+            infinite input, or a method other than rk4.
         gen.SolverError
             When the C function returns a failure status (a
             :class:`gen.SingularError` at a singular configuration, ...).
         """
-        x = self._vec(x, self.nx, "state x").copy()
+        if method != "rk4":
+            raise InputError(f"step supports method='rk4' (a fixed step); got {method!r}",
+                             "method", None, method)
+        x1 = self._vec(x, self.nx, "state x").copy()
         r = None if r is None else self._vec(r, self.nr, "inputs r")
-        st = self._fn("step_rk4")(t, h, self._ptr(r), self._ptr(self._params(p)),
-                                  1 if project else 0, self._ptr(x))
-        self._check(st, "step_rk4", t, x)
-        return x
+        pp = self._params(p)
+        st = self._fn("step_rk4")(t, h, self._ptr(r), self._ptr(pp), 1 if project else 0,
+                                  self._ptr(x1))
+        self._check(st, "step_rk4", t, x, args={"x": x1, "r": r, "p": pp})
+        return x1
 
-    def step(self, t, x, h, r=None, p=None, method="rk4", sensitivities=False, project=None):
-        """One integrator step of size h from (t, x), optionally with its exact
-        derivatives by the step's variational equations (the generated Jacobian
-        kernels, not finite differences).
+    def step_sensitivity(self, t, x, h, *, r=None, p=None, method="rk4"):
+        """One integrator step of size h from (t, x) and its exact derivatives
+        by the step's variational equations (the generated Jacobian kernels,
+        not finite differences); the step is not projected.
 
         For a constrained model the dependent entries of x follow the
         constraints to first order (perturb ``x_ind``, complete with
@@ -998,47 +1075,67 @@ class Simulator:
             The constants (None: the defaults given at model creation).
         method : {"rk4"}, optional
             The integrator (the sensitivities are those of RK4).
-        sensitivities : bool, optional
-            Also return ``Fx = dx1_ind/dx_ind`` (ns, ns) and ``Fr = dx1_ind/dr``
-            (ns, nr) on the independent state.
-        project : bool, optional
-            Project the plain step onto the constraints (default: True without
-            sensitivities; a step with sensitivities is not projected).
 
         Returns
         -------
         x1 : numpy.ndarray, shape (nx,)
-            The state after the step.
-        Fx, Fr : numpy.ndarray
-            With ``sensitivities=True``: ``(x1, Fx, Fr)``.
+            The state after the (unprojected) step.
+        Fx : numpy.ndarray, shape (ns, ns)
+            ``dx1_ind/dx_ind`` on the independent state.
+        Fr : numpy.ndarray, shape (ns, nr)
+            ``dx1_ind/dr``.
 
         Raises
         ------
-        ValueError
-            On a wrong shape (the message names the expected one) or a NaN or
-            infinite input.
+        gen.InputError
+            On a wrong shape, a NaN or infinite input, or a method other than
+            rk4.
+        gen.SolverError
+            When the C function returns a failure status.
+        """
+        if method != "rk4":
+            raise InputError(f"step_sensitivity supports method='rk4' (a fixed step); got "
+                             f"{method!r}", "method", None, method)
+        x1 = self._vec(x, self.nx, "state x").copy()
+        r = None if r is None else self._vec(r, self.nr, "inputs r")
+        pp = self._params(p)
+        Fx = np.empty(self.ns * self.ns, dtype=self.dtype)
+        Fr = np.zeros(max(1, self.ns * self.nr), dtype=self.dtype)
+        st = self._fn("step_sensitivity")(t, h, self._ptr(r), self._ptr(pp),
+                                          self._ptr(x1), self._ptr(Fx), self._ptr(Fr))
+        self._check(st, "step_sensitivity", t, x1, args={"x": x1, "r": r, "p": pp})
+        return (x1, Fx.reshape(self.ns, self.ns),
+                Fr[:self.ns * self.nr].reshape(self.ns, self.nr).copy())
+
+    def jac(self, t, x, *, r=None, p=None):
+        """The Jacobian d x'/dx of the right-hand side (every entry of x
+        free), usable as ``solve_ivp``'s ``jac``:
+        ``solve_ivp(sim.rhs, (0, 10), x0, method="Radau", jac=sim.jac)``.
+
+        Parameters
+        ----------
+        t : float
+            Time.
+        x : array_like, shape (nx,)
+            The state ``[q, u]`` (layout: ``state_names``).
+        r : array_like, shape (nr,), optional
+            The inputs (None: zero).
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+
+        Returns
+        -------
+        numpy.ndarray, shape (nx, nx)
+
+        Raises
+        ------
         gen.SolverError
             When the C function returns a failure status (a
             :class:`gen.SingularError` at a singular configuration, ...).
         """
-        if method != "rk4":
-            raise ValueError(f"step supports method='rk4' (a fixed step); got {method!r}")
-        if not sensitivities:
-            return self.step_rk4(t, x, h, r=r, p=p, project=True if project is None else project)
-        if project:
-            raise ValueError("step(sensitivities=True) differentiates the unprojected step; "
-                             "project=True is not available with it")
-        x1 = self._vec(x, self.nx, "state x").copy()
-        r = None if r is None else self._vec(r, self.nr, "inputs r")
-        Fx = np.empty(self.ns * self.ns, dtype=self.dtype)
-        Fr = np.zeros(max(1, self.ns * self.nr), dtype=self.dtype)
-        st = self._fn("step_sensitivity")(t, h, self._ptr(r), self._ptr(self._params(p)),
-                                          self._ptr(x1), self._ptr(Fx), self._ptr(Fr))
-        self._check(st, "step_sensitivity", t, x1)
-        return (x1, Fx.reshape(self.ns, self.ns),
-                Fr[:self.ns * self.nr].reshape(self.ns, self.nr).copy())
+        return self.jacobian(t, x, r=r, p=p)[0]
 
-    def jacobian(self, t, x, r=None, p=None):
+    def jacobian(self, t, x, *, r=None, p=None):
         """The full-state Jacobian of the right-hand side, every entry of x free.
 
         Parameters
@@ -1071,20 +1168,20 @@ class Simulator:
         Jr = np.zeros(max(1, self.nx * self.nr), dtype=self.dtype)
         st = self._fn("jacobian")(t, self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
                                   self._ptr(Jx), self._ptr(Jr))
-        self._check(st, "jacobian", t, x)
+        self._check(st, "jacobian", t, x, args={"x": x, "r": r, "p": self._params(p)})
         return Jx.reshape(self.nx, self.nx), Jr[:self.nx * self.nr].reshape(self.nx, self.nr).copy()
 
     # ---------------------------------------------------- linearization
-    def linearize(self, x_op, r_op=None, p=None, t=0.0, dt=None, outputs=False):
+    def linearize(self, x, *, r=None, p=None, t=0.0, dt=None):
         """Linearize about any operating point (it need not be an equilibrium),
         in C, on the independent state ``[q_ind, u_ind]`` (sympy's
         ``A_and_B=True`` partition).
 
         Parameters
         ----------
-        x_op : array_like, shape (nx,)
+        x : array_like, shape (nx,)
             The operating state (consistent with the constraints).
-        r_op : array_like, shape (nr,), optional
+        r : array_like, shape (nr,), optional
             The operating inputs (None: zero).
         p : array_like, shape (np,), optional
             The constants (None: the defaults given at model creation).
@@ -1094,9 +1191,6 @@ class Simulator:
             Return the zero-order-hold discretization over a step dt instead:
             ``Ad = exp(A dt)``, ``Bd = int_0^dt exp(A s) ds B`` (scaling and
             squaring, in C).
-        outputs : bool, optional
-            Also return ``C = dy/dx_ind`` (ny, ns) and ``D = dy/dr`` (ny, nr) of
-            the model's outputs.
 
         Returns
         -------
@@ -1104,25 +1198,60 @@ class Simulator:
             (or Ad with dt)
         B : numpy.ndarray, shape (ns, nr)
             (or Bd with dt)
-        C, D : numpy.ndarray
-            With ``outputs=True``: ``(A, B, C, D)``.
 
         Raises
         ------
-        ValueError
+        gen.InputError
             On a wrong shape (the message names the expected one) or a NaN or
             infinite input.
         gen.SolverError
             When the C function returns a failure status (a
             :class:`gen.SingularError` at a singular configuration, ...).
         """
-        x = self._vec(x_op, self.nx, "state x_op")
-        r = None if r_op is None else self._vec(r_op, self.nr, "inputs r_op")
+        return self._linearize(x, r, p, t, dt, False)
+
+    def linearize_outputs(self, x, *, r=None, p=None, t=0.0, dt=None):
+        """:meth:`linearize` and the outputs' ``C = dy/dx_ind`` (ny, ns) and
+        ``D = dy/dr`` (ny, nr), in one C call (the dependent entries follow
+        the constraints, as for A).
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,)
+            The operating state (consistent with the constraints).
+        r : array_like, shape (nr,), optional
+            The operating inputs (None: zero).
+        p : array_like, shape (np,), optional
+            The constants (None: the defaults given at model creation).
+        t : float, optional
+            Time (default 0), for models that depend on it.
+        dt : float, optional
+            A and B as the zero-order-hold discretization over dt (C and D
+            are the same).
+
+        Returns
+        -------
+        A, B : numpy.ndarray, shapes (ns, ns), (ns, nr)
+            As :meth:`linearize`.
+        C, D : numpy.ndarray, shapes (ny, ns), (ny, nr)
+
+        Raises
+        ------
+        gen.InputError
+            On a wrong shape or a NaN or infinite input.
+        gen.SolverError
+            When the C function returns a failure status.
+        """
+        return self._linearize(x, r, p, t, dt, True)
+
+    def _linearize(self, x, r, p, t, dt, outputs):
+        x = self._vec(x, self.nx, "state x")
+        r = None if r is None else self._vec(r, self.nr, "inputs r")
         A = np.empty(self.ns * self.ns, dtype=self.dtype)
         B = np.zeros(max(1, self.ns * self.nr), dtype=self.dtype)
         if dt is not None:
             if not (np.isfinite(dt) and dt > 0):
-                raise ValueError(f"dt must be a positive number, got {dt!r}")
+                raise InputError(f"dt must be a positive number, got {dt!r}")
             st = self._fn("linearize_discrete")(self._ptr(x), self._ptr(r),
                                                 self._ptr(self._params(p)), t, dt,
                                                 self._ptr(A), self._ptr(B))
@@ -1149,15 +1278,15 @@ class Simulator:
         return (A.reshape(self.ns, self.ns),
                 B[:self.ns * self.nr].reshape(self.ns, self.nr).copy())
 
-    def to_statespace(self, x_op, r_op=None, p=None, t=0.0, dt=None):
+    def to_statespace(self, x, *, r=None, p=None, t=0.0, dt=None):
         """The linearization as a python-control ``StateSpace``, with its
         states, inputs and outputs named (``pip install eomgen[control]``).
 
         Parameters
         ----------
-        x_op : array_like, shape (nx,)
+        x : array_like, shape (nx,)
             The operating state.
-        r_op : array_like, shape (nr,), optional
+        r : array_like, shape (nr,), optional
             The operating inputs.
         p : array_like, shape (np,), optional
             The constants (None: the defaults given at model creation).
@@ -1169,7 +1298,7 @@ class Simulator:
         Returns
         -------
         control.StateSpace
-            Outputs are the model's (C, D of ``linearize(outputs=True)``), or the
+            Outputs are the model's (C, D of :meth:`linearize_outputs`), or the
             independent state (C = I, D = 0) for a model without outputs.
 
         Raises
@@ -1184,10 +1313,10 @@ class Simulator:
                               "'eomgen[control]' (or pip install control)") from None
         names = list(self.independent_state_names)
         if self.ny:
-            A, B, C, D = self.linearize(x_op, r_op, p=p, t=t, dt=dt, outputs=True)
+            A, B, C, D = self.linearize_outputs(x, r=r, p=p, t=t, dt=dt)
             out_names = list(self.output_names)
         else:
-            A, B = self.linearize(x_op, r_op, p=p, t=t, dt=dt)
+            A, B = self.linearize(x, r=r, p=p, t=t, dt=dt)
             C, D = np.eye(self.ns), np.zeros((self.ns, self.nr))
             out_names = names
         kw = dict(states=names, inputs=list(self.input_names), outputs=out_names,
@@ -1208,7 +1337,8 @@ class Simulator:
             return a, 0
         if a.shape == (n, width):
             return a, width
-        raise ValueError(f"{what} must have shape ({width},) or ({n}, {width}), got {a.shape}")
+        raise InputError(f"{what} must have shape ({width},) or ({n}, {width}), got {a.shape}",
+                         what.split()[-1])
 
     def _batch_fn(self, name):
         return functools.partial(call, self, None, self._fn(name))   # Ctrl-C: gen/interrupt.py
@@ -1218,11 +1348,11 @@ class Simulator:
             try:
                 self._check(status, where, t, X[idx])
             except (ValueError, SolverError) as e:
-                raise type(e)(f"state {idx} of {len(X)}: {e}") if isinstance(e, ValueError) \
+                raise InputError(f"state {idx} of {len(X)}: {e}") if isinstance(e, ValueError) \
                     else type(e)(f"state {idx} of {len(X)}: {e}", status=e.status,
                                  status_name=e.status_name, time=e.time, state=e.state) from None
 
-    def rhs_batch(self, t, X, r=None, p=None, out=None):
+    def rhs_batch(self, t, X, *, r=None, p=None, out=None):
         """x' for N states in one C call, the GIL released.
 
         Parameters
@@ -1261,7 +1391,7 @@ class Simulator:
                 return res
         X = np.ascontiguousarray(X, dtype=self.dtype)
         if X.ndim != 2 or X.shape[1] != self.nx:
-            raise ValueError(f"states must have shape (N, {self.nx}), got {X.shape}")
+            raise InputError(f"states must have shape (N, {self.nx}), got {X.shape}")
         n = X.shape[0]
         # (a Python number first: np.ndim costs a microsecond, a fifth of
         # the call's fixed cost)
@@ -1270,20 +1400,20 @@ class Simulator:
         else:
             T, ts = np.ascontiguousarray(t, dtype=self.dtype), 1
             if T.shape != (n,):
-                raise ValueError(f"t must be a number or have shape ({n},), got {T.shape}")
+                raise InputError(f"t must be a number or have shape ({n},), got {T.shape}")
         R, rs = self._rows(r, n, self.nr, "inputs r")
         P, ps = self._rows(p, n, self.np, "constants p")
         if out is None:
             out = np.empty((n, self.nx), dtype=self.dtype)
         elif out.shape != (n, self.nx) or out.dtype is not self._dt or not out.flags.c_contiguous:
-            raise ValueError(f"out must be a C-contiguous array of shape ({n}, {self.nx})")
+            raise InputError(f"out must be a C-contiguous array of shape ({n}, {self.nx})")
         st = self._ffi.new("int *")
         idx = self._batch_fn("rhs_batch")(n, self._ptr(T), ts, self._ptr(X), self._ptr(R), rs,
                                            self._ptr(P), ps, self._ptr(out), st)
         self._batch_check(idx, st[0], "eval_rhs", X)
         return out
 
-    def mass_matrix_batch(self, Q, p=None):
+    def mass_matrix_batch(self, Q, *, p=None):
         """M(q) for N configurations in one C call.
 
         Parameters
@@ -1308,7 +1438,7 @@ class Simulator:
         """
         Q = np.ascontiguousarray(Q, dtype=self.dtype)
         if Q.ndim != 2 or Q.shape[1] not in (self.nq, self.nx):
-            raise ValueError(f"coordinates must have shape (N, {self.nq}) or (N, {self.nx}), "
+            raise InputError(f"coordinates must have shape (N, {self.nq}) or (N, {self.nx}), "
                              f"got {Q.shape}")
         n = Q.shape[0]
         P, ps = self._rows(p, n, self.np, "constants p")
@@ -1319,7 +1449,7 @@ class Simulator:
         self._batch_check(idx, st[0], "eval_mass_matrix", Q)
         return out
 
-    def linearize_batch(self, X, r=None, p=None, t=0.0):
+    def linearize_batch(self, X, *, r=None, p=None, t=0.0):
         """(A, B) at N operating points in one C call.
 
         Parameters
@@ -1349,7 +1479,7 @@ class Simulator:
         """
         X = np.ascontiguousarray(X, dtype=self.dtype)
         if X.ndim != 2 or X.shape[1] != self.nx:
-            raise ValueError(f"operating points must have shape (N, {self.nx}), got {X.shape}")
+            raise InputError(f"operating points must have shape (N, {self.nx}), got {X.shape}")
         n = X.shape[0]
         R, rs = self._rows(r, n, self.nr, "inputs r")
         P, ps = self._rows(p, n, self.np, "constants p")
@@ -1362,79 +1492,61 @@ class Simulator:
         self._batch_check(idx, st[0], "linearize", X, t)
         return A, B
 
-    def simulate_batch(self, X0, t_end, dt, r=None, p=None, workers=None, **kw):
-        """simulate() for N initial states and/or N parameter sets, on threads
-        (the C integrator runs without the GIL).
+    def outputs_batch(self, t, X, *, r=None, p=None):
+        """The outputs y for N states in one C call.
 
         Parameters
         ----------
-        X0 : array_like, shape (N, nx) or (nx,)
-            The initial states.
-        t_end : float
-            The final time.
-        dt : float
-            The RK4 step or the adaptive methods' output interval.
-        r : optional
-            As for :meth:`simulate`: constant inputs (one row or (N, nr)), a
-            table ``(t_grid, R)`` or a callable, shared by every run.
+        t : float or array_like, shape (N,)
+            The time(s).
+        X : array_like, shape (N, nx)
+            The states.
+        r : array_like, shape (nr,) or (N, nr), optional
+            One input vector for all states or one row per state.
         p : array_like, shape (np,) or (N, np), optional
-            The constants.
-        workers : int, optional
-            Threads (default: every core).
-        **kw
-            Keyword arguments of :meth:`simulate`.
+            One constant vector for all states or one row per state.
 
         Returns
         -------
-        t : numpy.ndarray, shape (rows,)
-        X : numpy.ndarray, shape (N, rows, nx)
+        numpy.ndarray, shape (N, ny)
+            Named by ``output_names``.
 
         Raises
         ------
-        ValueError
-            On a wrong shape (the message names the expected one) or a NaN or
-            infinite input.
+        gen.InputError
+            On a wrong shape or a NaN or infinite input.
         gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
+            When the C function returns a failure status.
         """
-        from concurrent.futures import ThreadPoolExecutor
-        import os
-        X0 = np.asarray(X0, dtype=float)
-        if X0.ndim == 1:
-            X0 = X0[None, :]
-        P = None if p is None else np.asarray(p, dtype=float)
-        # a callable r(t, x) or a table (t_grid, R) is the same for every run
-        shared_r = callable(r) or (isinstance(r, tuple) and len(r) == 2)
-        R = None if r is None or shared_r else np.asarray(r, dtype=float)
-        n = max(len(X0), 1 if P is None or P.ndim == 1 else len(P),
-                1 if R is None or R.ndim == 1 else len(R))
-        if len(X0) not in (1, n):
-            raise ValueError(f"X0 must have 1 or {n} rows, got {len(X0)}")
+        X = np.ascontiguousarray(X, dtype=self.dtype)
+        if X.ndim != 2 or X.shape[1] != self.nx:
+            raise InputError(f"states X must have shape (N, {self.nx}), got {X.shape}", "X")
+        n = X.shape[0]
+        if np.ndim(t) == 0:
+            T, ts = np.array([t], dtype=self.dtype), 0
+        else:
+            T, ts = np.ascontiguousarray(t, dtype=self.dtype), 1
+            if T.shape != (n,):
+                raise InputError(f"t must be a number or have shape ({n},), got {T.shape}", "t")
+        R, rs = self._rows(r, n, self.nr, "inputs r")
+        P, ps = self._rows(p, n, self.np, "constants p")
+        out = np.empty((n, max(1, self.ny)), dtype=self.dtype)
+        if self.ny == 0 or n == 0:
+            return out[:, :0] if self.ny == 0 else out
+        st = self._ffi.new("int *")
+        idx = self._batch_fn("outputs_batch")(n, self._ptr(T), ts, self._ptr(X), self._ptr(R),
+                                              rs, self._ptr(P), ps, self._ptr(out), st)
+        self._batch_check(idx, st[0], "eval_outputs", X)
+        return out
 
-        def row(a, i):
-            if a is None:
-                return None
-            return a if a.ndim == 1 else a[i]
-
-        def one(i):
-            x0 = X0[0] if len(X0) == 1 else X0[i]
-            return self.simulate(x0, t_end, dt, r=r if shared_r else row(R, i), p=row(P, i),
-                                 **kw)
-
-        workers = workers or os.cpu_count() or 1
-        with ThreadPoolExecutor(max_workers=workers) as ex:
-            results = list(ex.map(one, range(n)))
-        t = results[0][0]
-        return (t, np.stack([res[1] for res in results]),
-                *([np.stack([res[k] for res in results]) for k in range(2, len(results[0]))]))
-
-    def ensemble(self, x0, t_end, dt, p=None, r=None, controller=None, reduce="final",
-                 client=None, chunk=None, method="rk4", rtol=1e-8, atol=1e-10, project=True,
-                 t0=0.0, max_steps=100000, consistent=False, workers=None, progress=None,
-                 input_period=None, input_hold="zoh"):
-        """N simulations in C, reduced as they finish: in chunks on every core
-        (threads, the GIL released) or on a Dask cluster (:doc:`/guides/ensembles`).
+    def ensemble(self, x0, t_end, dt, *, r=None, p=None, controller=None, reduce="final",
+                 client=None, chunk=None, workers=None, progress=None, method="rk4", rtol=1e-8,
+                 atol=1e-10, project=True, t0=0.0, max_steps=100000, input_period=None,
+                 input_hold="zoh", every=1, final_only=False, max_rows=None, events=None,
+                 terminal=False, consistent=False):
+        """N simulations in C, reduced as they finish (or every row kept): in
+        chunks on every core (threads, the GIL released) or on a Dask cluster
+        (:doc:`/guides/ensembles`).
 
         Each run is exactly ``sim.simulate`` of its own x0, p, r (the same C
         path), so the results do not depend on chunk, workers or client.
@@ -1449,33 +1561,36 @@ class Simulator:
             The final time.
         dt : float
             The RK4 step or the output interval.
-        p : array_like or dict, optional
-            One constant vector, (N, np), or a dict (other constants their
-            defaults).
         r : optional
             Constant inputs (one row, (N, nr) or a dict), or a table ``(t_grid,
             R)`` shared by every run; a Python function is refused (it would
             hold the GIL at every step).
+        p : array_like or dict, optional
+            One constant vector, (N, np), or a dict (other constants their
+            defaults).
         controller : gen.LinearFeedback, optional
             A feedback computed in C, shared by every run.
         reduce : str, reducer, callable or dict, optional
-            ``"final"`` (the state at t_end, (N, nx)), :class:`gen.At`,
-            :class:`gen.Min`, :class:`gen.Max`, :class:`gen.Mean`, a function
-            ``f(t, X)`` called per chunk on its full trajectories, or a dict
-            ``{key: reducer}``.
+            ``"final"`` (the state at t_end, (N, nx)), ``"rows"`` (every row,
+            (N, rows, nx), with ``res.t``), :class:`gen.At`, :class:`gen.Min`,
+            :class:`gen.Max`, :class:`gen.Mean`, a function ``f(t, X)`` called
+            per chunk on its full trajectories, or a dict ``{key: reducer}``.
         client : dask.distributed.Client, optional
             Run the chunks on the cluster's workers (each builds the model from
             its sources into its own cache, by content).
         chunk : int, optional
             Runs per C call (default: a few chunks per worker).
-        method, rtol, atol, project, t0, max_steps, input_period, input_hold
-            As for :meth:`simulate`.
-        consistent : bool, optional
-            Solve each run's dependent states first.
         workers : int, optional
             Threads (default: every core).
         progress : bool, optional
             A tqdm progress bar (None: on a terminal).
+        method, rtol, atol, project, t0, max_steps, input_period, input_hold, max_rows, consistent
+            As for :meth:`simulate` (checked by the same code).
+        every, final_only, events, terminal
+            Accepted as :meth:`simulate`'s; an ensemble keeps what its reducers
+            ask for, so ``every`` must be 1, ``final_only=True`` means
+            ``reduce="final"``, and events are refused (simulate the runs that
+            need them).
 
         Returns
         -------
@@ -1483,12 +1598,13 @@ class Simulator:
             ``res[key]`` per reducer, ``res.status``, ``res.failures`` (failed
             runs: NaN rows, their status and last state), ``res.runs_per_second``.
         """
-        from .ensemble import run_ensemble
-        return run_ensemble(self, x0, t_end, dt, p=p, r=r, controller=controller,
-                            reduce=reduce, client=client, chunk=chunk, method=method, rtol=rtol,
-                            atol=atol, project=project, t0=t0, max_steps=max_steps,
-                            consistent=consistent, workers=workers, progress=progress,
-                            input_period=input_period, input_hold=input_hold)
+        opts = run_options(t_end, dt, method=method, rtol=rtol, atol=atol, project=project,
+                           t0=t0, max_steps=max_steps, input_period=input_period,
+                           input_hold=input_hold, every=every, final_only=final_only,
+                           max_rows=max_rows, events=events, terminal=terminal,
+                           consistent=consistent)
+        return run_ensemble(self, x0, opts, r=r, p=p, controller=controller, reduce=reduce,
+                            client=client, chunk=chunk, workers=workers, progress=progress)
 
     def __repr__(self):
         return (f"<eomgen Simulator '{self.name}' ({self.method}, {self.real}): "

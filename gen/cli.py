@@ -287,11 +287,11 @@ def cmd_linearize(a, progress):
     x, p, r = _state(sim, a, a.at)
     discrete = None
     with progress.stage("linearize"):
-        A, B = sim.linearize(x, r_op=r, p=p)
+        A, B = sim.linearize(x, r=r, p=p)
         if getattr(a, "dt", None) is not None:
             if not a.dt > 0:
                 raise UsageError(f"--dt must be positive, got {a.dt}")
-            discrete = (a.dt,) + sim.linearize(x, r_op=r, p=p, dt=a.dt)
+            discrete = (a.dt,) + sim.linearize(x, r=r, p=p, dt=a.dt)
     print_linearization(sim, x, r, A, B, discrete)
     return 0
 
@@ -315,14 +315,15 @@ def cmd_simulate(a, progress):
         r = _read_input_table(sim, a.input_csv)
         varying = True
     method = abi.method_name(a.method, "--method")
-    kw = dict(events=events, terminal=terminal, return_events=True) if events else {}
+    kw = dict(events=events, terminal=terminal) if events else {}
     with progress.stage(f"simulate {a.t_end:g} s ({method})"):
-        res = sim.simulate(x, a.t_end, a.dt, method=method, r=r, p=p, rtol=a.rtol,
-                           atol=a.atol, return_multipliers=True, return_inputs=True,
-                           return_outputs=True, input_hold=getattr(a, "hold", "zoh"), **kw)
-    t, X, lam, R, Y = res[:5]
+        sol = sim.simulate(x, a.t_end, a.dt, method=method, r=r, p=p, rtol=a.rtol,
+                           atol=a.atol, input_hold=getattr(a, "hold", "zoh"), **kw)
+    t, X, lam, R = sol.t, sol.x, sol.lam, sol.r
+    Y = np.column_stack([sol.outputs[k] for k in sim.output_names]) if sim.ny else \
+        np.empty((len(t), 0))
     if events:   # as the binary: a CSV file, or one line per event on stderr
-        found = res[5]
+        found = sol.events
         if a.events_csv:
             Path(a.events_csv).resolve().parent.mkdir(parents=True, exist_ok=True)
             with progress.stage(f"write {a.events_csv}"):

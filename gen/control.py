@@ -22,6 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .abi import hold_code
+from .errors import InputError
+
+__all__ = ["LinearFeedback", "InputPlan", "plan_inputs"]
 
 __all__ = ["LinearFeedback", "InputPlan", "plan_inputs"]
 
@@ -73,7 +76,7 @@ class LinearFeedback:
         if K.ndim == 1 and sim.nr == 1:
             K = K[None, :]
         if K.shape != (sim.nr, sim.ns):
-            raise ValueError(f"LinearFeedback: K must have shape (nr, ns) = ({sim.nr}, {sim.ns}) "
+            raise InputError(f"LinearFeedback: K must have shape (nr, ns) = ({sim.nr}, {sim.ns}) "
                              f"(inputs {sim.input_names} by the independent state "
                              f"{sim.independent_state_names}), got {K.shape}")
         if self.x_op is None:
@@ -87,18 +90,18 @@ class LinearFeedback:
                 idx = list(sim.q_ind) + [sim.nq + i for i in sim.u_ind]
                 x_op[idx] = x
             else:
-                raise ValueError(f"LinearFeedback: x_op must have nx = {sim.nx} (the state "
+                raise InputError(f"LinearFeedback: x_op must have nx = {sim.nx} (the state "
                                  f"{sim.state_names}) or ns = {sim.ns} values, got {x.shape}")
         r_op = (np.zeros(sim.nr) if self.r_op is None
                 else np.asarray(self.r_op, dtype=float).ravel())
         if r_op.shape != (sim.nr,):
-            raise ValueError(f"LinearFeedback: r_op must have nr = {sim.nr} values "
+            raise InputError(f"LinearFeedback: r_op must have nr = {sim.nr} values "
                              f"({sim.input_names}), got {r_op.shape}")
         for name, a in (("K", K), ("x_op", x_op), ("r_op", r_op)):
             if not np.all(np.isfinite(a)):
-                raise ValueError(f"LinearFeedback: {name} holds NaN or infinity")
+                raise InputError(f"LinearFeedback: {name} holds NaN or infinity")
         if self.period is not None and not (np.isfinite(self.period) and self.period > 0):
-            raise ValueError(f"LinearFeedback: period must be None (continuous) or a positive "
+            raise InputError(f"LinearFeedback: period must be None (continuous) or a positive "
                              f"number, got {self.period!r}")
         return K, x_op, r_op
 
@@ -119,15 +122,15 @@ class InputPlan:
         self.sim = sim
         self.keep = []
         self.error = None
-        self.struct = sim._new("input")
+        self.struct = sim.library.new("input")
 
     def array(self, a):
         a = np.ascontiguousarray(a, dtype=self.sim.dtype)
         self.keep.append(a)
-        return self.sim._ffi.from_buffer(self.sim._arr_t, a)
+        return self.sim.library.array(a)
 
     def callback(self, fn):
-        sim, ffi = self.sim, self.sim._ffi
+        sim, ffi = self.sim, self.sim.library.ffi
         nx, nr, dtype = sim.nx, sim.nr, sim.dtype
         size = np.dtype(dtype).itemsize
 
@@ -136,10 +139,10 @@ class InputPlan:
                 xs = np.frombuffer(ffi.buffer(x, nx * size), dtype=dtype).astype(float)
                 val = np.asarray(fn(float(t), xs), dtype=float).ravel()
                 if val.shape != (nr,):
-                    raise ValueError(f"the input function r(t, x) must return nr = {nr} values "
+                    raise InputError(f"the input function r(t, x) must return nr = {nr} values "
                                      f"({sim.input_names}), got shape {val.shape}")
                 if not np.all(np.isfinite(val)):
-                    raise ValueError(f"the input function r(t, x) returned NaN or infinity at "
+                    raise InputError(f"the input function r(t, x) returned NaN or infinity at "
                                      f"t = {float(t)}: {val}")
                 for i in range(nr):
                     r[i] = val[i]
@@ -160,9 +163,12 @@ def plan_inputs(sim, r, controller, dt, method, input_period, input_hold):
     table = isinstance(r, tuple) and len(r) == 2
     if controller is None and not callable(r) and not table:
         if input_period is not None:
-            raise ValueError("input_period applies to a callable r(t, x); r is constant")
+            raise InputError("input_period applies to a callable r(t, x); r is constant")
         return None
-    hold = hold_code(input_hold)
+    try:
+        hold = hold_code(input_hold)
+    except ValueError as e:
+        raise InputError(str(e)) from None
     plan = InputPlan(sim)
     s = plan.struct
     s.hold = hold
@@ -172,7 +178,7 @@ def plan_inputs(sim, r, controller, dt, method, input_period, input_hold):
                             f"{type(controller).__name__} (for a Python function, pass it as "
                             "r=lambda t, x: ...)")
         if r is not None:
-            raise ValueError("give the inputs at the operating point as LinearFeedback(r_op=...), "
+            raise InputError("give the inputs at the operating point as LinearFeedback(r_op=...), "
                              "not also as r")
         K, x_op, r_op = controller.arrays(sim)
         s.K = plan.array(K)
@@ -180,7 +186,7 @@ def plan_inputs(sim, r, controller, dt, method, input_period, input_hold):
         s.r = plan.array(r_op)
         s.period = 0.0 if controller.period is None else float(controller.period)
         if input_period is not None:
-            raise ValueError("the LinearFeedback has its own period; input_period is for a "
+            raise InputError("the LinearFeedback has its own period; input_period is for a "
                              "callable r(t, x)")
         return plan
     if table:
@@ -189,23 +195,23 @@ def plan_inputs(sim, r, controller, dt, method, input_period, input_hold):
         if R.ndim == 1 and sim.nr == 1:
             R = R[:, None]
         if tg.ndim != 1 or len(tg) < 1 or R.shape != (len(tg), sim.nr):
-            raise ValueError(f"an input table is (t_grid, R) with R of shape (len(t_grid), nr) = "
+            raise InputError(f"an input table is (t_grid, R) with R of shape (len(t_grid), nr) = "
                              f"({len(tg)}, {sim.nr}) (inputs {sim.input_names}), got {R.shape}")
         if not (np.all(np.isfinite(tg)) and np.all(np.isfinite(R))):
-            raise ValueError("the input table holds NaN or infinity")
+            raise InputError("the input table holds NaN or infinity")
         if np.any(np.diff(tg) <= 0):
-            raise ValueError("the input table's times must be strictly increasing")
+            raise InputError("the input table's times must be strictly increasing")
         s.n_table = len(tg)
         s.t_table = plan.array(tg)
         s.r_table = plan.array(R)
         if input_period is not None:
-            raise ValueError("input_period applies to a callable r(t, x); a table is "
+            raise InputError("input_period applies to a callable r(t, x); a table is "
                              "evaluated inside C")
         return plan
     # a Python callable, sampled
     period = dt if input_period is None else float(input_period)
     if not (np.isfinite(period) and period >= 0):
-        raise ValueError(f"input_period must be a number >= 0 (0: every stage), got "
+        raise InputError(f"input_period must be a number >= 0 (0: every stage), got "
                          f"{input_period!r}")
     s.controller = plan.callback(r)
     s.period = period

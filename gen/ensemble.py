@@ -35,12 +35,14 @@ import os
 import sys
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .abi import JACOBIAN_METHODS, METHODS, method_name, status_name
+from .abi import JACOBIAN_METHODS, METHODS, status_name
+from .errors import InputError
 from .interrupt import call
+from .runs import finite_or_raise, plan_rows
 
 __all__ = ["Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult", "run_ensemble"]
 
@@ -195,7 +197,7 @@ class Sampler:
         """
         n = int(n)
         if n < 1:
-            raise ValueError(f"the number of runs must be >= 1, got {n}")
+            raise InputError(f"the number of runs must be >= 1, got {n}")
         out = {}
         for name, spec in specs.items():   # in the order given: reproducible by seed
             out[name] = self._one(name, spec, n)
@@ -207,21 +209,21 @@ class Sampler:
         if isinstance(spec, tuple) and spec and isinstance(spec[0], str):
             kind, *args = spec
             if kind not in self.KINDS or len(args) != 2:
-                raise ValueError(f"{name}: a spec is ('uniform', low, high) or ('normal', mean, "
+                raise InputError(f"{name}: a spec is ('uniform', low, high) or ('normal', mean, "
                                  f"std), got {spec!r}")
             a, b = float(args[0]), float(args[1])
             if kind == "uniform":
                 if not b >= a:
-                    raise ValueError(f"{name}: uniform needs low <= high, got {a}, {b}")
+                    raise InputError(f"{name}: uniform needs low <= high, got {a}, {b}")
                 return self.rng.uniform(a, b, n)
             if not b >= 0:
-                raise ValueError(f"{name}: normal needs std >= 0, got {b}")
+                raise InputError(f"{name}: normal needs std >= 0, got {b}")
             return self.rng.normal(a, b, n)
         arr = np.asarray(spec, dtype=float)
         if arr.ndim == 0:
             return np.full(n, float(arr))
         if arr.shape != (n,):
-            raise ValueError(f"{name}: {arr.shape[0] if arr.ndim else 1} values for {n} runs")
+            raise InputError(f"{name}: {arr.shape[0] if arr.ndim else 1} values for {n} runs")
         return arr
 
     @staticmethod
@@ -248,14 +250,14 @@ class Sampler:
             try:
                 return float(parts[0])
             except ValueError:
-                raise ValueError(f"{text!r} is neither a number nor uniform:LOW:HIGH or "
+                raise InputError(f"{text!r} is neither a number nor uniform:LOW:HIGH or "
                                  "normal:MEAN:STD") from None
         if parts[0] not in Sampler.KINDS or len(parts) != 3:
-            raise ValueError(f"{text!r}: write uniform:LOW:HIGH or normal:MEAN:STD")
+            raise InputError(f"{text!r}: write uniform:LOW:HIGH or normal:MEAN:STD")
         try:
             return (parts[0], float(parts[1]), float(parts[2]))
         except ValueError:
-            raise ValueError(f"{text!r}: LOW/HIGH and MEAN/STD must be numbers") from None
+            raise InputError(f"{text!r}: LOW/HIGH and MEAN/STD must be numbers") from None
 
     @staticmethod
     def grid(**axes):
@@ -286,7 +288,7 @@ def _expand(sim, v, width, names, labels, base, what):
         lens = {len(np.atleast_1d(a)) for a in v.values()}
         lens.discard(1)
         if len(lens) > 1:
-            raise ValueError(f"{what}: arrays of different lengths {sorted(lens)}")
+            raise InputError(f"{what}: arrays of different lengths {sorted(lens)}")
         n = lens.pop() if lens else 1
         out = np.tile(np.asarray(base, dtype=float), (n, 1))
         for k, a in v.items():
@@ -296,7 +298,7 @@ def _expand(sim, v, width, names, labels, base, what):
             elif k in labels:
                 j = labels.index(k)
             else:
-                raise ValueError(f"unknown name {k!r} in {what}; known: {names}")
+                raise InputError(f"unknown name {k!r} in {what}; known: {names}")
             out[:, j] = np.broadcast_to(np.asarray(a, dtype=float), (n,))
         return out
     a = np.asarray(v, dtype=float)
@@ -306,7 +308,7 @@ def _expand(sim, v, width, names, labels, base, what):
         return a
     if a.ndim == 0 and width == 1:
         return a.reshape(1, 1)
-    raise ValueError(f"{what} must be {width} values, an (N, {width}) array or a dict of "
+    raise InputError(f"{what} must be {width} values, an (N, {width}) array or a dict of "
                      f"names {names}; got shape {a.shape}")
 
 
@@ -326,33 +328,34 @@ def _quantities(sim, names):
         elif k in sim.output_labels:
             out.append(sim.nx + sim.output_labels.index(k))
         else:
-            raise ValueError(f"unknown quantity {k!r}; states {sim.state_names}, outputs "
+            raise InputError(f"unknown quantity {k!r}; states {sim.state_names}, outputs "
                              f"{sim.output_names}")
     return out
 
 
 def _reducers(sim, reduce, rows, t0, dt, t_rows=None):
     """{key: (kind, sel, at_rows, shape of one run, python fn)}."""
-    from .host import host_module
-    lib = host_module(sim.real).lib
+    lib = sim.library.host
     if reduce is None or isinstance(reduce, str):
-        if reduce not in (None, "final"):
-            raise ValueError(f"reduce must be 'final', gen.At/Min/Max/Mean, a function "
-                             f"f(t, X) or a dict of them, got {reduce!r}")
-        reduce = {"final": Final()}
+        if reduce not in (None, "final", "rows"):
+            raise InputError(f"reduce must be 'final', 'rows', gen.At/Min/Max/Mean, a function "
+                             f"f(t, X) or a dict of them, got {reduce!r}", "reduce", None, reduce)
+        reduce = {"rows": "rows"} if reduce == "rows" else {"final": Final()}
     elif not isinstance(reduce, dict):
         key = ("final" if isinstance(reduce, Final) else "at" if isinstance(reduce, At) else
                type(reduce).__name__.lower() if isinstance(reduce, _Over) else "user")
         reduce = {key: reduce}
     out = {}
     for key, rd in reduce.items():
-        if rd == "final" or isinstance(rd, Final):
+        if isinstance(rd, str) and rd == "final" or isinstance(rd, Final):
             out[key] = (lib.EOMGEN_REDUCE_FINAL, [], [], (sim.nx,), None)
+        elif isinstance(rd, str) and rd == "rows":
+            out[key] = (lib.EOMGEN_REDUCE_ROWS, [], [], (rows, sim.nx), None)
         elif isinstance(rd, At):
             sel = _quantities(sim, rd.names)
             at = [int(round((t - t0) / dt)) for t in rd.times]
             if any(not 0 <= k < rows for k in at):
-                raise ValueError(f"At: times {rd.times} outside the run [{t0}, t_end]")
+                raise InputError(f"At: times {rd.times} outside the run [{t0}, t_end]")
             if t_rows is not None:   # the nearest row; a warning when it is not the time asked
                 at = _snap_warn(rd.times, t_rows, dt)
             out[key] = (lib.EOMGEN_REDUCE_AT, sel, at, (len(at), len(sel)), None)
@@ -364,7 +367,7 @@ def _reducers(sim, reduce, rows, t0, dt, t_rows=None):
         elif callable(rd):
             out[key] = (lib.EOMGEN_REDUCE_ROWS, [], [], (rows, sim.nx), rd)
         else:
-            raise ValueError(f"reduce[{key!r}]: not a reducer: {rd!r}")
+            raise InputError(f"reduce[{key!r}]: not a reducer: {rd!r}")
     return out
 
 
@@ -390,10 +393,11 @@ def run_chunk(sim, job):
     """One chunk in C (the GIL released): job holds the chunk's x0, p, r
     (arrays of its runs, or one row for all), the shared settings and the
     reducers; returns {"status", "t_last", "x_last", "values"}."""
-    ffi, lib = sim._ffi, sim._lib
+    library = sim.library
+    ffi, lib = library.ffi, library.host
     n, nx, rows = job["n"], sim.nx, job["rows"]
     if job["method"] in JACOBIAN_METHODS:
-        sim._need_derivatives()
+        library.ensure_derivatives()
     keep = []
 
     def arr(a, dtype=None):
@@ -402,9 +406,9 @@ def run_chunk(sim, job):
         return a
 
     def ptr(a, t=None):
-        return ffi.from_buffer(t or sim._arr_t, a)
+        return library.array(a, t)
 
-    e = ffi.new("eomgen_ensemble *")
+    e = library.new("ensemble")
     e.n = n
     x0 = arr(job["x0"])
     e.x0, e.x0_stride = ptr(x0), (nx if len(x0) > 1 else 0)
@@ -419,8 +423,8 @@ def run_chunk(sim, job):
                        job["input_period"], job["input_hold"])
     if plan is not None:
         e.input = plan.struct
-    opts = sim._new("sim_options")
-    sim._fn("sim_options_default")(opts)
+    opts = library.new("sim_options")
+    library.function("sim_options_default")(opts)
     opts.method = METHODS[job["method"]]
     opts.project = 1 if job["project"] else 0
     opts.rtol, opts.atol = job["rtol"], job["atol"]
@@ -438,7 +442,7 @@ def run_chunk(sim, job):
     e.t_buf, e.x_buf, e.x_start, e.y_buf = ptr(t_buf), ptr(x_buf), ptr(x_start), ptr(y_buf)
     if r_buf is not None:
         e.r_buf = ptr(r_buf)
-    stats = sim._new("sim_stats")
+    stats = library.new("sim_stats")
     e.stats = stats
     status = arr(np.zeros(n, dtype=np.intc), np.intc)
     t_last, x_last = arr(np.empty(n)), arr(np.empty((n, nx)))
@@ -455,7 +459,7 @@ def run_chunk(sim, job):
         rds[i].n_rows, rds[i].rows = len(at), ptr(a_, "int[]")
         rds[i].out = ptr(out)
     e.n_reducers, e.reducers = len(reducers), rds
-    call(sim, opts, lib.eomgen_ensemble_run, sim._api, e)   # Ctrl-C: gen/interrupt.py
+    call(sim, opts, library.host.eomgen_ensemble_run, library.table, e)   # the C call of a chunk (Ctrl-C: gen/interrupt.py)
     if plan is not None and plan.error is not None:
         raise plan.error
     t_rows = job["t_rows"]
@@ -472,7 +476,7 @@ def _rows(sim, x0, p, r):
     lens = {len(a) for a in (x0, p, r) if a is not None}
     lens.discard(1)
     if len(lens) > 1:
-        raise ValueError(f"x0, p and r give different numbers of runs: {sorted(lens)}")
+        raise InputError(f"x0, p and r give different numbers of runs: {sorted(lens)}")
     return lens.pop() if lens else 1
 
 
@@ -494,20 +498,25 @@ def _progress(total, enabled):
     return tqdm(total=total, unit="run", smoothing=0.1)
 
 
-def run_ensemble(sim, x0, t_end, dt, p=None, r=None, controller=None, reduce="final",
-                 client=None, chunk=None, method="rk4", rtol=1e-8, atol=1e-10, project=True,
-                 t0=0.0, max_steps=100000, consistent=False, workers=None, progress=None,
-                 input_period=None, input_hold="zoh"):
-    """Simulator.ensemble (its docstring)."""
-    method = method_name(method)
-    if not (np.isfinite(dt) and dt > 0):
-        raise ValueError(f"dt must be a positive number, got {dt!r}")
-    if not (np.isfinite(t_end) and t_end >= t0):
-        raise ValueError(f"t_end must be a number >= t0 = {t0}, got {t_end!r}")
+def run_ensemble(sim, x0, opts, r=None, p=None, controller=None, reduce="final", client=None,
+                 chunk=None, workers=None, progress=None):
+    """Simulator.ensemble (its docstring); opts: the checked gen.runs.RunOptions."""
+    if opts.events is not None:
+        raise InputError("events= is not available in an ensemble: simulate the runs that "
+                         "need events one by one (sim.simulate(..., events=...))", "events")
+    if opts.every != 1:
+        raise InputError(f"every={opts.every}: an ensemble keeps what its reducers ask for "
+                         "(reduce='final', gen.At, ...); give every=1", "every", None,
+                         opts.every)
+    if opts.final_only and not (reduce is None or reduce == "final"
+                                or isinstance(reduce, Final)):
+        raise InputError("final_only=True keeps the final state only: give reduce='final' "
+                         f"(got reduce={reduce!r})", "final_only")
+    method, t0, t_end, dt = opts.method, opts.t0, opts.t_end, opts.dt
     if callable(r) and not isinstance(r, tuple):
-        raise ValueError("an ensemble runs in C without the GIL: give r as constants (one row, "
+        raise InputError("an ensemble runs in C without the GIL: give r as constants (one row, "
                          "or one per run), a table (t_grid, R) or a gen.LinearFeedback "
-                         "controller, not a Python function")
+                         "controller, not a Python function", "r")
     X0 = _expand(sim, x0, sim.nx, sim.state_names, sim.state_labels, np.zeros(sim.nx),
                  "x0")
     P = None if p is None else _expand(sim, p, sim.np, sim.constant_names,
@@ -516,16 +525,26 @@ def run_ensemble(sim, x0, t_end, dt, p=None, r=None, controller=None, reduce="fi
     R = None if (r is None or table) else _expand(sim, r, sim.nr, sim.input_names,
                                                   sim.input_labels, np.zeros(sim.nr), "r")
     if R is not None and controller is not None:
-        raise ValueError("give the inputs at the operating point as LinearFeedback(r_op=...), "
-                         "not also as r")
+        raise InputError("give the inputs at the operating point as LinearFeedback(r_op=...), "
+                         "not also as r", "r")
+    labels = {"x0": sim.state_names, "p": sim.constant_names, "r": sim.input_names}
     for name, a in (("x0", X0), ("p", P), ("r", R)):
-        if a is not None and not np.all(np.isfinite(a)):
-            bad = np.argwhere(~np.isfinite(a))[0]
-            raise ValueError(f"{name} of run {bad[0]} holds NaN or infinity")
+        if a is not None:
+            finite_or_raise(name, a, labels[name])
     n = _rows(sim, X0, P, R)
-    rows = sim._fn("simulate_rows")(t0, t_end, dt)
-    if rows < 0:
-        sim._check(rows, "simulate_rows")
+    full = sim.library.function("simulate_rows")(t0, t_end, dt)
+    # every row of a run is kept only for a "rows" or a Python reducer: the
+    # same checks as simulate's (max_rows, memory, the C limit) before
+    # anything is allocated
+    keeps_rows = reduce == "rows" or callable(reduce) or (
+        isinstance(reduce, dict) and any(v == "rows" or (callable(v) and not isinstance(
+            v, (Final, At, _Over))) for v in reduce.values()))
+    check = opts if keeps_rows else replace(opts, final_only=True)
+    row_bytes = np.dtype(sim.dtype).itemsize * (1 + sim.nx)
+    _, rows = plan_rows(check, full if full >= 0 else None, row_bytes,
+                        sim.library.function("simulate_rows_kept"),
+                        what="every run of this ensemble" if keeps_rows else "this ensemble",
+                        runs=n if keeps_rows else 1)
     t_rows = np.minimum(t0 + dt * np.arange(rows), t_end)
     reducers = _reducers(sim, reduce, rows, t0, dt, t_rows)
     workers = workers or os.cpu_count() or 1
@@ -536,12 +555,13 @@ def run_ensemble(sim, x0, t_end, dt, p=None, r=None, controller=None, reduce="fi
         chunk = int(max(1, min(-(-n // (4 * workers)), 20000, 64e6 // per_run)))
     chunk = int(chunk)
     if chunk < 1:
-        raise ValueError(f"chunk must be >= 1, got {chunk}")
+        raise InputError(f"chunk must be >= 1, got {chunk}")
     bounds = [(i, min(n, i + chunk)) for i in range(0, n, chunk)]
-    shared = dict(rows=rows, t_rows=t_rows, method=method, project=project, rtol=float(rtol),
-                  atol=float(atol), max_steps=max_steps, t0=float(t0), t_end=float(t_end),
-                  dt=float(dt), consistent=consistent, r_shared=r if table else None,
-                  controller=controller, input_period=input_period, input_hold=input_hold,
+    shared = dict(rows=rows, t_rows=t_rows, method=method, project=opts.project,
+                  rtol=opts.rtol, atol=opts.atol, max_steps=opts.max_steps, t0=t0,
+                  t_end=t_end, dt=dt, consistent=opts.consistent,
+                  r_shared=r if table else None, controller=controller,
+                  input_period=opts.input_period, input_hold=opts.input_hold,
                   reducers=reducers)
     jobs = [dict(shared, n=i1 - i0, x0=_slice(X0, i0, i1), p=_slice(P, i0, i1),
                  r=_slice(R, i0, i1)) for i0, i1 in bounds]
@@ -592,13 +612,16 @@ def model_bundle(sim):
     info = getattr(sim, "build_info", {}) or {}
     module = info.get("module")
     if not module:
-        raise ValueError("this Simulator was not made by gen.compile: its sources are unknown")
+        raise InputError("this Simulator was not made by gen.compile: its sources are unknown")
     src = Path(module).parent / "src"
     files = {f.name: f.read_text() for f in sorted(src.iterdir()) if f.is_file()}
     backend = info.get("backend", "c")
     derivatives = bool(info.get("derivatives", True))
+    # the class pickles by reference (its module and name): this module
+    # needs no import of gen.bindings
     return {"files": files, "interface": sim.interface, "backend": backend,
-            "real": sim.real, "derivatives": derivatives, "name": sim.name}
+            "real": sim.real, "derivatives": derivatives, "name": sim.name,
+            "simulator": type(sim)}
 
 
 _loaded = {}
@@ -608,7 +631,6 @@ _loaded_lock = threading.Lock()
 def simulator_from_bundle(bundle):
     """The Simulator of a bundle in this process: built into this machine's
     eomgen cache if it is not there (by content), loaded once per process."""
-    from .bindings import Simulator
     from .build import build
     from .host import load
     from .render import Rendered
@@ -620,7 +642,7 @@ def simulator_from_bundle(bundle):
         sim = _loaded.get(built.modname)
         if sim is None:
             host, api = load(built)
-            sim = _loaded[built.modname] = Simulator(host, api, built.interface)
+            sim = _loaded[built.modname] = bundle["simulator"](host, api, built.interface)
             sim.build_info = {"module": str(built.path), "derivatives": built.derivatives,
                               "cached": tm.get("cached"), "compile": tm.get("compile")}
     return sim
@@ -633,7 +655,7 @@ def _dask_task(bundle, job):
 
 def _run_dask(sim, jobs, client, bar):
     if jobs and jobs[0]["method"] in JACOBIAN_METHODS:
-        sim._need_derivatives()          # the workers get the complete library
+        sim.library.ensure_derivatives()     # the workers get the complete library
     # one future for the whole bundle, under a key of this call's own: a
     # dict given to scatter itself would be scattered value by value under
     # the dict's keys ("files", "name", ...), shared by every model on the

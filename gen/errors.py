@@ -14,6 +14,31 @@ class ModelError(EomgenError, ValueError):
     bad partition, unprintable expressions, bad name)."""
 
 
+class InputError(EomgenError, ValueError):
+    """An argument of a call is wrong: its shape, a NaN or infinite entry, a
+    value out of range, or a run too large to keep. The message names the
+    argument (``x0``, ``p``, ``r``, ``t_end``, ...), the entry and its value
+    (``x0[2] = nan``).
+
+    Parameters
+    ----------
+    message : str
+        The message.
+    argument : str, optional
+        The argument's name (kept as ``argument``).
+    index : int, optional
+        The bad entry, when one is (``index``).
+    value : optional
+        Its value (``value``).
+    """
+
+    def __init__(self, message, argument=None, index=None, value=None):
+        super().__init__(message)
+        self.argument = argument
+        self.index = index
+        self.value = value
+
+
 class BuildError(EomgenError, RuntimeError):
     """Compiling the generated code failed.
 

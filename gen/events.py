@@ -5,13 +5,15 @@ output of the model, found between the ends of every integration step and
 located on the step's dense output inside the generated C (the runtime's
 ``gen_rt_events``; README, "Events"). This module turns the Python
 arguments into the ``<p>_events`` struct and the C log back into
-``(name, t, x)`` tuples.
+``gen.Event(name, t, x)`` records.
 """
 from __future__ import annotations
 
 import numbers
 
 import numpy as np
+
+from .errors import InputError
 
 __all__ = ["EventPlan", "plan_events"]
 
@@ -23,39 +25,40 @@ class EventPlan:
     for one C call): the spec of n events and a log of ``capacity`` rows."""
 
     def __init__(self, sim, names, which, direction, terminal, level, capacity):
-        ffi = sim._ffi
+        lib = sim.library
         self.sim = sim
         self.names = names
         self.which = np.asarray(which, dtype=np.intc)
         self.direction = np.asarray(direction, dtype=np.intc)
         self.terminal = np.asarray(terminal, dtype=np.intc)
         self.level = np.asarray(level, dtype=sim.dtype)
-        self.struct = sim._new("events")
+        self.struct = lib.new("events")
         s = self.struct
         s.n = len(names)
-        s.which = ffi.from_buffer("int[]", self.which)
-        s.direction = ffi.from_buffer("int[]", self.direction)
-        s.terminal = ffi.from_buffer("int[]", self.terminal)
-        s.level = ffi.from_buffer(sim._arr_t, self.level)
+        s.which = lib.array(self.which, "int[]")
+        s.direction = lib.array(self.direction, "int[]")
+        s.terminal = lib.array(self.terminal, "int[]")
+        s.level = lib.array(self.level)
         self.resize(capacity)
 
     def resize(self, capacity):
         """A log of capacity rows (a rerun when more events were found)."""
-        sim, ffi, s = self.sim, self.sim._ffi, self.struct
+        sim, lib, s = self.sim, self.sim.library, self.struct
         self.capacity = int(capacity)
         self.log_which = np.zeros(max(1, self.capacity), dtype=np.intc)
         self.log_t = np.zeros(max(1, self.capacity), dtype=sim.dtype)
         self.log_x = np.zeros((max(1, self.capacity), sim.nx), dtype=sim.dtype)
         s.capacity = self.capacity
-        s.log_which = ffi.from_buffer("int[]", self.log_which)
-        s.log_t = ffi.from_buffer(sim._arr_t, self.log_t)
-        s.log_x = ffi.from_buffer(sim._arr_t, self.log_x)
+        s.log_which = lib.array(self.log_which, "int[]")
+        s.log_t = lib.array(self.log_t)
+        s.log_x = lib.array(self.log_x)
 
     def found(self, n):
-        """The first n logged events as [(name, t, x)]."""
+        """The first n logged events as [gen.Event(name, t, x)]."""
+        from .solution import Event
         n = min(int(n), self.capacity)
-        return [(self.names[int(self.log_which[k])], float(self.log_t[k]),
-                 self.log_x[k].astype(float).copy()) for k in range(n)]
+        return [Event(self.names[int(self.log_which[k])], float(self.log_t[k]),
+                      self.log_x[k].astype(float).copy()) for k in range(n)]
 
 
 def _resolve(sim, name):
@@ -69,7 +72,7 @@ def _resolve(sim, name):
             return sim.nx + names.index(name)
     outs = f"; outputs {list(sim.output_names)}" if sim.output_names else \
         " (the model has no outputs: Model(..., outputs={name: expr}) adds some)"
-    raise ValueError(f"event {name!r} is neither a state nor an output of model "
+    raise InputError(f"event {name!r} is neither a state nor an output of model "
                      f"'{sim.name}': states {list(sim.state_names)}{outs}")
 
 
@@ -86,7 +89,7 @@ def plan_events(sim, events, terminal=False, capacity=256):
     if isinstance(terminal, dict):
         unknown = set(terminal) - set(events)
         if unknown:
-            raise ValueError(f"terminal names events that are not in events: {sorted(unknown)}")
+            raise InputError(f"terminal names events that are not in events: {sorted(unknown)}")
         term = [bool(terminal.get(k, False)) for k in events]
     elif isinstance(terminal, (bool, np.bool_)):
         term = [bool(terminal)] * len(events)
@@ -97,11 +100,11 @@ def plan_events(sim, events, terminal=False, capacity=256):
     for name, spec in events.items():
         d, lev = (spec if isinstance(spec, tuple) else (spec, 0.0))
         if isinstance(d, bool) or not isinstance(d, numbers.Integral) or int(d) not in _DIRECTIONS:
-            raise ValueError(f"event {name!r}: the direction must be +1 (upwards), -1 "
+            raise InputError(f"event {name!r}: the direction must be +1 (upwards), -1 "
                              f"(downwards) or 0 (both), got {d!r}")
         lev = float(lev)
         if not np.isfinite(lev):
-            raise ValueError(f"event {name!r}: the level must be a finite number, got {lev!r}")
+            raise InputError(f"event {name!r}: the level must be a finite number, got {lev!r}")
         names.append(str(name))
         which.append(_resolve(sim, str(name)))
         direction.append(int(d))

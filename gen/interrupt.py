@@ -85,7 +85,7 @@ def call(sim, opts, fn, *args):
     SIGINT during the call stops the C work and raises ``KeyboardInterrupt``
     (Python's handler raises it in the main thread; in another thread this
     function does)."""
-    lib, ffi = sim._lib, sim._ffi
+    lib, ffi = sim.library.host, sim.library.ffi
     owner, slot = lib, -1
     try:
         owner, slot = _armed(lib, ffi)

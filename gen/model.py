@@ -470,7 +470,7 @@ class Model:
         outputs : dict, optional
             ``{name: expression}`` of quantities to measure (sensor readings,
             point positions) in the coordinates, speeds, inputs, constants and t
-            (``sim.outputs``; ``linearize(outputs=True)`` gives C and D).
+            (``sim.outputs``; ``linearize_outputs`` gives C and D).
 
         Returns
         -------
@@ -591,7 +591,7 @@ class Model:
         outputs : dict, optional
             ``{name: expression}`` of quantities to measure (sensor readings,
             point positions) in the coordinates, speeds, inputs, constants and t
-            (``sim.outputs``; ``linearize(outputs=True)`` gives C and D).
+            (``sim.outputs``; ``linearize_outputs`` gives C and D).
 
         Returns
         -------
@@ -715,7 +715,7 @@ class Model:
         outputs : dict, optional
             ``{name: expression}`` of quantities to measure (sensor readings,
             point positions) in the coordinates, speeds, inputs, constants and t
-            (``sim.outputs``; ``linearize(outputs=True)`` gives C and D).
+            (``sim.outputs``; ``linearize_outputs`` gives C and D).
         **partition
             The further keywords of the builder: q_ind, q_dep, qd_ind, qd_dep for
             Lagrange models (a sympy System's own partition is the default), those

@@ -242,7 +242,7 @@ def verify(model, samples=20, backend="c", real="double", sources=None, seed=0, 
         t = float(rng.uniform(0, 1))
         try:
             note("eval_mass_matrix", _rel(sim.mass_matrix(q, t=t), _call(ref["M"], x, r, p, t)))
-            note("eval_forcing", _rel(sim.forcing(q, u, r, t=t),
+            note("eval_forcing", _rel(sim.forcing(q, u, r=r, t=t),
                                       _call(ref["f"], x, r, p, t).ravel()))
             xd_ref, lam_ref = _rhs_reference(m, ref, x, r, p, t)
             note("eval_kinematics", _rel(sim.kinematics(q, u, t=t), xd_ref[:m.nq]))
@@ -263,20 +263,20 @@ def verify(model, samples=20, backend="c", real="double", sources=None, seed=0, 
             if m.energy is not None:
                 note("eval_energy", _rel([sim.energy(x, t=t)], _call(ref["E"], x, r, p, t)
                                          .ravel()))
-            note("eval_rhs", _rel(sim.rhs(t, x, r), xd_ref))
+            note("eval_rhs", _rel(sim.rhs(t, x, r=r), xd_ref))
             if m.mv:
-                note("eval_rhs (multipliers)", _rel(sim.multipliers(t, x, r), lam_ref))
+                note("eval_rhs (multipliers)", _rel(sim.multipliers(t, x, r=r), lam_ref))
             if getattr(m, "na", 0):
                 ud = xd_ref[m.nq:]
                 Fa = np.array(ref["auxF"](*x, *r, *p, t, *ud), dtype=float)
                 ga = np.array(ref["auxg"](*x, *r, *p, t, *ud), dtype=float).ravel()
-                note("eval_auxiliary_forces", _rel(sim.auxiliary_forces(t, x, r),
+                note("eval_auxiliary_forces", _rel(sim.auxiliary_forces(t, x, r=r),
                                                    np.linalg.solve(Fa, -ga)))
             if k < linearize_samples:
                 op = dict(zip(m.state_names, x))
                 A_s, B_s = linearize_symbolic(m_real, op, r_op=dict(zip(m.input_names, r)),
                                               constants="values", t=t, simplify=False)
-                A_c, B_c = sim.linearize(x, r, t=t)
+                A_c, B_c = sim.linearize(x, r=r, t=t)
                 e = _rel(A_c, np.array(A_s.evalf(), dtype=float))
                 if m.nr:
                     e = max(e, _rel(B_c, np.array(B_s.evalf(), dtype=float)))

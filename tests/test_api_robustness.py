@@ -51,7 +51,7 @@ def test_disc_linearize_and_projection_properties(disc, x, T):
         1 + np.max(np.abs(xc)))
     assert np.allclose(disc.project(xc), xc, rtol=0, atol=1e-12 * (1 + np.max(np.abs(xc))))
     try:
-        A, B = disc.linearize(xc, [T])
+        A, B = disc.linearize(xc, r=[T])
     except OK_ERRORS:
         return
     assert np.all(np.isfinite(A)) and np.all(np.isfinite(B))
@@ -65,7 +65,7 @@ def test_step_unchanged_on_failure_and_on_manifold(kane_sim, x, h):
     x = np.array(x)
     before = x.copy()
     try:
-        y = kane_sim.step_rk4(0.0, x, h)
+        y = kane_sim.step(0.0, x, h, method="rk4")
     except OK_ERRORS:
         assert np.array_equal(x, before)
         return

@@ -241,7 +241,7 @@ def test_box_on_ground_with_friction_solves_motion_and_reaction_together():
         res = sympy_residuals(system, consts, F, Nf, x, r, xd, n_val)
         assert np.max(np.abs(res)) < 1e-12 * m * g, res
     # the linearization carries the friction: d u'/d F = 1/m, the rest zero
-    A, B = sim.linearize([0.0, 0.5], [3.0])
+    A, B = sim.linearize([0.0, 0.5], r=[3.0])
     np.testing.assert_allclose(B, [[0.0], [1 / m]], atol=1e-15)
     np.testing.assert_allclose(A, [[0.0, 1.0], [0.0, 0.0]], atol=1e-15)
 
@@ -307,7 +307,7 @@ def test_cart_pendulum_friction_on_varying_normal_force_by_hand():
         assert abs(sim.auxiliary_forces(0.0, x, r=r)[0] - n_val) < 1e-12 * abs(n_val)
     # the linearization is the derivative of that rhs (central differences)
     x0, r0 = np.array([0.1, 0.8, 0.4, -0.3]), np.array([1.5])
-    A, B = sim.linearize(x0, r0)
+    A, B = sim.linearize(x0, r=r0)
     h = 1e-6
     An = np.column_stack([(sim.rhs(0.0, x0 + h * e, r=r0) - sim.rhs(0.0, x0 - h * e, r=r0)) / (2 * h)
                           for e in np.eye(4)])

@@ -18,19 +18,19 @@ def test_rhs_batch_equals_single_calls(cart):
     X = rng.uniform(-1, 1, (50, cart.nx))
     F = rng.uniform(-1, 1, (50, 1))
     t = rng.uniform(0, 1, 50)
-    ref = np.array([cart.rhs(ti, x, f) for ti, x, f in zip(t, X, F)])
-    assert np.array_equal(cart.rhs_batch(t, X, F), ref)
-    assert np.array_equal(cart.rhs(t, X, F), ref)              # (N, nx) through rhs
+    ref = np.array([cart.rhs(ti, x, r=f) for ti, x, f in zip(t, X, F)])
+    assert np.array_equal(cart.rhs_batch(t, X, r=F), ref)
+    assert np.array_equal(cart.rhs(t, X, r=F), ref)              # (N, nx) through rhs
     out = np.empty_like(ref)
-    assert cart.rhs_batch(t, X, F, out=out) is out
+    assert cart.rhs_batch(t, X, r=F, out=out) is out
     # one input vector and one parameter vector shared by every state
     p = cart.constants * 1.1
-    ref2 = np.array([cart.rhs(0.0, x, [0.3], p) for x in X])
-    assert np.array_equal(cart.rhs_batch(0.0, X, [0.3], p), ref2)
+    ref2 = np.array([cart.rhs(0.0, x, r=[0.3], p=p) for x in X])
+    assert np.array_equal(cart.rhs_batch(0.0, X, r=[0.3], p=p), ref2)
     # per-state parameters
     P = np.tile(cart.constants, (50, 1)) * rng.uniform(0.8, 1.2, (50, 1))
-    ref3 = np.array([cart.rhs(0.0, x, None, pi) for x, pi in zip(X, P)])
-    assert np.array_equal(cart.rhs_batch(0.0, X, None, P), ref3)
+    ref3 = np.array([cart.rhs(0.0, x, r=None, p=pi) for x, pi in zip(X, P)])
+    assert np.array_equal(cart.rhs_batch(0.0, X, r=None, p=P), ref3)
 
 
 def test_rhs_out_preallocated(cart):
@@ -48,9 +48,9 @@ def test_mass_matrix_and_linearize_batch(cart):
     M = cart.mass_matrix_batch(X[:, :cart.nq])
     assert np.array_equal(M, np.array([cart.mass_matrix(x[:cart.nq]) for x in X]))
     assert np.array_equal(cart.mass_matrix_batch(X), M)         # states work too
-    A, B = cart.linearize_batch(X, [0.5])
+    A, B = cart.linearize_batch(X, r=[0.5])
     for k, x in enumerate(X):
-        a, b = cart.linearize(x, [0.5])
+        a, b = cart.linearize(x, r=[0.5])
         assert np.array_equal(A[k], a) and np.array_equal(B[k], b)
 
 
@@ -67,15 +67,18 @@ def test_batch_errors_name_the_state(kane_sim):
         kane_sim.rhs_batch(0.0, np.zeros((3, 4)), r=np.zeros((2, 1)))
 
 
-def test_simulate_batch_matches_serial(cart):
+def test_ensemble_rows_match_serial(cart):
+    """ensemble(reduce="rows") keeps every row of every run (what
+    simulate_batch did), each run exactly its simulate."""
     rng = np.random.default_rng(2)
     X0 = rng.uniform(-0.5, 0.5, (6, cart.nx))
     P = np.tile(cart.constants, (6, 1)) * rng.uniform(0.9, 1.1, (6, 1))
-    t, X = cart.simulate_batch(X0, 1.0, 0.01, p=P, method="dopri5", workers=2)
+    res = cart.ensemble(X0, 1.0, 0.01, p=P, method="dopri5", workers=2, reduce="rows")
+    t, X = res.t, res["rows"]
     assert X.shape == (6, len(t), cart.nx)
     for i in range(6):
         ti, Xi = cart.simulate(X0[i], 1.0, 0.01, p=P[i], method="dopri5")
         assert np.array_equal(ti, t) and np.array_equal(Xi, X[i])
     # one initial state, many parameter sets
-    t, X = cart.simulate_batch(X0[0], 0.5, 0.01, p=P)
+    X = cart.ensemble(X0[0], 0.5, 0.01, p=P, reduce="rows").rows
     assert X.shape[0] == 6 and not np.array_equal(X[0], X[1])

@@ -368,7 +368,7 @@ def test_rhs_against_sympy_kkt(sim, derivation):
                       fun(x[qi], x[ui], r, [vals[k] for k in bicycle.MOORE_NAMES]))
         K = np.block([[M, -A.T], [A, np.zeros((5, 5))]])
         want = np.linalg.solve(K, np.concatenate([f.ravel(), -a.ravel()]))[:8]
-        got = sim.rhs(0.0, x, r)
+        got = sim.rhs(0.0, x, r=r)
         np.testing.assert_allclose(got[ui], want, rtol=0, atol=1e-11 * max(1, np.max(np.abs(want))))
         np.testing.assert_allclose(got[qi], x[ui], rtol=0, atol=0)     # q' = u
 
@@ -407,5 +407,5 @@ def test_rhs_against_sympys_own_elimination(sim):
         M, f = (np.asarray(m_, dtype=float) for m_ in
                 fun(x[qi], x[ui], r, [vals[k] for k in bicycle.MOORE_NAMES]))
         want = np.linalg.solve(M, f.ravel())
-        got = sim.rhs(0.0, x, r)[ui]
+        got = sim.rhs(0.0, x, r=r)[ui]
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-11 * max(1, np.max(np.abs(want))))

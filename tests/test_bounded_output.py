@@ -23,18 +23,23 @@ def _x0(sim):
     return np.array([0.0, 0.3, 0.0, 0.0])
 
 
+def _arrays(sol):
+    """Every per-row array of a gen.Solution: t, x, lam, r and the outputs."""
+    return [sol.t, sol.x, sol.lam, sol.r] + [sol.outputs[k] for k in sorted(sol.outputs)]
+
+
 def _check(sim, method, every):
-    kw = dict(method=method, return_multipliers=True, return_inputs=True, return_outputs=True)
+    kw = dict(method=method)
     if sim.nr:
         kw["r"] = lambda t, x: [np.sin(3 * t)]
-    full = sim.simulate(_x0(sim), 1.0, 0.03, **kw)
+    full = _arrays(sim.simulate(_x0(sim), 1.0, 0.03, **kw))
     n = len(full[0])
-    part = sim.simulate(_x0(sim), 1.0, 0.03, every=every, **kw)
+    part = _arrays(sim.simulate(_x0(sim), 1.0, 0.03, every=every, **kw))
     idx = sorted(set(range(0, n, every)) | {n - 1})
-    assert len(part[0]) == len(idx)
+    assert len(part[0]) == len(idx) and len(part) == len(full) == 4 + sim.ny
     for a, b in zip(full, part):
         assert np.array_equal(a[idx], b)
-    last = sim.simulate(_x0(sim), 1.0, 0.03, final_only=True, **kw)
+    last = _arrays(sim.simulate(_x0(sim), 1.0, 0.03, final_only=True, **kw))
     assert len(last[0]) == 1 and last[0][0] == 1.0
     for a, b in zip(full, last):
         assert np.array_equal(a[[n - 1]], b)
@@ -49,7 +54,7 @@ def test_rows_are_those_of_the_full_output(sims, key, method):
 
 def test_max_rows_and_bad_every(sims):
     sim = sims["cart_pole"]
-    with pytest.raises(ValueError, match=r"would return 1001 rows .* more than max_rows=100"):
+    with pytest.raises(ValueError, match=r"would keep 1,001 rows .* more than max_rows=100"):
         sim.simulate(np.zeros(4), 1.0, 1e-3, max_rows=100)
     t, X = sim.simulate(np.zeros(4), 1.0, 1e-3, every=100, max_rows=11)
     assert len(t) == 11 and t[-1] == 1.0
@@ -60,11 +65,11 @@ def test_max_rows_and_bad_every(sims):
 def test_batch_final_only(sims):
     sim = sims["cart_pole"]
     X0 = np.array([[0.0, 0.1, 0, 0], [0.0, -0.2, 0, 0], [0.1, 0.0, 0, 0]])
-    t, X = sim.simulate_batch(X0, 1.0, 1e-3, final_only=True, r=[0.5])
-    assert X.shape == (3, 1, 4) and t.shape == (1,)
+    res = sim.ensemble(X0, 1.0, 1e-3, final_only=True, r=[0.5])
+    assert res.final.shape == (3, 4)
     for i in range(3):
         _, Xf = sim.simulate(X0[i], 1.0, 1e-3, r=[0.5])
-        assert np.array_equal(X[i, 0], Xf[-1])
+        assert np.array_equal(res.final[i], Xf[-1])
 
 
 @pytest.mark.slow

@@ -148,7 +148,7 @@ def test_host_build_of_a_20_link_cart(tmp_path):
     x = np.zeros(sim.nx)
     for k, v in at.items():
         x[sim.state_names.index(k)] = v
-    A, B = sim.linearize(x, r_op=np.array([1.5]))
+    A, B = sim.linearize(x, r=np.array([1.5]))
     assert A.shape == A_bin.shape == (42, 42) and B.shape == B_bin.shape == (42, 1)
     # the binary prints 12 significant digits
     scale = max(1.0, float(np.abs(A).max()))

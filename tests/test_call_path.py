@@ -28,28 +28,28 @@ def test_fast_path_equals_general_path(kane_sim, cart):
                           kane_sim.rhs(0.0, x.astype(np.float32)))
     xc, r = np.array([0.1, 0.2, 0.3, 0.4]), np.array([0.5])
     refc = np.empty(4)
-    cart.rhs(0.0, xc, r, out=refc)
-    assert np.array_equal(cart.rhs(0.0, xc, r), refc)
-    assert np.array_equal(cart.rhs(0.0, xc, [0.5]), refc)
-    assert np.array_equal(cart.rhs(0.0, xc, 0.5), refc)
+    cart.rhs(0.0, xc, r=r, out=refc)
+    assert np.array_equal(cart.rhs(0.0, xc, r=r), refc)
+    assert np.array_equal(cart.rhs(0.0, xc, r=[0.5]), refc)
+    assert np.array_equal(cart.rhs(0.0, xc, r=0.5), refc)
     # the independent reference: M u' = f at this state, from the model's own M and f
     M = cart.mass_matrix(xc[:2])
-    f = cart.forcing(xc[:2], xc[2:], r)
+    f = cart.forcing(xc[:2], xc[2:], r=r)
     np.testing.assert_allclose(refc[2:], np.linalg.solve(M, f), rtol=1e-13)
     np.testing.assert_array_equal(refc[:2], xc[2:])
     # a fresh array every call (solve_ivp keeps them)
-    a, b = cart.rhs(0.0, xc, r), cart.rhs(0.0, xc + 0.1, r)
+    a, b = cart.rhs(0.0, xc, r=r), cart.rhs(0.0, xc + 0.1, r=r)
     assert not np.shares_memory(a, b)
 
 
 def test_fast_path_still_refuses_bad_values(cart):
     xc = np.array([0.1, 0.2, 0.3, 0.4])
     with pytest.raises(ValueError, match="NaN or infinite"):
-        cart.rhs(0.0, xc, np.array([np.nan]))
+        cart.rhs(0.0, xc, r=np.array([np.nan]))
     with pytest.raises(ValueError, match="NaN or infinite"):
-        cart.rhs(0.0, np.array([0.1, np.inf, 0.3, 0.4]), np.array([0.5]))
+        cart.rhs(0.0, np.array([0.1, np.inf, 0.3, 0.4]), r=np.array([0.5]))
     with pytest.raises(ValueError, match="inputs r"):
-        cart.rhs(0.0, xc, np.array([0.5, 0.5]))
+        cart.rhs(0.0, xc, r=np.array([0.5, 0.5]))
 
 
 def test_fused_rhs_failure_names_the_cause_and_writes_nothing(cart):
@@ -59,20 +59,20 @@ def test_fused_rhs_failure_names_the_cause_and_writes_nothing(cart):
     out = np.full(4, 7.0)
     # omega^2 overflows in the forcing: u' is not finite while x is
     with pytest.raises(gen.DivergenceError) as e:
-        cart.rhs(0.0, np.array([0.1, 0.2, 0.3, 1e200]), np.array([0.5]), out=out)
+        cart.rhs(0.0, np.array([0.1, 0.2, 0.3, 1e200]), r=np.array([0.5]), out=out)
     assert e.value.status_name == "ERR_DIVERGED" and "omega=1e+200" in str(e.value)
     assert np.array_equal(out, np.full(4, 7.0))
     # a massless pole: M = [[m_c, 0], [0, 0]] has a zero pivot
     with pytest.raises(gen.SingularError) as e:
-        cart.rhs(0.0, np.array([0.1, 0.2, 0.3, 0.4]), np.array([0.5]),
+        cart.rhs(0.0, np.array([0.1, 0.2, 0.3, 0.4]), r=np.array([0.5]),
                  p=[1.0, 0.0, 0.5, 9.81], out=out)
     assert e.value.status_name == "ERR_SINGULAR"
     assert np.array_equal(out, np.full(4, 7.0))
     # and next to the failures, a regular call: M u' = f from the model's M and f
     x = np.array([0.1, 0.2, 0.3, 0.4])
-    ud = cart.rhs(0.0, x, np.array([0.5]), out=out)[2:]
+    ud = cart.rhs(0.0, x, r=np.array([0.5]), out=out)[2:]
     np.testing.assert_allclose(ud, np.linalg.solve(cart.mass_matrix(x[:2]),
-                                                   cart.forcing(x[:2], x[2:], [0.5])), rtol=1e-13)
+                                                   cart.forcing(x[:2], x[2:], r=[0.5])), rtol=1e-13)
 
 
 def test_host_fast_path_is_taken_and_exact(kane_sim, cart):
@@ -100,7 +100,7 @@ def test_host_fast_path_is_taken_and_exact(kane_sim, cart):
         fast(0.0)
     xc, r = np.array([0.1, 0.2, 0.3, 0.4]), np.array([0.5])
     refc = np.empty(4)
-    cart.rhs(0.0, xc, r, out=refc)
+    cart.rhs(0.0, xc, r=r, out=refc)
     assert np.array_equal(cart._rhs_fast(0.0, xc, r), refc)
     assert cart._rhs_fast(0.0, xc, np.array([0.5, 0.5])) is None
 
@@ -111,11 +111,11 @@ def test_host_fast_path_float_model():
     sim = gen.compile(cart_pole.model(), real="float")
     xc, r = np.array([0.1, 0.2, 0.3, 0.4], dtype=np.float32), np.array([0.5], np.float32)
     ref = np.empty(4, dtype=np.float32)
-    sim.rhs(0.0, xc, r, out=ref)
+    sim.rhs(0.0, xc, r=r, out=ref)
     out = sim._rhs_fast(0.0, xc, r)
     assert out.dtype == np.float32 and np.array_equal(out, ref)
     assert sim._rhs_fast(0.0, xc.astype(float), r) is None
-    np.testing.assert_array_equal(sim.rhs(0.0, xc.astype(float), r), ref)
+    np.testing.assert_array_equal(sim.rhs(0.0, xc.astype(float), r=r), ref)
 
 
 def test_host_fast_batch_is_taken_and_exact(cart):
@@ -130,10 +130,10 @@ def test_host_fast_batch_is_taken_and_exact(cart):
     rng = np.random.default_rng(11)
     X = rng.uniform(-1, 1, (25, 4))
     r, p = np.array([0.5]), cart.constants * 1.2
-    ref = np.array([cart.rhs(0.0, x, r, p) for x in X])
+    ref = np.array([cart.rhs(0.0, x, r=r, p=p) for x in X])
     # independent: M u' = f from the model's own M and f, q' = u
     for x, d in zip(X[:3], ref[:3]):
-        M, f = cart.mass_matrix(x[:2], p), cart.forcing(x[:2], x[2:], r, p)
+        M, f = cart.mass_matrix(x[:2], p=p), cart.forcing(x[:2], x[2:], r=r, p=p)
         np.testing.assert_allclose(d[2:], np.linalg.solve(M, f), rtol=1e-13)
         assert np.array_equal(d[:2], x[2:])
     got = fast(0.0, X, r, p, None)
@@ -160,7 +160,7 @@ def test_host_fast_batch_is_taken_and_exact(cart):
     with pytest.raises(TypeError):
         fast(0.0, X)
     # Simulator.rhs_batch: the same numbers by either path, and the failing state named
-    assert np.array_equal(cart.rhs_batch(0.0, X, r, p), ref)
-    assert np.array_equal(cart.rhs_batch(np.zeros(25), X, r, np.tile(p, (25, 1))), ref)
+    assert np.array_equal(cart.rhs_batch(0.0, X, r=r, p=p), ref)
+    assert np.array_equal(cart.rhs_batch(np.zeros(25), X, r=r, p=np.tile(p, (25, 1))), ref)
     with pytest.raises(ValueError, match="state 7 of 25"):
-        cart.rhs_batch(0.0, bad, r, p)
+        cart.rhs_batch(0.0, bad, r=r, p=p)

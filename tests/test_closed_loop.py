@@ -63,8 +63,8 @@ def test_feedback_about_an_operating_point(cart):
     # x_ss = x_op - r_op / K_x ... here r_op = 0 at the equilibrium x_op)
     sim, K = cart
     x_op = np.array([0.5, 0.0, 0.0, 0.0])
-    t, X, R = sim.simulate(np.zeros(4), 8.0, 1e-3, controller=gen.LinearFeedback(K, x_op),
-                           return_inputs=True)
+    sol = sim.simulate(np.zeros(4), 8.0, 1e-3, controller=gen.LinearFeedback(K, x_op))
+    t, X, R = sol.t, sol.x, sol.r
     assert abs(X[-1, 0] - 0.5) < 1e-4 and np.max(np.abs(X[-1, 1:])) < 1e-4
     # the inputs reported are the law at the rows
     law = gen.LinearFeedback(K, x_op)
@@ -85,10 +85,12 @@ def test_sampled_paths_agree(cart, period, dt, method):
         calls.append(t)
         return -K @ x
 
-    _, Xc, Rc = sim.simulate(x0, 2.0, dt, method=method, return_inputs=True,
-                             controller=gen.LinearFeedback(K, period=period))
-    _, Xp, Rp = sim.simulate(x0, 2.0, dt, method=method, return_inputs=True, r=law,
-                             input_period=period)
+    sol = sim.simulate(x0, 2.0, dt, method=method,
+                       controller=gen.LinearFeedback(K, period=period))
+    _, Xc, Rc = sol.t, sol.x, sol.r
+    sol = sim.simulate(x0, 2.0, dt, method=method, r=law,
+                       input_period=period)
+    _, Xp, Rp = sol.t, sol.x, sol.r
     assert np.max(np.abs(Xc - Xp)) <= 1e-12 and np.max(np.abs(Rc - Rp)) <= 1e-11
     # each sample is taken once, at t = k Ts
     n = int(round(2.0 / period))
@@ -98,14 +100,14 @@ def test_sampled_paths_agree(cart, period, dt, method):
 
 def test_sampled_feedback_is_a_zero_order_hold(cart):
     """At period = dt the sampled loop is RK4 steps with the input computed
-    at the start of each step and held: a Python loop of sim.step_rk4."""
+    at the start of each step and held: a Python loop of sim.step(method="rk4")."""
     sim, K = cart
     dt = 1e-3
     x = np.array([0.0, 0.3, 0.0, 0.0])
     _, Xc = sim.simulate(x, 0.5, dt, controller=gen.LinearFeedback(K, period=dt))
     rows = [x]
     for k in range(500):
-        x = sim.step_rk4(k * dt, x, dt, r=-K @ x)
+        x = sim.step(k * dt, x, dt, r=-K @ x, method="rk4")
         rows.append(x)
     assert np.max(np.abs(Xc - np.array(rows))) < 1e-13
 
@@ -155,15 +157,16 @@ def test_input_table_zoh_and_linear_against_analytic(double_integrator, method):
     kw = dict(method=method, rtol=1e-12, atol=1e-14)
     # linear hold of a ramp r = 3 t: x = t^3 / 4 (m = 2)
     tg = np.array([0.0, 0.7, 1.3, 2.0])
-    t, X, R = sim.simulate([0.0, 0.0], 2.0, 0.01, r=(tg, 3 * tg), input_hold="linear",
-                           return_inputs=True, **kw)
+    sol = sim.simulate([0.0, 0.0], 2.0, 0.01, r=(tg, 3 * tg), input_hold="linear", **kw)
+    t, X, R = sol.t, sol.x, sol.r
     assert np.max(np.abs(X[:, 0] - t**3 / 4)) < 1e-9
     assert np.max(np.abs(X[:, 1] - 3 * t**2 / 4)) < 1e-9
     assert np.max(np.abs(R[:, 0] - 3 * t)) < 1e-12
     # zero-order hold of a staircase with knots between output times
     tk = np.array([0.0, 0.333, 1.1, 1.55])
     rk = np.array([1.0, -2.0, 0.5, 3.0])
-    t, X, R = sim.simulate([0.0, 0.0], 2.0, 0.01, r=(tk, rk), return_inputs=True, **kw)
+    sol = sim.simulate([0.0, 0.0], 2.0, 0.01, r=(tk, rk), **kw)
+    t, X, R = sol.t, sol.x, sol.r
     want = np.array([staircase(tk, rk, ti) for ti in t])
     assert np.max(np.abs(X - want)) < 1e-9
     held = rk[np.searchsorted(tk, t, side="right") - 1]
@@ -196,15 +199,18 @@ def test_errors_name_the_problem(cart, double_integrator):
         sim.simulate(x0, 1.0, 1e-2, r=[1.0], controller=gen.LinearFeedback(K))
 
 
-def test_simulate_batch_takes_a_controller_and_a_callable(cart):
+def test_ensemble_rows_take_a_controller_and_refuse_a_callable(cart):
     sim, K = cart
     X0 = np.array([[0.0, 0.1, 0, 0], [0.0, -0.2, 0, 0]])
-    _, Xb = sim.simulate_batch(X0, 1.0, 1e-3, controller=gen.LinearFeedback(K, period=1e-3))
-    _, Xc = sim.simulate_batch(X0, 1.0, 1e-3, r=lambda t, x: -K @ x, workers=1)
+    res = sim.ensemble(X0, 1.0, 1e-3, controller=gen.LinearFeedback(K, period=1e-3),
+                       reduce="rows")
     for i in range(2):
-        _, X = sim.simulate(X0[i], 1.0, 1e-3, controller=gen.LinearFeedback(K, period=1e-3))
-        assert np.array_equal(Xb[i], X)
-        assert np.max(np.abs(Xc[i] - X)) < 1e-12
+        t, X = sim.simulate(X0[i], 1.0, 1e-3, controller=gen.LinearFeedback(K, period=1e-3))
+        assert np.array_equal(res.rows[i], X) and np.array_equal(res.t, t)
+    # a Python r(t, x) would hold the GIL at every step: refused, naming r
+    with pytest.raises(gen.InputError, match="not a Python function") as e:
+        sim.ensemble(X0, 1.0, 1e-3, r=lambda t, x: -K @ x, reduce="rows")
+    assert e.value.argument == "r"
 
 
 @pytest.mark.slow
@@ -222,8 +228,10 @@ def test_eigen_backend_closes_the_loop_too(cart):
                dict(r=(tk, np.array([1.0, -2.0, 0.5])), input_hold="linear"),
                dict(r=(tk, np.array([1.0, -2.0, 0.5])))):
         for method in ("rk4", "dopri5"):
-            _, X, R = sim.simulate(x0, 2.0, 1e-2, method=method, return_inputs=True, **kw)
-            _, Xe, Re = sim_e.simulate(x0, 2.0, 1e-2, method=method, return_inputs=True, **kw)
+            sol = sim.simulate(x0, 2.0, 1e-2, method=method, **kw)
+            _, X, R = sol.t, sol.x, sol.r
+            sol = sim_e.simulate(x0, 2.0, 1e-2, method=method, **kw)
+            _, Xe, Re = sol.t, sol.x, sol.r
             assert np.max(np.abs(X - Xe)) < 1e-10 and np.max(np.abs(R - Re)) < 1e-9, kw
 
 
@@ -261,8 +269,9 @@ def test_binary_with_gain_and_input_table_reproduces_the_c_path(cart, tmp_path):
         head, data = _csv(subprocess.run(args, capture_output=True, text=True,
                                          check=True).stdout)
         assert head == ["t", "x", "theta", "v", "omega", "tip_x", "tip_y", "F"]
-        t, X, R, Y = sim.simulate(x0, 5.0, 1e-3, controller=gen.LinearFeedback(K, period=period),
-                                  return_inputs=True, return_outputs=True)
+        sol = sim.simulate(x0, 5.0, 1e-3, controller=gen.LinearFeedback(K, period=period))
+        t, X, R = sol.t, sol.x, sol.r
+        Y = np.column_stack([sol.outputs[k] for k in sim.output_names])
         assert np.max(np.abs(data[:, 1:5] - X)) < 1e-10
         assert np.max(np.abs(data[:, 5:7] - Y)) < 1e-10
         assert np.max(np.abs(data[:, 7] - R[:, 0])) < 1e-9
@@ -275,7 +284,8 @@ def test_binary_with_gain_and_input_table_reproduces_the_c_path(cart, tmp_path):
                               "--input-csv", str(tmp_path / "in.csv"), "--hold", hold],
                              capture_output=True, text=True, check=True).stdout
         head, data = _csv(out)
-        t, X, R = sim.simulate(x0, 1.0, 0.01, r=(tg, Rt), input_hold=hold, return_inputs=True)
+        sol = sim.simulate(x0, 1.0, 0.01, r=(tg, Rt), input_hold=hold)
+        t, X, R = sol.t, sol.x, sol.r
         assert np.max(np.abs(data[:, 1:5] - X)) < 1e-12
         assert np.max(np.abs(data[:, 7] - R[:, 0])) < 1e-12
     # a gain of the wrong shape is named

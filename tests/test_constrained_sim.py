@@ -22,8 +22,8 @@ def measured_period(sim, order, theta0, method="dopri5", dt=1e-3, n_periods=2, *
     T = exact_period(theta0)
     x0 = pendulum_state(theta0, 0.0, L, order)
     t0 = time.perf_counter()
-    t, X, stats = sim.simulate(x0, n_periods * T + 0.25 * T, dt, method=method, p=P,
-                               return_stats=True, **kw)
+    sol = sim.simulate(x0, n_periods * T + 0.25 * T, dt, method=method, p=P, **kw)
+    t, X, stats = sol.t, sol.x, sol.stats
     wall = time.perf_counter() - t0
     y = X[:, sim.state_names.index("q2")]
     cr = crossing_times(t, y, direction=-1)     # through the bottom, once a period
@@ -57,8 +57,9 @@ def test_long_run_drift_and_energy(lagrange_sim):
     out = {}
     for project in (True, False):
         t0 = time.perf_counter()
-        t, X, st = lagrange_sim.simulate(x0, 1000 * T, T / 8, method="dopri5", rtol=1e-10,
-                                         atol=1e-10, p=P, project=project, return_stats=True)
+        sol = lagrange_sim.simulate(x0, 1000 * T, T / 8, method="dopri5", rtol=1e-10,
+                                    atol=1e-10, p=P, project=project)
+        t, X, st = sol.t, sol.x, sol.stats
         wall = time.perf_counter() - t0
         drift = np.max(np.abs(X[:, 0] ** 2 + X[:, 1] ** 2 - L ** 2))
         energy = max(abs(lagrange_sim.energy(x, p=P) - E0) for x in X[::50]) / abs(E0)
@@ -134,8 +135,8 @@ def test_rk4_order_and_dopri5_tolerance(lagrange_sim):
     x0 = pendulum_state(th0, 0.0, L, "lagrange")
     d_errs, steps = [], []
     for rtol in (1e-6, 1e-8, 1e-10):
-        t, X, st = lagrange_sim.simulate(x0, T, T, method="dopri5", rtol=rtol, atol=rtol, p=P,
-                                         return_stats=True)
+        sol = lagrange_sim.simulate(x0, T, T, method="dopri5", rtol=rtol, atol=rtol, p=P)
+        t, X, st = sol.t, sol.x, sol.stats
         d_errs.append(np.max(np.abs(X[-1] - x0)))
         steps.append(st["n_accepted"])
     print("dopri5 error after one period by rtol 1e-6, 1e-8, 1e-10:", d_errs, "steps", steps)
@@ -145,9 +146,9 @@ def test_rk4_order_and_dopri5_tolerance(lagrange_sim):
 
 def test_multipliers_match_tension(lagrange_sim):
     th0 = np.radians(75.0)
-    t, X, lam = lagrange_sim.simulate(pendulum_state(th0, 0, L, "lagrange"), 3.0, 0.01,
-                                      method="dopri5", rtol=1e-11, atol=1e-11, p=P,
-                                      return_multipliers=True)
+    sol = lagrange_sim.simulate(pendulum_state(th0, 0, L, "lagrange"), 3.0, 0.01,
+                                method="dopri5", rtol=1e-11, atol=1e-11, p=P)
+    t, X, lam = sol.t, sol.x, sol.lam
     x, y, vx, vy = X.T
     theta = np.arctan2(y, x)
     thetadot = (x * vy - y * vx) / L ** 2

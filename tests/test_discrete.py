@@ -38,9 +38,9 @@ def test_against_scipy_expm_of_the_augmented_matrix(sim):
     tol = 1e-12 if real == "double" else 1e-5
     for x in _points(s):
         r = np.full(s.nr, 0.4)
-        A, B = s.linearize(x, r)
+        A, B = s.linearize(x, r=r)
         for Ts in (1e-3, 0.05, 0.7):
-            Ad, Bd = s.linearize(x, r, dt=Ts)
+            Ad, Bd = s.linearize(x, r=r, dt=Ts)
             ns, nr = s.ns, s.nr
             M = np.zeros((ns + nr, ns + nr))
             M[:ns, :ns], M[:ns, ns:] = A, B

@@ -29,6 +29,7 @@ RECEIVED = {
     "VerifyReport": "returned by gen.verify",
     "EnsembleResult": "returned by Simulator.ensemble",
     "Simulator": "returned by gen.compile",
+    "Solution": "returned by Simulator.simulate",
 }
 
 

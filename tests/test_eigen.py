@@ -179,8 +179,8 @@ def _calls(sim, x, r, rng_pert):
         "multipliers": sim.multipliers(0.3, x, r=R),
         "project": sim.project(xp),
         "consistent_state": sim.consistent_state(xp),
-        "step_rk4": sim.step_rk4(0.0, x, 0.01, r=R),
-        "linearize": np.concatenate([a.ravel() for a in sim.linearize(x, r_op=R)]),
+        "step_rk4": sim.step(0.0, x, 0.01, r=R, method="rk4"),
+        "linearize": np.concatenate([a.ravel() for a in sim.linearize(x, r=R)]),
     }
     if sim.has_energy:
         out["energy"] = np.array([sim.energy(x)])
@@ -192,8 +192,8 @@ def _simulations(sim, x, r):
     out = {}
     t, X = sim.simulate(x, 0.5, 0.01, method="rk4", r=R)
     out["simulate_rk4"] = np.concatenate([t, X.ravel()])
-    t, X, lam = sim.simulate(x, 1.0, 0.1, method="dopri5", r=R, rtol=1e-9, atol=1e-11,
-                             return_multipliers=True)
+    sol = sim.simulate(x, 1.0, 0.1, method="dopri5", r=R, rtol=1e-9, atol=1e-11)
+    t, X, lam = sol.t, sol.x, sol.lam
     out["simulate_dopri5"] = np.concatenate([t, X.ravel(), lam.ravel()])
     return out
 
@@ -232,7 +232,7 @@ def test_eigen_errors_match_c(sims):
     x = np.array([0, 0, np.pi / 2, 1.0, 0.0, 0.0])
     for sim in (sim_c, sim_e):
         with pytest.raises(gen.SingularError):
-            sim.linearize(x, r_op=[0, 0])
+            sim.linearize(x, r=[0, 0])
 
 
 # ------------------------------------------------------ against sympy

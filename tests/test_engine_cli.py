@@ -102,8 +102,9 @@ def test_binary_events_match_python_and_the_exact_period(binary, kane_sim, x0, t
     run(binary, *args, "--output", out, "--events-csv", ev)
     t_b, X_b = rows(out)
     ev_b = events_csv(ev)
-    t, X, found = kane_sim.simulate(x0, 3.0, 0.01, method="dopri5", rtol=1e-12, atol=1e-12,
-                                    events={"q2": 0}, return_events=True)
+    sol = kane_sim.simulate(x0, 3.0, 0.01, method="dopri5", rtol=1e-12, atol=1e-12,
+                            events={"q2": 0})
+    t, X, found = sol.t, sol.x, sol.events
     assert len(t_b) == len(t) == 301
     assert rel_err(t_b, t) <= 1e-12 and rel_err(X_b, X) <= 1e-12
     same_events(ev_b, found)
@@ -131,10 +132,10 @@ def test_binary_terminal_event_ends_the_rows(binary, kane_sim, x0, tmp_path):
         "--event", "q2:-1:terminal", "--event", "u2:up", "--output", out, "--events-csv", ev)
     t_b, X_b = rows(out)
     ev_b = events_csv(ev)
-    t, X, found, info = kane_sim.simulate(
-        x0, 3.0, 0.01, method="dopri5", rtol=1e-12, atol=1e-12,
-        events={"q2": -1, "u2": 1}, terminal={"q2": True}, return_events=True,
-        return_stats=True)
+    sol = kane_sim.simulate(
+                            x0, 3.0, 0.01, method="dopri5", rtol=1e-12, atol=1e-12,
+                            events={"q2": -1, "u2": 1}, terminal={"q2": True})
+    t, X, found, info = sol.t, sol.x, sol.events, sol.stats
     assert info["terminal"] == "q2"
     assert len(t_b) == len(t) == int(np.floor(T4 / 0.01)) + 2   # the grid, then the event
     assert rel_err(t_b, t) <= 1e-12 and rel_err(X_b, X) <= 1e-12
@@ -153,9 +154,10 @@ def test_binary_event_level_and_direction_words(binary, kane_sim, x0, tmp_path):
     run(binary, "--t-end", 1, "--dt", 0.05, "--method", "dopri5", *TOL, *x0_args(x0),
         "--event", "q2=0.5:down:terminal", "--event", "u2=-1e0:-1", "--output", out,
         "--events-csv", ev)
-    t, X, found = kane_sim.simulate(x0, 1.0, 0.05, method="dopri5", rtol=1e-12, atol=1e-12,
-                                    events={"q2": (-1, 0.5), "u2": (-1, -1.0)},
-                                    terminal={"q2": True}, return_events=True)
+    sol = kane_sim.simulate(x0, 1.0, 0.05, method="dopri5", rtol=1e-12, atol=1e-12,
+                            events={"q2": (-1, 0.5), "u2": (-1, -1.0)},
+                            terminal={"q2": True})
+    t, X, found = sol.t, sol.x, sol.events
     ev_b = events_csv(ev)
     same_events(ev_b, found)
     assert rel_err(rows(out)[1], X) <= 1e-12
@@ -194,8 +196,9 @@ def test_binary_rodas4_matches_python(binary, kane_sim, x0, tmp_path):
     run(binary, *args, "--method", "rodas4", "--event", "q2:0:terminal", "--output", out,
         "--events-csv", ev)
     t_b, X_b = rows(out)
-    t, X, found = kane_sim.simulate(x0, 2.0, 0.02, method="rodas4", rtol=1e-9, atol=1e-11,
-                                    events={"q2": 0}, terminal=True, return_events=True)
+    sol = kane_sim.simulate(x0, 2.0, 0.02, method="rodas4", rtol=1e-9, atol=1e-11,
+                            events={"q2": 0}, terminal=True)
+    t, X, found = sol.t, sol.x, sol.events
     assert len(t_b) == len(t) < 101
     assert rel_err(X_b, X) <= 1e-12
     same_events(events_csv(ev), found)
@@ -266,17 +269,17 @@ def test_eomgen_simulate_events_match_the_binary(binary, kane_sim, x0, tmp_path)
     assert abs(ev_c[-1][1] - 4 * T4) / T4 < 1e-8 and t_c[-1] == ev_c[-1][1]
     # and from Python directly
     x = kane_sim.consistent_state(x0)
-    t, X, found = kane_sim.simulate(x, 2.5, 0.01, method="dopri5", rtol=1e-12, atol=1e-12,
-                                    events={"q2": 0, "u2": -1}, terminal={"u2": True},
-                                    return_events=True)
+    sol = kane_sim.simulate(x, 2.5, 0.01, method="dopri5", rtol=1e-12, atol=1e-12,
+                            events={"q2": 0, "u2": -1}, terminal={"u2": True})
+    t, X, found = sol.t, sol.x, sol.events
     same_events(ev_c, found)
     assert rel_err(X_c, X) <= 1e-12
     # no --events-csv: the binary's lines on stderr; rodas4 (alias rodas) by name
     p = eomgen("simulate", SEED, "--t-end", 1, "--dt", 0.01, "--method", "rodas", *xs,
                "--event", "q2:down", "--csv", csv)
     ev_s = events_stderr(p.stderr)
-    t, X, found = kane_sim.simulate(x, 1.0, 0.01, method="rodas4", events={"q2": -1},
-                                    return_events=True)
+    sol = kane_sim.simulate(x, 1.0, 0.01, method="rodas4", events={"q2": -1})
+    t, X, found = sol.t, sol.x, sol.events
     same_events(ev_s, found)
     assert len(ev_s) == 1 and abs(ev_s[0][1] - T4) / T4 < 1e-6
     assert rel_err(rows(csv)[1], X) <= 1e-12
@@ -308,9 +311,9 @@ def test_binary_event_on_an_output(tmp_path):
     lines = ev.read_text().splitlines()
     assert lines[0] == "event,t," + ",".join(sim.state_names)
     name, *vals = lines[1].split(",")
-    t, X, found = sim.simulate(x0, 3.0, 0.01, method="dopri5", rtol=1e-12, atol=1e-12,
-                               r=[0.0], events={"tip_y": (-1, 0.5)}, terminal=True,
-                               return_events=True)
+    sol = sim.simulate(x0, 3.0, 0.01, method="dopri5", rtol=1e-12, atol=1e-12,
+                       r=[0.0], events={"tip_y": (-1, 0.5)}, terminal=True)
+    t, X, found = sol.t, sol.x, sol.events
     assert name == "tip_y" and len(lines) == 2 and len(found) == 1
     assert abs(float(vals[0]) - found[0][1]) <= 1e-12
     th = float(vals[1 + sim.state_names.index("theta")])

@@ -74,6 +74,11 @@ def _both(sims, key, *args, **kw):
     return sim_c.simulate(*args, **kw), sim_e.simulate(*args, **kw)
 
 
+def _parts(sols, *names):
+    """(attribute, ...) of each gen.Solution, in the order of names."""
+    return [tuple(getattr(sol, n) for n in names) for sol in sols]
+
+
 def _dmax(a, b):
     a, b = np.asarray(a, float), np.asarray(b, float)
     assert a.shape == b.shape, (a.shape, b.shape)
@@ -90,8 +95,8 @@ def _same_counts(st_c, st_e, keys=("n_accepted", "n_rejected", "n_rhs", "n_jac",
 def test_dopri5_seed_pendulum(sims, key):
     """Adaptive steps, rows from the continuous extension every 0.01 s."""
     x0 = pendulum_state(1.1, 0.7, 1.0, key)
-    (t_c, X_c, st_c), (t_e, X_e, st_e) = _both(
-        sims, key, x0, 3.0, 0.01, method="dopri5", rtol=1e-10, atol=1e-10, return_stats=True)
+    (t_c, X_c, st_c), (t_e, X_e, st_e) = _parts(_both(
+        sims, key, x0, 3.0, 0.01, method="dopri5", rtol=1e-10, atol=1e-10), "t", "x", "stats")
     d = _dmax(X_e, X_c)
     print(f"\n{key} dopri5: max|dX| = {d:.2e}, {st_c}")
     assert len(t_c) == 301 and np.array_equal(t_c, t_e)
@@ -114,9 +119,9 @@ def test_cart_pole_feedback(sims, method, period):
     K = _cart_pole_gain(sim_c)
     x0 = np.array([0.0, 0.3, 0.0, 0.0])
     ctl = gen.LinearFeedback(K, period=period)
-    (t_c, X_c, R_c, st_c), (t_e, X_e, R_e, st_e) = _both(
+    (t_c, X_c, R_c, st_c), (t_e, X_e, R_e, st_e) = _parts(_both(
         sims, "cart_pole", x0, 3.0, 0.01, method=method, rtol=1e-10, atol=1e-10,
-        controller=ctl, return_inputs=True, return_stats=True)
+        controller=ctl), "t", "x", "r", "stats")
     d, dr = _dmax(X_e, X_c), _dmax(R_e, R_c)
     print(f"\ncart_pole {method} period {period}: max|dX| = {d:.2e}, max|dF| = {dr:.2e}, {st_c}")
     assert np.array_equal(t_c, t_e)
@@ -138,9 +143,9 @@ def test_cart_pole_inputs(sims, method, kind):
     else:
         tt = np.linspace(0.0, 2.0, 9)
         kw = dict(r=(tt, np.sin(3 * tt)[:, None]), input_hold=kind.split("_")[1])
-    (t_c, X_c, R_c, st_c), (t_e, X_e, R_e, st_e) = _both(
-        sims, "cart_pole", x0, 2.0, 0.01, method=method, rtol=1e-10, atol=1e-10,
-        return_inputs=True, return_stats=True, **kw)
+    (t_c, X_c, R_c, st_c), (t_e, X_e, R_e, st_e) = _parts(_both(
+        sims, "cart_pole", x0, 2.0, 0.01, method=method, rtol=1e-10, atol=1e-10, **kw),
+        "t", "x", "r", "stats")
     d, dr = _dmax(X_e, X_c), _dmax(R_e, R_c)
     print(f"\ncart_pole {method} {kind}: max|dX| = {d:.2e}, max|dF| = {dr:.2e}, {st_c}")
     assert np.array_equal(t_c, t_e)
@@ -160,17 +165,17 @@ def test_cart_pole_inputs(sims, method, kind):
 # ------------------------------------------------------------------ RODAS4
 def test_rodas4_stiff(sims):
     x0 = np.array([1.0, 0.0, 0.0, 0.0])
-    (t_c, X_c, st_c), (t_e, X_e, st_e) = _both(
+    (t_c, X_c, st_c), (t_e, X_e, st_e) = _parts(_both(
         sims, "stiff", x0, 2.0, 0.01, method="rodas4", rtol=1e-6, atol=1e-6,
-        return_stats=True, max_steps=10 ** 6)
+        max_steps=10 ** 6), "t", "x", "stats")
     d = _dmax(X_e, X_c)
     print(f"\nstiff rodas4: max|dX| = {d:.2e}, {st_c}")
     assert len(t_c) == 201 and np.array_equal(t_c, t_e)
     _same_counts(st_c, st_e)
     assert st_c["n_jac"] == st_c["n_accepted"]     # one Jacobian per step, kept on rejection
     # fewer steps than DOPRI5 needs on this stiff model
-    _, _, st_d = sims["stiff"][1].simulate(x0, 2.0, 0.01, method="dopri5", rtol=1e-6,
-                                          atol=1e-6, return_stats=True, max_steps=10 ** 7)
+    st_d = sims["stiff"][1].simulate(x0, 2.0, 0.01, method="dopri5", rtol=1e-6,
+                                     atol=1e-6, max_steps=10 ** 7).stats
     assert st_c["n_accepted"] < st_d["n_accepted"]
     assert d < TOL_STATE
 
@@ -225,15 +230,14 @@ def test_advance(sims, method, key):
 def _events_run(sim, terminal, method="dopri5"):
     x0 = pendulum_state(np.pi / 3, 0.0, 1.0, "kane")     # released at 60 degrees
     return sim.simulate(x0, 2.0, 0.01, method=method, rtol=1e-12, atol=1e-12,
-                        events={"q2": 0}, terminal=terminal, return_events=True,
-                        return_stats=True)
+                        events={"q2": 0}, terminal=terminal)
 
 
 @pytest.mark.parametrize("method", ["dopri5", "rodas4", "rk4"])
 def test_events(sims, method):
     """Both crossings of q2 = 0 in 2 s, located on the dense output."""
-    (t_c, X_c, ev_c, st_c), (t_e, X_e, ev_e, st_e) = [
-        _events_run(s, False, method) for s in sims["kane"]]
+    (t_c, X_c, ev_c, st_c), (t_e, X_e, ev_e, st_e) = _parts(
+        [_events_run(s, False, method) for s in sims["kane"]], "t", "x", "events", "stats")
     print(f"\nevents {method}: C {[(n, t) for n, t, _ in ev_c]}, stats {st_c}")
     assert np.array_equal(t_c, t_e) and len(t_c) == 201
     _same_counts(st_c, st_e, ("n_accepted", "n_rejected", "n_rhs", "n_jac", "n_out",
@@ -251,8 +255,8 @@ def test_events(sims, method):
 
 def test_events_terminal(sims):
     """terminal=True: the run ends at the first crossing, its state the last row."""
-    (t_c, X_c, ev_c, st_c), (t_e, X_e, ev_e, st_e) = [
-        _events_run(s, True) for s in sims["kane"]]
+    (t_c, X_c, ev_c, st_c), (t_e, X_e, ev_e, st_e) = _parts(
+        [_events_run(s, True) for s in sims["kane"]], "t", "x", "events", "stats")
     print(f"\nterminal: t_event C {ev_c[0][1]!r}, Eigen {ev_e[0][1]!r}; stats {st_c}")
     assert st_c == st_e       # n_rhs, n_jac, n_events, terminal, ...
     assert st_e["terminal"] == "q2" and st_e["n_events"] == 1
@@ -269,11 +273,12 @@ def test_every_and_final_only(sims, method):
     """every=k and final_only keep rows of the same run (the integration is
     the same), equal between the backends."""
     x0 = pendulum_state(0.9, 0.4, 1.0, "lagrange")
-    kw = dict(method=method, rtol=1e-9, atol=1e-9, return_stats=True)
-    full_c = sims["lagrange"][0].simulate(x0, 1.0, 0.01, **kw)
+    kw = dict(method=method, rtol=1e-9, atol=1e-9)
+    full = sims["lagrange"][0].simulate(x0, 1.0, 0.01, **kw)
+    full_c = (full.t, full.x, full.stats)
     for extra in (dict(every=7), dict(final_only=True)):
-        (t_c, X_c, st_c), (t_e, X_e, st_e) = _both(sims, "lagrange", x0, 1.0, 0.01,
-                                                  **kw, **extra)
+        (t_c, X_c, st_c), (t_e, X_e, st_e) = _parts(_both(sims, "lagrange", x0, 1.0, 0.01,
+                                                          **kw, **extra), "t", "x", "stats")
         _same_counts(st_c, st_e)
         assert np.array_equal(t_c, t_e)
         if "every" in extra:

@@ -64,7 +64,7 @@ def test_rolling_disc_stability_limit(disc, factor):
     x = _upright(disc, omega)
     # the contact point rolls forward at r * Omega along the heading
     assert abs(x[disc.state_names.index("u4")] - r * omega) < 1e-12
-    A, B = disc.linearize(x, r_op=[0.0])
+    A, B = disc.linearize(x, r=[0.0])
     assert A.shape == (8, 8) and B.shape == (8, 1)
     ev = np.linalg.eigvals(A)
     lam2 = 0.8 * (g / r - 3 * omega**2)
@@ -110,15 +110,15 @@ def test_n_link_cart_against_sympy(n):
         F = rng.uniform(-3, 3)
         ref = np.linalg.solve(np.array(fM(*x, F), dtype=float),
                               np.array(fF(*x, F), dtype=float).ravel())
-        worst = max(worst, rel_err(sim.rhs(0.0, x, [F], p), ref))
+        worst = max(worst, rel_err(sim.rhs(0.0, x, r=[F], p=p), ref))
         Mfull = np.array(fM(*x, F), dtype=float)
-        worst = max(worst, rel_err(sim.mass_matrix(x[:n + 1], p), Mfull[n + 1:, n + 1:]))
+        worst = max(worst, rel_err(sim.mass_matrix(x[:n + 1], p=p), Mfull[n + 1:, n + 1:]))
     print(f"cart{n}: max rel err vs sympy {worst:.2e}")
     assert worst < 1e-12
     # energy is conserved without the force
     x0 = rng.uniform(-0.5, 0.5, model.nx)
     t, X = sim.simulate(x0, 2.0, 0.01, method="dopri5", rtol=1e-11, atol=1e-12, p=p)
-    E = np.array([sim.energy(x, p) for x in X])
+    E = np.array([sim.energy(x, p=p) for x in X])
     assert np.max(np.abs(E - E[0])) < 1e-8 * np.max(np.abs(E))
 
 

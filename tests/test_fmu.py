@@ -395,9 +395,9 @@ def _check_dependencies(name):
         x = sim.consistent_state(_x0(name) + 0.1 * rng.standard_normal(m.nx))
         r = rng.standard_normal(m.nr)
         if m.ny:
-            A, B, C, D = sim.linearize(x, r, outputs=True)
+            A, B, C, D = sim.linearize_outputs(x, r=r)
         else:
-            A, B = sim.linearize(x, r)
+            A, B = sim.linearize(x, r=r)
         for k, d in enumerate(deps.derivative):
             row = np.hstack([A[k], B[k]])
             assert not np.any((np.abs(row) > 1e-12) & ~mask(d)), (name, k, row, d)
@@ -410,8 +410,8 @@ def _check_dependencies(name):
                 xp, xm = x.copy(), x.copy()
                 xp[i] += h
                 xm[i] -= h
-                dl = (sim.multipliers(0, sim.consistent_state(xp), r)
-                      - sim.multipliers(0, sim.consistent_state(xm), r)) / (2 * h)
+                dl = (sim.multipliers(0, sim.consistent_state(xp), r=r)
+                      - sim.multipliers(0, sim.consistent_state(xm), r=r)) / (2 * h)
                 for k in range(m.mv):
                     if abs(dl[k]) > 1e-6:
                         assert ("x", i) in deps.multiplier[k], (name, k, i, dl)

@@ -87,17 +87,17 @@ def test_rhs_at_hover_and_at_random_states_matches_hand_written_euler_rates(sims
 
 def test_linearization_at_hover_matches(sims):
     x = np.zeros(12)
-    A0, B0 = sims["euler"].linearize(x, HOVER_R)
+    A0, B0 = sims["euler"].linearize(x, r=HOVER_R)
     assert A0.shape == (11, 11)
     for k in ("sympy", "sympy_implicit"):
-        A, B = sims[k].linearize(x, HOVER_R)
+        A, B = sims[k].linearize(x, r=HOVER_R)
         assert np.max(np.abs(A - A0)) <= 1e-12 and np.max(np.abs(B - B0)) <= 1e-12, k
     # away from hover, where q' couples the constraint to the attitude
     x = sims["euler"].consistent_state(np.array([0.3, -0.2, 0.4, 0, 0, 1, 0.5, -0.3, 0.2,
                                                  0.0, 0.2, 0.1]))
-    A0, B0 = sims["euler"].linearize(x, HOVER_R)
+    A0, B0 = sims["euler"].linearize(x, r=HOVER_R)
     for k in ("sympy", "sympy_implicit"):
-        A, B = sims[k].linearize(x, HOVER_R)
+        A, B = sims[k].linearize(x, r=HOVER_R)
         assert np.max(np.abs(A - A0)) <= 1e-10 * np.max(np.abs(A0)), k
         assert np.max(np.abs(B - B0)) <= 1e-12 * np.max(np.abs(B0)), k
 
@@ -132,7 +132,7 @@ def test_eigen_backend_evaluates_a_at_the_solved_q_prime(sims):
     x = ref.consistent_state(np.array([0.3, -0.2, 0.4, 0, 0, 1, 0.5, -0.3, 0.2, 0.0, 0.2, 0.1]))
     for xx in (np.zeros(12), x):
         assert np.max(np.abs(sim_e.rhs(0.0, xx, r=HOVER_R) - ref.rhs(0.0, xx, r=HOVER_R))) < 1e-12
-        A, B = sim_e.linearize(xx, HOVER_R)
-        A0, B0 = ref.linearize(xx, HOVER_R)
+        A, B = sim_e.linearize(xx, r=HOVER_R)
+        A0, B0 = ref.linearize(xx, r=HOVER_R)
         assert np.max(np.abs(A - A0)) <= 1e-10 * np.max(np.abs(A0))
         assert np.max(np.abs(B - B0)) <= 1e-12 * np.max(np.abs(B0))

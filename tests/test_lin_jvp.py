@@ -51,22 +51,22 @@ def test_jvp_blocks_equal_the_unrolled_ones(key):
         if su.mc or su.mv:
             x = su.consistent_state(x)
         r = rng.normal(size=su.nr) if su.nr else None
-        A1, B1 = su.linearize(x, r)
-        A2, B2 = sj.linearize(x, r)
+        A1, B1 = su.linearize(x, r=r)
+        A2, B2 = sj.linearize(x, r=r)
         scale = 1 + np.max(np.abs(A1))
         assert np.max(np.abs(A1 - A2)) <= 1e-12 * scale
         if su.nr:
             assert np.max(np.abs(B1 - B2)) <= 1e-12 * (1 + np.max(np.abs(B1)))
-        Jx1, _ = su.jacobian(0.0, x, r)
-        Jx2, _ = sj.jacobian(0.0, x, r)
+        Jx1, _ = su.jacobian(0.0, x, r=r)
+        Jx2, _ = sj.jacobian(0.0, x, r=r)
         assert np.max(np.abs(Jx1 - Jx2)) <= 1e-12 * (1 + np.max(np.abs(Jx1)))
     # the independent reference: central differences of the rhs
     x = su.consistent_state(rng.normal(size=su.nx) * 0.4) if (su.mc or su.mv) else \
         rng.normal(size=su.nx) * 0.4
     r = rng.normal(size=su.nr) if su.nr else None
-    Jx, _ = sj.jacobian(0.0, x, r)
+    Jx, _ = sj.jacobian(0.0, x, r=r)
     h = 1e-6
-    fd = np.column_stack([(sj.rhs(0.0, x + h * e, r) - sj.rhs(0.0, x - h * e, r)) / (2 * h)
+    fd = np.column_stack([(sj.rhs(0.0, x + h * e, r=r) - sj.rhs(0.0, x - h * e, r=r)) / (2 * h)
                           for e in np.eye(sj.nx)])
     assert np.max(np.abs(Jx - fd)) <= 1e-6 * (1 + np.max(np.abs(fd)))
 

@@ -126,7 +126,7 @@ def test_sleigh_random_points(sleigh):
         op.update(pv)
         A_s, B_s = lin.linearize(op_point=op, A_and_B=True)
         inp = list(lin.r)
-        A, B = sim.linearize(x, r_op=r)
+        A, B = sim.linearize(x, r=r)
         # B's columns in our input order [F, tau] (sympy's order may differ)
         cols = [list(inp).index(s["F"]), list(inp).index(s["tau"])]
         B_ref = _num(B_s)[:, cols]
@@ -141,7 +141,7 @@ def test_sleigh_singular_partition(sleigh):
     _, _, _, sim = sleigh
     x = np.array([0, 0, np.pi / 2, 1.0, 0.0, 0.0])
     with pytest.raises(gen.SingularError):
-        sim.linearize(x, r_op=[0, 0])
+        sim.linearize(x, r=[0, 0])
 
 
 # ------------------------------------------------- exact and FD checks
@@ -189,7 +189,7 @@ def test_finite_differences_along_manifold(kane_sim, lagrange_sim, sleigh):
          np.array([0.4, -0.3])),
     ]
     for sim, x, r in cases:
-        A, B = sim.linearize(x, r_op=r if sim.nr else None)
+        A, B = sim.linearize(x, r=r if sim.nr else None)
         A_fd, B_fd = _fd_check(sim, x, r)
         ea, eb = rel_err(A, A_fd), (rel_err(B, B_fd) if sim.nr else 0.0)
         print(f"{sim.name}: A vs central differences {ea:.1e}, B {eb:.1e}")

@@ -46,7 +46,7 @@ def _compare(model, sim, points, r=None):
         rr = dict(zip(model.input_names, r)) if r is not None else None
         A_s, B_s = gen.linearize_symbolic(model, op, r_op=rr, constants="values",
                                           simplify=False)
-        A, B = sim.linearize(x, r_op=r)
+        A, B = sim.linearize(x, r=r)
         worst = max(worst, rel_err(A, np.array(A_s.evalf(), dtype=float)))
         if model.nr:
             worst = max(worst, rel_err(B, np.array(B_s.evalf(), dtype=float)))

@@ -74,11 +74,11 @@ def test_hostile_names_compile_and_compute(hostile, tmp_path):
     for _ in range(5):
         x = rng.uniform(-1, 1, 4)
         r = rng.uniform(-1, 1)
-        assert rel_err(sim.rhs(0.0, x, [r]), np.ravel(rhs(*x, r)).astype(float)) < 1e-14
+        assert rel_err(sim.rhs(0.0, x, r=[r]), np.ravel(rhs(*x, r)).astype(float)) < 1e-14
     # dict access by the sanitized names and by the sympy spelling
     x1 = sim.consistent_state({"x_0": 0.3, "θ": -0.2, "theta_p": 1.0})
     assert list(x1) == [0.3, -0.2, 0.0, 1.0]
-    A, _ = sim.linearize({"x[0]": 0.0, "u03b8": 0.0}, r_op=[0.0])
+    A, _ = sim.linearize({"x[0]": 0.0, "u03b8": 0.0}, r=[0.0])
     assert np.allclose(sorted(np.linalg.eigvals(A).real), [-0.125] * 4, atol=1e-12)
 
 

@@ -1,6 +1,6 @@
 """Issue 15: model outputs. Model.from_kanes(..., outputs={name: expr})
 compiles measured quantities with the model: sim.outputs, simulate(...,
-return_outputs=True), C and D of linearize(outputs=True), a python-control
+sol.outputs), C and D of linearize_outputs, a python-control
 StateSpace.
 
 References: sympy's own expressions lambdified (the user's symbols, not the
@@ -42,9 +42,13 @@ def test_cart_pole_outputs_against_sympy(cart):
 
 def test_simulate_returns_the_outputs_at_the_rows(cart):
     x0 = np.array([0.1, 0.3, 0.0, 0.2])
-    t_, X, R, Y = cart.simulate(x0, 1.0, 0.01, r=lambda tt, x: [np.sin(3 * tt)],
-                                return_inputs=True, return_outputs=True)
+    sol = cart.simulate(x0, 1.0, 0.01, r=lambda tt, x: [np.sin(3 * tt)])
+    t_, X, R = sol.t, sol.x, sol.r
+    assert list(sol.outputs) == cart.output_names == ["tip_x", "tip_y"]
+    Y = np.column_stack([sol.outputs["tip_x"], sol.outputs["tip_y"]])
     assert Y.shape == (len(t_), 2)
+    # computed in C in one batch call, equal to sim.outputs row by row
+    np.testing.assert_array_equal(Y, [cart.outputs(tk, xk, r=rk) for tk, xk, rk in zip(t_, X, R)])
     for k in (0, 37, len(t_) - 1):
         assert np.array_equal(Y[k], cart.outputs(t_[k], X[k], r=R[k]))
     # tip_x = x - 2 l sin(theta)
@@ -107,8 +111,8 @@ def test_C_and_D_against_central_differences(cart, measured):
                 x[sim.q_ind] = rng.uniform(0.2, 0.8, len(sim.q_ind))
                 x = sim.consistent_state(x)
             r = rng.uniform(-2, 2, sim.nr)
-            A, B, C, D = sim.linearize(x, r, outputs=True)
-            A0, B0 = sim.linearize(x, r)
+            A, B, C, D = sim.linearize_outputs(x, r=r)
+            A0, B0 = sim.linearize(x, r=r)
             assert np.array_equal(A, A0) and np.array_equal(B, B0)
             Cn, Dn = _fd_CD(sim, x, r)
             assert C.shape == (sim.ny, sim.ns) and D.shape == (sim.ny, sim.nr)
@@ -117,7 +121,7 @@ def test_C_and_D_against_central_differences(cart, measured):
 
 
 def test_discrete_with_outputs(cart):
-    Ad, Bd, C, D = cart.linearize(np.zeros(4), dt=0.01, outputs=True)
+    Ad, Bd, C, D = cart.linearize_outputs(np.zeros(4), dt=0.01)
     Ad0, Bd0 = cart.linearize(np.zeros(4), dt=0.01)
     assert np.array_equal(Ad, Ad0) and np.array_equal(Bd, Bd0) and C.shape == (2, 4)
 
@@ -126,7 +130,7 @@ def test_to_statespace(cart, measured):
     control = pytest.importorskip("control", reason="python-control not installed "
                                                     "(pip install 'eomgen[control]')")
     sys = cart.to_statespace(np.zeros(4))
-    A, B, C, D = cart.linearize(np.zeros(4), outputs=True)
+    A, B, C, D = cart.linearize_outputs(np.zeros(4))
     assert np.array_equal(sys.A, A) and np.array_equal(sys.C, C)
     assert sys.input_labels == ["F"] and sys.output_labels == ["tip_x", "tip_y"]
     assert sys.state_labels == ["x", "theta", "v", "omega"]
@@ -180,6 +184,6 @@ def test_eigen_backend_outputs(cart, measured):
                 x[sim.q_ind] = rng.uniform(0.2, 0.8, len(sim.q_ind))
                 x = sim.consistent_state(x)
             r = rng.uniform(-2, 2, sim.nr)
-            assert np.max(np.abs(sim.outputs(0.3, x, r) - e.outputs(0.3, x, r))) < 1e-14
-            for a, b in zip(sim.linearize(x, r, outputs=True), e.linearize(x, r, outputs=True)):
+            assert np.max(np.abs(sim.outputs(0.3, x, r=r) - e.outputs(0.3, x, r=r))) < 1e-14
+            for a, b in zip(sim.linearize_outputs(x, r=r), e.linearize_outputs(x, r=r)):
                 assert a.shape == b.shape and np.all(np.abs(a - b) < 1e-12)

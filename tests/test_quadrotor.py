@@ -24,9 +24,9 @@ def sims():
 
 def test_hover_linearization_matches_hand_written_euler_rates(sims):
     x, r = np.zeros(12), qr.hover_input()
-    A0, B0 = sims["euler"].linearize(x, r)
+    A0, B0 = sims["euler"].linearize(x, r=r)
     for k in ("sympy", "sympy_implicit"):
-        A, B = sims[k].linearize(x, r)
+        A, B = sims[k].linearize(x, r=r)
         assert np.max(np.abs(A - A0)) <= 1e-12 and np.max(np.abs(B - B0)) <= 1e-12, k
     # the independent state is [psi, theta, phi, x, y, z, p, q, r, vx, vy, vz]
     g, m, I = qr.DEFAULTS["g"], qr.DEFAULTS["m"], qr.DEFAULTS
@@ -59,7 +59,7 @@ def test_gimbal_lock_names_the_kinematics(sims, pitch):
         assert e.value.status_name == "ERR_SINGULAR_KINEMATICS"
         assert "singular kinematic equations" in str(e.value)
         with pytest.raises(gen.SingularError, match="kinematic"):
-            sims[k].linearize(x, qr.hover_input())
+            sims[k].linearize(x, r=qr.hover_input())
 
 
 @pytest.mark.slow
@@ -69,8 +69,8 @@ def test_eigen_backend_solves_the_kinematics_too(sims):
     require_eigen()
     sim_e = gen.compile(qr.model("sympy", False, name="quad_implicit"), backend="eigen")
     x, r = np.zeros(12), qr.hover_input()
-    A, B = sim_e.linearize(x, r)
-    A0, B0 = sims["sympy_implicit"].linearize(x, r)
+    A, B = sim_e.linearize(x, r=r)
+    A0, B0 = sims["sympy_implicit"].linearize(x, r=r)
     assert np.max(np.abs(A - A0)) <= 1e-12 and np.max(np.abs(B - B0)) <= 1e-12
     x[1] = np.pi / 2
     with pytest.raises(gen.SingularError) as e:

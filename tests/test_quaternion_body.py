@@ -62,7 +62,7 @@ def test_linearization_on_the_independent_state(setup):
     assert sim.ns == 12 and "lambda_0" not in sim.independent_state_names
     x0 = sim.consistent_state(_state(sim, np.random.default_rng(3)))
     r0 = np.array([0.1, -3.0])
-    A, B = sim.linearize(x0, r0)
+    A, B = sim.linearize(x0, r=r0)
     ind = [sim.state_names.index(n) for n in sim.independent_state_names]
 
     def f(z, r):

@@ -60,12 +60,12 @@ def test_kane_matrices_against_sympy(kane_sim, kane_reference):
         argr = list(xr) + list(p)
         ref = kane_reference
         checks = {
-            "mass_matrix": (kane_sim.mass_matrix(qr, p), np.array(ref["M"](*argr), float)),
+            "mass_matrix": (kane_sim.mass_matrix(qr, p=p), np.array(ref["M"](*argr), float)),
             "forcing": (kane_sim.forcing(qr, ur, p=p), np.array(ref["f"](*argr), float).ravel()),
-            "constraints": (kane_sim.constraints(qr, p), np.array(ref["fc"](*argr), float).ravel()),
-            "constraint_jacobian": (kane_sim.constraint_jacobian(qr, p),
+            "constraints": (kane_sim.constraints(qr, p=p), np.array(ref["fc"](*argr), float).ravel()),
+            "constraint_jacobian": (kane_sim.constraint_jacobian(qr, p=p),
                                     np.array(ref["Jc"](*argr), float)),
-            "velocity_constraints": (kane_sim.velocity_constraints(qr, ur, p),
+            "velocity_constraints": (kane_sim.velocity_constraints(qr, ur, p=p),
                                      np.array(ref["fv"](*argr), float).ravel()),
             "rhs": (kane_sim.rhs(0.0, x, p=p),
                     np.linalg.solve(np.array(ref["MMf"](*args), float),
@@ -110,12 +110,12 @@ def test_lagrange_matrices_against_sympy(lagrange_sim, lagrange_reference):
         sol = np.linalg.solve(np.array(ref["MMf"](*args), float),
                               np.array(ref["Ff"](*args), float).ravel())
         checks = {
-            "mass_matrix": (lagrange_sim.mass_matrix(q, p), np.array(ref["M"](*argr), float)),
+            "mass_matrix": (lagrange_sim.mass_matrix(q, p=p), np.array(ref["M"](*argr), float)),
             "forcing": (lagrange_sim.forcing(q, u, p=p), np.array(ref["f"](*argr), float).ravel()),
-            "constraints": (lagrange_sim.constraints(q, p), np.array(ref["fc"](*argr), float).ravel()),
-            "constraint_jacobian": (lagrange_sim.constraint_jacobian(q, p),
+            "constraints": (lagrange_sim.constraints(q, p=p), np.array(ref["fc"](*argr), float).ravel()),
+            "constraint_jacobian": (lagrange_sim.constraint_jacobian(q, p=p),
                                     np.array(ref["Jc"](*argr), float)),
-            "velocity_constraints": (lagrange_sim.velocity_constraints(q, u, p),
+            "velocity_constraints": (lagrange_sim.velocity_constraints(q, u, p=p),
                                      np.array(ref["fv"](*argr), float).ravel()),
             # sympy's full form solves [q', q'', lam]: compare the state part
             # and the multipliers (the mass_matrix_full solve's: -solve_multipliers)

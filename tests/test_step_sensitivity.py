@@ -1,5 +1,5 @@
 """Issue 15: step sensitivities. x1, Fx, Fr = sim.step(t, x, h, r,
-sensitivities=True) are one RK4 step and its exact derivatives by the
+sim.step_sensitivity) are one RK4 step and its exact derivatives by the
 step's variational equations (the generated Jacobian kernels; the C
 runtime's own tests in tests/c/test_sens.c check the algebra on hand-written
 models). Here, on generated models, against central differences of the
@@ -34,7 +34,7 @@ def _fd(sim, t, x, h, r, d=1e-6):
     ind = list(sim.q_ind) + [sim.nq + i for i in sim.u_ind]
 
     def step(xx, rr):
-        return sim.step_rk4(t, xx, h, r=rr, project=False)[ind]
+        return sim.step(t, xx, h, r=rr, project=False, method="rk4")[ind]
 
     Fx = np.zeros((sim.ns, sim.ns))
     for j, idx in enumerate(ind):
@@ -60,9 +60,9 @@ def test_against_central_differences_of_the_step(sims, key):
     for h in (1e-3, 0.05):
         x = _state(sim, rng)
         r = rng.uniform(-1, 1, sim.nr)
-        x1, Fx, Fr = sim.step(0.2, x, h, r=r, sensitivities=True)
+        x1, Fx, Fr = sim.step_sensitivity(0.2, x, h, r=r)
         # the step itself is the plain unprojected RK4 step, bit for bit
-        assert np.array_equal(x1, sim.step_rk4(0.2, x, h, r=r, project=False))
+        assert np.array_equal(x1, sim.step(0.2, x, h, r=r, project=False, method="rk4"))
         Fxn, Frn = _fd(sim, 0.2, x, h, r)
         assert Fx.shape == (sim.ns, sim.ns) and Fr.shape == (sim.ns, sim.nr)
         assert np.max(np.abs(Fx - Fxn)) < 1e-7 * max(1, np.max(np.abs(Fx))), (key, h)
@@ -75,10 +75,10 @@ def test_small_steps_tend_to_I_plus_hA(sims, key):
     sim = sims[key]
     x = _state(sim, np.random.default_rng(2))
     r = np.full(sim.nr, 0.3)
-    A, B = sim.linearize(x, r)
+    A, B = sim.linearize(x, r=r)
     errs = []
     for h in (1e-2, 1e-3, 1e-4):
-        _, Fx, Fr = sim.step(0.0, x, h, r=r, sensitivities=True)
+        _, Fx, Fr = sim.step_sensitivity(0.0, x, h, r=r)
         errs.append(np.max(np.abs((Fx - np.eye(sim.ns)) / h - A)))
         if sim.nr:
             assert np.max(np.abs(Fr / h - B)) < 10 * h * max(1, np.max(np.abs(B)))
@@ -91,7 +91,7 @@ def test_jacobian_against_central_differences_of_the_rhs(sims):
     for key, sim in sims.items():
         x = _state(sim, rng) + rng.uniform(-1e-2, 1e-2, sim.nx)   # off the manifold too
         r = rng.uniform(-1, 1, sim.nr)
-        Jx, Jr = sim.jacobian(0.1, x, r)
+        Jx, Jr = sim.jacobian(0.1, x, r=r)
         d = 1e-6
         Jn = np.column_stack([(sim.rhs(0.1, x + d * e, r=r) - sim.rhs(0.1, x - d * e, r=r))
                               / (2 * d) for e in np.eye(sim.nx)])
@@ -100,13 +100,26 @@ def test_jacobian_against_central_differences_of_the_rhs(sims):
 
 def test_unconstrained_full_state_and_errors(sims):
     sim = sims["cart_pole"]
-    with pytest.raises(ValueError, match="method='rk4'"):
-        sim.step(0.0, np.zeros(4), 0.01, method="dopri5", sensitivities=True)
-    with pytest.raises(ValueError, match="unprojected"):
-        sim.step(0.0, np.zeros(4), 0.01, sensitivities=True, project=True)
-    # without sensitivities, step is step_rk4
-    x = np.array([0.1, 0.2, 0.3, 0.4])
-    assert np.array_equal(sim.step(0.0, x, 0.01, r=[1.0]), sim.step_rk4(0.0, x, 0.01, r=[1.0]))
+    with pytest.raises(gen.InputError, match="method='rk4'"):
+        sim.step_sensitivity(0.0, np.zeros(4), 0.01, method="dopri5")
+    # the differentiated step is the unprojected one: no project= to ask otherwise, and
+    # no flag that changes what step returns
+    with pytest.raises(TypeError):
+        sim.step_sensitivity(0.0, np.zeros(4), 0.01, project=True)
+    with pytest.raises(TypeError):
+        sim.step(0.0, np.zeros(4), 0.01, sensitivities=True)
+    # without sensitivities, step(method="rk4") is the classic RK4 step over sim.rhs
+    x, h, r = np.array([0.1, 0.2, 0.3, 0.4]), 0.01, [1.0]
+    f = lambda t, y: sim.rhs(t, y, r=r)  # noqa: E731
+    k1 = f(0.0, x)
+    k2 = f(h / 2, x + h / 2 * k1)
+    k3 = f(h / 2, x + h / 2 * k2)
+    k4 = f(h, x + h * k3)
+    want = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    np.testing.assert_allclose(sim.step(0.0, x, h, r=r, method="rk4"), want, rtol=0, atol=1e-15)
+    assert np.array_equal(sim.step(0.0, x, h, r=r), sim.step(0.0, x, h, r=r, method="rk4"))
+    with pytest.raises(gen.InputError, match="method='rk4'"):
+        sim.step(0.0, x, h, method="dopri5")
 
 
 @pytest.mark.slow
@@ -120,8 +133,8 @@ def test_eigen_backend_matches_c(sims):
         e = gen.compile(MODELS[key](), backend="eigen")
         x = _state(c, rng)
         r = rng.uniform(-1, 1, c.nr)
-        for a, b in zip(c.step(0.0, x, 0.02, r=r, sensitivities=True),
-                        e.step(0.0, x, 0.02, r=r, sensitivities=True)):
+        for a, b in zip(c.step_sensitivity(0.0, x, 0.02, r=r),
+                        e.step_sensitivity(0.0, x, 0.02, r=r)):
             assert a.shape == b.shape and np.all(np.abs(a - b) <= 1e-12 * max(1, np.max(np.abs(a), initial=0)))
-        for a, b in zip(c.jacobian(0.0, x, r), e.jacobian(0.0, x, r)):
+        for a, b in zip(c.jacobian(0.0, x, r=r), e.jacobian(0.0, x, r=r)):
             assert np.all(np.abs(a - b) <= 1e-12 * max(1, np.max(np.abs(a), initial=0)))

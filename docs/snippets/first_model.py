@@ -15,6 +15,6 @@ km.kanes_equations([me.Particle("bob", P, m)], [(P, m * g * N.x), (A, T * N.z)])
 
 model = gen.Model.from_kanes(km, constants={m: 1.0, l: 0.5, g: 9.81}, inputs=[T], name="pend")
 sim = gen.compile(model)                          # C, compiled and loaded (cached by content)
-t, X = sim.simulate([0.1, 0.0], 10.0, 1e-3)       # RK4 in C: (1001,), (1001, 2)
+t, X = sim.simulate([0.1, 0.0], 10.0, 1e-3)       # RK4 in C: (10001,), (10001, 2)
 A_lin, B_lin = sim.linearize([0.0, 0.0])          # [[0, 1], [-g/l, 0]], [[0], [1/(m l^2)]]
 print(np.linalg.eigvals(A_lin))                   # +-4.43j = +-sqrt(g/l) j

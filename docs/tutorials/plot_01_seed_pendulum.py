@@ -71,10 +71,9 @@ def at_rest(sim, theta):
 
 def period(sim, theta0):
     T_guess = 2 * np.pi * np.sqrt(L / g) * 1.5
-    t, X, events = sim.simulate(at_rest(sim, theta0), 1.4 * T_guess, 0.01, method="dopri5",
-                                rtol=1e-12, atol=1e-12, events={"q2": -1},
-                                return_events=True)
-    down = [te for name, te, _ in events if name == "q2"]
+    sol = sim.simulate(at_rest(sim, theta0), 1.4 * T_guess, 0.01, method="dopri5",
+                       rtol=1e-12, atol=1e-12, events={"q2": -1})
+    down = [ev.t for ev in sol.events if ev.name == "q2"]     # gen.Event records
     return down[1] - down[0]
 
 
@@ -108,8 +107,9 @@ for method, T in periods.items():
 theta0 = np.radians(60)
 tension = {}
 for method, sim, scale in (("Kane", kane, 1.0), ("Lagrange", lagrange, 2 * L)):
-    t, X, lam = sim.simulate(at_rest(sim, theta0), 2.0, 0.01, method="dopri5", rtol=1e-11,
-                             atol=1e-11, return_multipliers=True)
+    sol = sim.simulate(at_rest(sim, theta0), 2.0, 0.01, method="dopri5", rtol=1e-11,
+                       atol=1e-11)
+    t, X, lam = sol.t, sol.x, sol.lam          # the multipliers come with the run
     names = list(sim.state_names)
     theta = np.arctan2(X[:, names.index("q2")], X[:, names.index("q1")])
     closed_form = sp.DEFAULTS["m"] * g * (3 * np.cos(theta) - 2 * np.cos(theta0))

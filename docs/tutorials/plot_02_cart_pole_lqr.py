@@ -81,8 +81,9 @@ x0 = np.array([0.0, 0.3, 0.0, 0.0])
 runs = {}
 for label, ctrl in (("continuous", gen.LinearFeedback(K)),
                     ("sampled, 1 kHz", gen.LinearFeedback(K, period=1e-3))):
-    t, X, R, Y = sim.simulate(x0, 6.0, 1e-3, controller=ctrl, return_inputs=True,
-                              return_outputs=True)
+    sol = sim.simulate(x0, 6.0, 1e-3, controller=ctrl)   # a gen.Solution
+    t, X, R = sol.t, sol.x, sol.r              # times, states, the force applied
+    Y = np.column_stack([sol.outputs[k] for k in sim.output_names])   # tip_x, tip_y
     runs[label] = (t, X, R, Y)
     print(f"{label:15s}: |x(6 s)| = {np.max(np.abs(X[-1])):.1e}, max |F| = "
           f"{np.max(np.abs(R)):.2f} N")

@@ -96,11 +96,36 @@ def _fpart(name, a):
     return {"name": name, "shape": list(a.shape), "hex": hexs(a)}
 
 
+# the recorded stats (the Solution's stats has more keys: n_steps, ...)
+STATS = ("n_accepted", "n_jac", "n_out", "n_rejected", "n_rhs")
+
+
+def replay(sim, fn, args, kwargs):
+    """A recorded call in today's API: the records name step_rk4 (now
+    step(method="rk4")) and simulate's former return_multipliers= and
+    return_stats= flags (now attributes of the gen.Solution), kept as the
+    tuple they recorded: (t, X[, lam][, stats])."""
+    kwargs = dict(kwargs)
+    if fn == "step_rk4":
+        return sim.step(*args, method="rk4", **kwargs)
+    if fn == "simulate":
+        lam = kwargs.pop("return_multipliers", False)
+        stats = kwargs.pop("return_stats", False)
+        sol = sim.simulate(*args, **kwargs)
+        out = [sol.t, sol.x]
+        if lam:
+            out.append(sol.lam)
+        if stats:
+            out.append({k: sol.stats[k] for k in STATS})
+        return tuple(out)
+    return getattr(sim, fn)(*args, **kwargs)
+
+
 def call(sim, rec):
     """Replay one record on a Simulator; returns the encoded outputs."""
     args = [dec(a) for a in rec["args"]]
     kwargs = {k: dec(v) for k, v in rec.get("kwargs", {}).items()}
-    result = getattr(sim, rec["fn"])(*args, **kwargs)
+    result = replay(sim, rec["fn"], args, kwargs)
     return outputs(rec["fn"], result, rec.get("keep_rows"))
 
 

@@ -114,6 +114,7 @@ int eomgen_eval_outputs(const eomgen_api *api, eomgen_real t, const eomgen_real 
 int eomgen_linearize_outputs(const eomgen_api *api, const eomgen_real *x_op, const eomgen_real *r_op, const eomgen_real *p, eomgen_real t, eomgen_real *A, eomgen_real *B, eomgen_real *C, eomgen_real *D);
 int eomgen_linearize_discrete(const eomgen_api *api, const eomgen_real *x_op, const eomgen_real *r_op, const eomgen_real *p, eomgen_real t, eomgen_real dt, eomgen_real *Ad, eomgen_real *Bd);
 int eomgen_rhs_batch(const eomgen_api *api, int n, const eomgen_real *t, int t_stride, const eomgen_real *x, const eomgen_real *r, int r_stride, const eomgen_real *p, int p_stride, eomgen_real *dxdt, int *status);
+int eomgen_outputs_batch(const eomgen_api *api, int n, const eomgen_real *t, int t_stride, const eomgen_real *x, const eomgen_real *r, int r_stride, const eomgen_real *p, int p_stride, eomgen_real *y, int *status);
 int eomgen_mass_matrix_batch(const eomgen_api *api, int n, const eomgen_real *q, int q_stride, const eomgen_real *p, int p_stride, eomgen_real *M, int *status);
 int eomgen_linearize_batch(const eomgen_api *api, int n, const eomgen_real *x, const eomgen_real *r, int r_stride, const eomgen_real *p, int p_stride, eomgen_real t, eomgen_real *A, eomgen_real *B, int *status);
 
@@ -271,6 +272,22 @@ int eomgen_rhs_batch(const eomgen_api *api, int n, const eomgen_real *t, int t_s
         st = api->eval_rhs(t ? t[(long)i * t_stride] : 0, x + i * nx,
                            r ? r + (long)i * r_stride : NULL, p ? p + (long)i * p_stride : NULL,
                            dxdt + i * nx, NULL);
+        if (st) { *status = st; return i; }
+    }
+    return -1;
+}
+
+int eomgen_outputs_batch(const eomgen_api *api, int n, const eomgen_real *t, int t_stride,
+                         const eomgen_real *x, const eomgen_real *r, int r_stride,
+                         const eomgen_real *p, int p_stride, eomgen_real *y, int *status)
+{
+    const long nx = api->nx, ny = api->ny;
+    int i, st;
+    *status = 0;
+    for (i = 0; i < n; ++i) {
+        st = api->eval_outputs(t ? t[(long)i * t_stride] : 0, x + i * nx,
+                               r ? r + (long)i * r_stride : NULL,
+                               p ? p + (long)i * p_stride : NULL, y + i * ny);
         if (st) { *status = st; return i; }
     }
     return -1;

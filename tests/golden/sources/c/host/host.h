@@ -112,6 +112,7 @@ int eomgen_eval_outputs(const eomgen_api *api, eomgen_real t, const eomgen_real 
 int eomgen_linearize_outputs(const eomgen_api *api, const eomgen_real *x_op, const eomgen_real *r_op, const eomgen_real *p, eomgen_real t, eomgen_real *A, eomgen_real *B, eomgen_real *C, eomgen_real *D);
 int eomgen_linearize_discrete(const eomgen_api *api, const eomgen_real *x_op, const eomgen_real *r_op, const eomgen_real *p, eomgen_real t, eomgen_real dt, eomgen_real *Ad, eomgen_real *Bd);
 int eomgen_rhs_batch(const eomgen_api *api, int n, const eomgen_real *t, int t_stride, const eomgen_real *x, const eomgen_real *r, int r_stride, const eomgen_real *p, int p_stride, eomgen_real *dxdt, int *status);
+int eomgen_outputs_batch(const eomgen_api *api, int n, const eomgen_real *t, int t_stride, const eomgen_real *x, const eomgen_real *r, int r_stride, const eomgen_real *p, int p_stride, eomgen_real *y, int *status);
 int eomgen_mass_matrix_batch(const eomgen_api *api, int n, const eomgen_real *q, int q_stride, const eomgen_real *p, int p_stride, eomgen_real *M, int *status);
 int eomgen_linearize_batch(const eomgen_api *api, int n, const eomgen_real *x, const eomgen_real *r, int r_stride, const eomgen_real *p, int p_stride, eomgen_real t, eomgen_real *A, eomgen_real *B, int *status);
 
