@@ -68,7 +68,7 @@ TEMPLATES = {
             ("sources/gen_fmu_model.h", "fmu/gen_fmu_model.h.j2")],
 }
 # files of the generated project that are not the model library
-NOT_SOURCES = {"main.c", "CMakeLists.txt", "arm-none-eabi.cmake"}
+NOT_SOURCES = {"main.c", "gen_rt_main.c", "gen_rt_main.h", "CMakeLists.txt", "arm-none-eabi.cmake"}
 # the FMI headers the binary is compiled against (the importer's)
 HEADERS = {"2.0": ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
            "3.0": ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")}

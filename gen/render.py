@@ -38,6 +38,8 @@ RUNTIME_SOURCES = ["gen_rt_status.c", "gen_rt_linalg.c", "gen_rt_dynamics.c",
                    "gen_rt_model.c", "gen_rt_simulate.c", "gen_rt_expm.c", "gen_rt_sens.c"]
 RUNTIME_HEADERS = ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h", "gen_rt_rodas4.h", "gen_rt_expm.h",
                    "gen_rt_sens.h", "gen_rt_ldlt.h"]
+# the standalone simulator's runtime (main.c's program; project files only, no library's)
+RUNTIME_MAIN = ["gen_rt_main.c", "gen_rt_main.h"]
 # the C++ runtime of the Eigen backend and the tables it shares with the C one
 EIGEN_RUNTIME_HEADERS = ["eigen/gen_rt_eigen.hpp", "eigen/gen_rt_expm.hpp", "gen_rt_status.h", "gen_rt_rodas4.h",
                          "gen_rt_dopri5.h"]
@@ -415,7 +417,7 @@ def render(plan, real="double", backend="c", timings=None, project=True, only=No
     files = {fname.format(name=name): env.get_template(tname).render(**ctx)
              for fname, tname, role in BACKENDS[backend] if role in (only or roles)}
     runtime = (RUNTIME_SOURCES + RUNTIME_HEADERS) if backend == "c" else EIGEN_RUNTIME_HEADERS
-    for src in runtime if only is None else ():
+    for src in runtime + (RUNTIME_MAIN if project else []) if only is None else ():
         files[Path(src).name] = (csrc_dir() / src).read_text()
     timings["templates"] = time.perf_counter() - t0
     return Rendered(files, iface, backend, real, plan.derivatives, timings)

@@ -34,7 +34,8 @@ HOW_TO_UPDATE = ("if the change is intended: EOMGEN_UPDATE_GOLDEN=1 python -m py
 # the runtime's files are copied into the project verbatim (csrc/ has its own
 # tests): the golden files are what the templates produce
 RUNTIME_COPIES = {Path(f).name for f in (gen.render.RUNTIME_SOURCES + gen.render.RUNTIME_HEADERS
-                                         + gen.render.EIGEN_RUNTIME_HEADERS)}
+                                         + gen.render.EIGEN_RUNTIME_HEADERS
+                                         + gen.render.RUNTIME_MAIN)}
 
 
 def render(model, backend, real="double"):
