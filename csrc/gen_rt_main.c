@@ -300,6 +300,7 @@ int gen_rt_main_parse(const gen_rt_main_model *m, int argc, char **argv, gen_rt_
         const char *arg = argv[i];
         const char *v = (i + 1 < argc) ? argv[i + 1] : NULL;
         if (needs_value(arg) && !v) return fail_usage(m, "missing value after", arg);
+        if (!v) v = "";   /* the last option, which takes no value */
         if (strcmp(arg, "--help") == 0 || strcmp(arg, "-h") == 0) { usage(m, stdout); return 0; }
         else if (strcmp(arg, "--t-end") == 0) {
             if (gen_rt_main_parse_real(m, v, &a->t_end)) return fail_usage(m, "--t-end needs a number", v);
