@@ -1,4 +1,5 @@
-"""Golden numbers: the seed pendulum's results stay BIT-IDENTICAL (C backend, double).
+"""Golden numbers: the seed pendulum's results stay BIT-IDENTICAL (C backend, double) on
+the platform they were recorded on, and within a stated tolerance elsewhere.
 
 tests/golden/seed_numbers.json holds, for examples/seed_pendulum.py kane_model() and
 lagrange_model() compiled with gen.compile(model), a list of public Simulator calls
