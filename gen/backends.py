@@ -33,7 +33,7 @@ from .printers import ModelCPrinter, ModelCxxPrinter
 
 __all__ = ["Backend", "CBackend", "EigenBackend", "FmuBackend", "BACKENDS", "get_backend",
            "backend_names", "c_compiler", "cxx_compiler", "eigen_include_dir",
-           "RUNTIME_SOURCES", "RUNTIME_HEADERS", "EIGEN_RUNTIME_HEADERS", "C_FLAGS",
+           "RUNTIME_SOURCES", "RUNTIME_HEADERS", "RUNTIME_MAIN", "EIGEN_RUNTIME_HEADERS", "C_FLAGS",
            "C_LIN_FLAGS", "RUNTIME_FLAGS", "STRICT_FLAGS", "CXX_FLAGS", "CXX_STRICT_FLAGS",
            "LIB_SUFFIX", "CXX_RESERVED"]
 
@@ -44,6 +44,9 @@ RUNTIME_SOURCES = ["gen_rt_status.c", "gen_rt_linalg.c", "gen_rt_dynamics.c",
                    "gen_rt_model.c", "gen_rt_simulate.c", "gen_rt_expm.c", "gen_rt_sens.c"]
 RUNTIME_HEADERS = ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h", "gen_rt_rodas4.h", "gen_rt_expm.h",
                    "gen_rt_sens.h", "gen_rt_ldlt.h"]
+# the standalone simulator's runtime (main.c's program: the project's binary
+# only, never a library's)
+RUNTIME_MAIN = ["gen_rt_main.c", "gen_rt_main.h"]
 # the C++ runtime of the Eigen backend and the tables it shares with the C one
 EIGEN_RUNTIME_HEADERS = ["eigen/gen_rt_eigen.hpp", "eigen/gen_rt_expm.hpp", "gen_rt_status.h", "gen_rt_rodas4.h",
                          "gen_rt_dopri5.h"]
@@ -183,6 +186,8 @@ class Backend:
     templates = ()
     #: runtime files (under csrc/) copied into its sources
     runtime_files = ()
+    #: runtime files a generated project adds for its standalone binary
+    project_runtime_files = ()
     #: runtime C sources linked into its library (objects shared in the cache)
     runtime_sources = ()
     #: how the plan generates the Jacobian blocks (gen/ir.py plan(lin=...))
@@ -246,6 +251,7 @@ class CBackend(Backend):
     name = "c"
     templates = tuple(C_TEMPLATES)
     runtime_files = tuple(RUNTIME_SOURCES + RUNTIME_HEADERS)
+    project_runtime_files = tuple(RUNTIME_MAIN)
     runtime_sources = tuple(RUNTIME_SOURCES)
     lin = "auto"
     lazy_derivatives = True
@@ -270,6 +276,7 @@ class EigenBackend(Backend):
     name = "eigen"
     templates = tuple(EIGEN_TEMPLATES)
     runtime_files = tuple(EIGEN_RUNTIME_HEADERS)
+    project_runtime_files = tuple(RUNTIME_MAIN)
     runtime_sources = ()
     # its templates print the unrolled Jacobian kernel
     lin = "unrolled"
@@ -327,6 +334,7 @@ class FmuBackend(CBackend):
     lazy_derivatives = False
     loadable = False
     project = False
+    project_runtime_files = ()
     stack_limit = False
     tag = "_fmu"
     fmu_templates = FMU_TEMPLATES

@@ -372,7 +372,8 @@ def render(plan, real="double", backend="c", timings=None, project=True, only=No
     roles = {"model", "lin" if plan.derivatives else "stub"} | ({"project"} if project else set())
     files = {fname.format(name=name): env.get_template(tname).render(**ctx)
              for fname, tname, role in b.templates if role in (only or roles)}
-    for src in b.runtime_files if only is None else ():
+    for src in (b.runtime_files + (b.project_runtime_files if project else ())
+                if only is None else ()):
         files[Path(src).name] = (csrc_dir() / src).read_text()
     timings["templates"] = time.perf_counter() - t0
     return Rendered(files, iface, b.name, real, plan.derivatives, timings)

@@ -35,7 +35,8 @@ HOW_TO_UPDATE = ("if the change is intended: EOMGEN_UPDATE_GOLDEN=1 python -m py
 # the runtime's files are copied into the project verbatim (csrc/ has its own
 # tests): the golden files are what the templates produce
 RUNTIME_COPIES = {Path(f).name for f in (gen.backends.RUNTIME_SOURCES + gen.backends.RUNTIME_HEADERS
-                                         + gen.backends.EIGEN_RUNTIME_HEADERS)}
+                                         + gen.backends.EIGEN_RUNTIME_HEADERS
+                                         + gen.backends.RUNTIME_MAIN)}
 
 
 def render(model, backend, real="double"):

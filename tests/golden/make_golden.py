@@ -13,14 +13,22 @@ Simulator API. Each record holds the call (method name, arguments, keyword argum
 and its outputs; every float, input or output, is stored as float.hex() so that the
 test replays exactly the same calls and compares exactly. The examples are taken from
 the checkout the imported `gen` package lives in (falling back to this repository's).
+
+The JSON also holds the platform's fingerprint (fingerprint(): machine, OS, C library,
+compiler and its version, the C flags): the test compares bit for bit where it matches
+and to a stated tolerance elsewhere. The fingerprint was added on 2026-11-27 to the
+numbers recorded at 725e9d7, after a rerun here reproduced every one of them.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
+import shutil
 import subprocess
 import sys
+import sysconfig
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +40,74 @@ FORMAT = 1
 
 # simulate(method="rk4"): keep every RK4_STRIDE-th output row plus the last one
 RK4_STRIDE = 100
+
+
+# --------------------------------------------------------------- fingerprint
+# What decides the bits of the golden numbers: the machine's arithmetic, the
+# C library (its libm: sin, cos, sqrt, atan2), the compiler, its version and
+# the flags gen.compile passes. tests/test_golden_numbers.py compares bit for
+# bit only where these match the recorded ones, and to a stated tolerance
+# elsewhere. Python's and numpy's versions are recorded for information only:
+# every number is computed by the compiled C (numpy only carries the float64
+# arrays), so they are not part of the match.
+FINGERPRINT_KEYS = ("machine", "system", "libc", "compiler", "compiler_version", "c_flags")
+
+
+def compiler_command():
+    """The C compiler gen.compile runs, by its rule (gen/build.py): $CC, else
+    clang when it is installed, else the compiler Python was built with."""
+    cc = os.environ.get("CC")
+    if not cc:
+        cc = "clang" if shutil.which("clang") else (sysconfig.get_config_var("CC") or "cc")
+    return cc.split()[0]
+
+
+def _compiler_version(cc):
+    try:
+        out = subprocess.run([cc, "--version"], capture_output=True, text=True, timeout=30)
+        return (out.stdout.strip().splitlines() or ["unknown"])[0]
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+
+
+def _c_flags():
+    """The flags of a model's compile that matter for its numbers (the
+    optimization and floating-point ones): gen's C_FLAGS and C_LIN_FLAGS,
+    wherever the package keeps them."""
+    import importlib
+    for mod in ("gen.build", "gen.pipeline", "gen.cache"):
+        try:
+            m = importlib.import_module(mod)
+        except ImportError:
+            continue
+        if hasattr(m, "C_FLAGS"):
+            return " ".join([*m.C_FLAGS, "lin:", *getattr(m, "C_LIN_FLAGS", [])])
+    return "unknown"
+
+
+def fingerprint():
+    """The platform and compiler the golden numbers are computed with here."""
+    import numpy
+    try:    # the C library running (platform.libc_ver reads the executable's)
+        libc = os.confstr("CS_GNU_LIBC_VERSION")
+    except (AttributeError, ValueError, OSError):
+        libc = None
+    if not libc:
+        name, version = platform.libc_ver()
+        libc = f"{name or 'unknown'} {version}".strip()
+    cc = compiler_command()
+    return {"machine": platform.machine(), "system": platform.system(), "libc": libc,
+            "compiler": os.path.basename(cc), "compiler_version": _compiler_version(cc),
+            "c_flags": _c_flags(),
+            # information only (not compared)
+            "python": platform.python_version(), "numpy": numpy.__version__}
+
+
+def fingerprint_differences(recorded, running):
+    """The keys of FINGERPRINT_KEYS where two fingerprints differ (a missing
+    fingerprint differs in every key)."""
+    recorded = recorded or {}
+    return [k for k in FINGERPRINT_KEYS if recorded.get(k) != running.get(k)]
 
 
 # ------------------------------------------------------------------ encoding
@@ -250,6 +326,8 @@ def main(argv=None):
                  "regenerate with tests/golden/make_golden.py only for an intended change",
         "recorded_with": {"commit": _git_head(pkg.parent), "python": platform.python_version(),
                           "numpy": np.__version__, "machine": platform.machine()},
+        # bit for bit where this matches (tests/test_golden_numbers.py)
+        "fingerprint": fingerprint(),
         "rk4_stride": RK4_STRIDE,
         "models": {},
     }
