@@ -26,3 +26,11 @@ __all__ = ["Model", "generate", "compile", "EomgenError", "ModelError", "BuildEr
            "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
            "export_fmu", "Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult",
            "__version__"]
+
+
+def __getattr__(name):
+    # gen.pydy (the PyDy drop-in) is loaded on first use: `import gen` stays as it was
+    if name == "pydy":
+        import importlib
+        return importlib.import_module(".pydy", __name__)
+    raise AttributeError(f"module 'gen' has no attribute {name!r}")
