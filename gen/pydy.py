@@ -248,7 +248,8 @@ class ODEFunctionGenerator:
             ``numpy.ndarray`` of shape (n_states,) per call. Its attributes
             ``simulator`` (the compiled :class:`gen.bindings.Simulator`, in the
             model's order of constants and inputs) and ``model`` (the
-            :class:`gen.Model`) give the rest of eomgen.
+            :class:`gen.Model`) give the rest of eomgen; ``constants`` and
+            ``specifieds`` are the orders of the arrays p and r.
         """
         from .build import compile as gen_compile
         model = self.model()
@@ -257,6 +258,8 @@ class ODEFunctionGenerator:
         rhs = self._rhs_function(sim)
         rhs.simulator = sim
         rhs.model = model
+        rhs.constants = list(self.constants)         # the order of an array p
+        rhs.specifieds = list(self.specifieds or ())  # the order of an array r
         rhs.__doc__ = self._rhs_doc()
         return rhs
 
