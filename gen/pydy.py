@@ -264,102 +264,94 @@ class ODEFunctionGenerator:
         return rhs
 
     # -------------------------------------------------- the call's arguments
-    def _p_array(self, p):
-        """p (dict or array, in the user's order) as the model's array."""
-        if isinstance(p, dict):
-            try:
-                vals = [p[c] for c in self.constants]
-            except KeyError as e:
-                raise ModelError(f"p has no value for the constant {e.args[0]}") from None
-            a = np.array(vals, dtype=float)
-        else:
-            a = np.asarray(p, dtype=float)
-            if a.shape != (self.num_constants,):
-                raise ModelError(f"p must have shape ({self.num_constants},) (the constants "
-                                 f"{self.constants}), got {a.shape}")
-        return a if self._p_identity else a[self._p_order]
+    def _converters(self):
+        """(p_of(p), r_of(x, t, r)): p and r as the model's float arrays, from
+        every kind PyDy documents (r_of is None without specifieds)."""
+        nc, nr = self.num_constants, self.num_specifieds
+        pidx = np.array(self._p_order, dtype=np.intp)
+        p_id = self._p_order == list(range(nc))
+        constants = self.constants
+        pkind, rkind, tf = self.constants_arg_type, self.specifieds_arg_type, self.time_first
 
-    def _r_from_dict(self, x, t, r):
-        vals = np.full(self.num_specifieds, np.nan)
-        index = self._r_index
-        for k, v in r.items():
-            keys = k if isinstance(k, tuple) else (k,)
-            try:
-                idx = [index[s] for s in keys]
-            except KeyError as e:
-                raise ModelError(f"r has a key {e.args[0]} that is not a specified "
-                                 f"({self.specifieds})") from None
-            vals[idx] = v(*self._xt(x, t)) if callable(v) else v
-        if np.isnan(vals).any():
-            missing = [s for s, v in zip(self.specifieds, vals) if np.isnan(v)]
-            raise ModelError(f"r gives no value (or NaN) for the specified(s) {missing}")
-        return vals
+        def p_of(p):
+            if type(p) is np.ndarray and p.shape == (nc,) and pkind != "dictionary":
+                return p if p_id else p.take(pidx)
+            if isinstance(p, dict) and pkind != "array":
+                try:
+                    a = np.array([p[c] for c in constants], dtype=float)
+                except KeyError as e:
+                    raise ModelError(f"p has no value for the constant {e.args[0]}") from None
+            elif pkind == "dictionary":
+                raise ModelError(f"p must be a dict (constants_arg_type='dictionary'), got "
+                                 f"{type(p).__name__}")
+            else:
+                a = np.asarray(p, dtype=float)
+                if a.shape != (nc,):
+                    raise ModelError(f"p must have shape ({nc},) (the constants {constants}), "
+                                     f"got {a.shape}")
+            return a if p_id else a.take(pidx)
 
-    def _xt(self, x, t):
-        return (t, x) if self.time_first else (x, t)
+        if self.specifieds is None:
+            return p_of, None
+        ridx = np.array(self._r_order, dtype=np.intp)
+        r_id = self._r_order == list(range(nr))
+        index = {s: i for i, s in enumerate(self.specifieds)}
+        specifieds = self.specifieds
 
-    def _r_array(self, x, t, r, kind):
-        if kind == "dictionary" or (kind is None and isinstance(r, dict)):
-            a = self._r_from_dict(x, t, r)
-        else:
-            if kind == "function" or (kind is None and callable(r)):
-                r = r(*self._xt(x, t))
-            a = np.asarray(r, dtype=float).reshape(-1)
-            if a.shape != (self.num_specifieds,):
-                raise ModelError(f"r must give {self.num_specifieds} value(s) (the specifieds "
-                                 f"{self.specifieds}), got shape {np.shape(r)}")
-        return a if self._r_identity else a[self._r_order]
+        def from_dict(x, t, r):
+            vals = np.full(nr, np.nan)
+            for k, v in r.items():
+                keys = k if isinstance(k, tuple) else (k,)
+                try:
+                    idx = [index[s] for s in keys]
+                except KeyError as e:
+                    raise ModelError(f"r has a key {e.args[0]} that is not a specified "
+                                     f"({specifieds})") from None
+                vals[idx] = (v(t, x) if tf else v(x, t)) if callable(v) else v
+            if np.isnan(vals).any():
+                missing = [s for s, v in zip(specifieds, vals) if np.isnan(v)]
+                raise ModelError(f"r gives no value (or NaN) for the specified(s) {missing}")
+            return vals
+
+        def r_of(x, t, r):
+            if type(r) is np.ndarray and r.shape == (nr,) and rkind in (None, "array"):
+                return r if r_id else r.take(ridx)
+            if rkind == "dictionary" or (rkind is None and isinstance(r, dict)):
+                a = from_dict(x, t, r)
+            else:
+                if rkind == "function" or (rkind is None and callable(r)):
+                    r = r(t, x) if tf else r(x, t)
+                a = np.asarray(r, dtype=float).reshape(-1)
+                if a.shape != (nr,):
+                    raise ModelError(f"r must give {nr} value(s) (the specifieds "
+                                     f"{specifieds}), got shape {np.shape(r)}")
+            return a if r_id else a.take(ridx)
+        return p_of, r_of
 
     # ------------------------------------------------------------- the rhs
     def _rhs_function(self, sim):
         nq, ns = self.num_coordinates, self.num_states
         has_r, has_p = self.specifieds is not None, self.num_constants > 0
-        self._p_identity = self._p_order == list(range(self.num_constants))
-        self._r_identity = (not has_r) or self._r_order == list(range(self.num_specifieds))
-        self._r_index = {s: i for i, s in enumerate(self.specifieds or ())}
-        pkind, rkind = self.constants_arg_type, self.specifieds_arg_type
         solve, tf = self._solve, self.time_first
-        sim_rhs = sim.rhs
-        n_args = 2 + has_r + 1
-        min_args = n_args - (0 if has_p else 1)
+        p_of, r_of = self._converters()
+        # one state through rhs_batch: its CPython fast path takes p (rhs's
+        # takes only t, x, r: with p it converts in Python, 4-5x the call);
+        # the same C function, a fresh (1, nx) array per call
+        batch = sim.rhs_batch
 
-        def args_of(args):
-            if not min_args <= len(args) <= n_args:
-                raise TypeError(
-                    f"rhs takes {'(t, x' if tf else '(x, t'}{', r' if has_r else ''}, p), "
-                    f"{len(args)} argument(s) given")
-            x, t = (args[1], args[0]) if tf else (args[0], args[1])
-            return x, t, (args[2] if has_r else None), (args[n_args - 1]
-                                                       if len(args) == n_args else None)
-
-        fast_p = pkind == "array" and self._p_identity
-        fast_r = (not has_r) or (rkind == "array" and self._r_identity)
-        if solve is None and fast_p and fast_r and has_p:
-            # the common typed call: straight to the C function
-            if has_r:
-                if tf:
-                    def rhs(t, x, r, p):
-                        return sim_rhs(t, x, r=r, p=p)
-                else:
-                    def rhs(x, t, r, p):
-                        return sim_rhs(t, x, r=r, p=p)
-            else:
-                if tf:
-                    def rhs(t, x, p):
-                        return sim_rhs(t, x, p=p)
-                else:
-                    def rhs(x, t, p):
-                        return sim_rhs(t, x, p=p)
-            return rhs
-
-        def rhs(*args):
-            x, t, r, p = args_of(args)
-            p = self._p_array(p) if has_p else None
-            r = self._r_array(x, t, r, rkind) if has_r else None
+        def sim_rhs(t, x, r=None, p=None):
+            try:
+                X = x.reshape(1, ns)
+            except AttributeError:
+                X = np.asarray(x, dtype=float).reshape(1, -1)
+            except ValueError:
+                X = None
+            if X is None or X.shape != (1, ns):
+                raise ValueError(f"x must have shape ({ns},), got {np.shape(x)}")
             if solve is None:
-                return sim_rhs(t, x, r=r, p=p)
+                return batch(t, X, r=r, p=p)[0]
             # the user's linear solver, on the speeds' M u' = f
-            x = np.asarray(x, dtype=float)
+            x = X[0].astype(float)
             q, u = x[:nq], x[nq:]
             M = sim.mass_matrix(q, p=p, t=t)
             f = sim.forcing(q, u, r=r, p=p, t=t)
@@ -367,6 +359,31 @@ class ODEFunctionGenerator:
             out[:nq] = sim.kinematics(q, u, p=p, t=t)
             out[nq:] = np.asarray(solve(M, f), dtype=float).reshape(-1)
             return out
+
+        n_args = 3 + has_r
+        min_args = n_args - (0 if has_p else 1)
+        usage = f"rhs takes {'(t, x' if tf else '(x, t'}{', r' if has_r else ''}, p)"
+
+        if has_r and has_p:
+            def rhs(*args):
+                if len(args) != 4:
+                    raise TypeError(f"{usage}, {len(args)} argument(s) given")
+                x, t = (args[1], args[0]) if tf else (args[0], args[1])
+                return sim_rhs(t, x, r=r_of(x, t, args[2]), p=p_of(args[3]))
+        elif has_p:
+            def rhs(*args):
+                if len(args) != 3:
+                    raise TypeError(f"{usage}, {len(args)} argument(s) given")
+                x, t = (args[1], args[0]) if tf else (args[0], args[1])
+                return sim_rhs(t, x, p=p_of(args[2]))
+        else:
+            # no constants: p may be left out (PyDy ignores it)
+            def rhs(*args):
+                if not min_args <= len(args) <= n_args:
+                    raise TypeError(f"{usage}, {len(args)} argument(s) given")
+                x, t = (args[1], args[0]) if tf else (args[0], args[1])
+                r = r_of(x, t, args[2]) if has_r else None
+                return sim_rhs(t, x, r=r, p=np.zeros(0))
         return rhs
 
     def _rhs_doc(self):

@@ -140,6 +140,7 @@ def test_every_form_agrees_with_pydy(which, tmp_path_factory):
             assert rel_err(a, b) < TOL, (which, form, a, b)
 
 
+@pytest.mark.slow
 def test_full_forms_against_pydy_in_the_same_form(tmp_path):
     """The full mass matrix and the full rhs, PyDy's generator built in that
     form too (n = 1)."""
@@ -310,6 +311,12 @@ def test_errors_name_the_argument_and_are_not_type_errors():
     spec = list(sysm.specifieds_symbols)
     with pytest.raises(ValueError, match="gives no value"):
         ours(x, t, {spec[0]: 1.0}, p)
+    with pytest.raises(ValueError, match=r"x must have shape \(4,\), got \(3,\)"):
+        ours(x[:3], t, r, p)
+    with pytest.raises(ValueError, match=rf"p must have shape \({len(p)},\)"):
+        ours(x, t, r, p[:-1])
+    # lists work as arrays do
+    assert rel_err(ours(list(x), t, list(r), list(p)), ours(x, t, r, p)) == 0
 
 
 def test_nonlinear_kinematics_refused_by_from_matrices():
