@@ -92,8 +92,8 @@ class ODEFunctionGenerator:
     specifieds : sequence or set of functions of time, optional
         The specified inputs r, in this order.
     linear_sys_solver : {"numpy", "scipy"} or "sympy[:method]" or callable, optional
-        The strings all mean the solve in C (LU, or Cholesky for a symmetric
-        positive definite mass matrix); a function ``solve(A, b)`` is called
+        The strings all mean the solve in C (a symmetric factorization for a
+        symmetric mass matrix, LU otherwise); a function ``solve(A, b)`` is called
         with the speeds' mass matrix and forcing, as PyDy calls it.
     constants_arg_type : {None, "array", "dictionary"}, optional
     specifieds_arg_type : {None, "array", "function", "dictionary"}, optional
@@ -201,8 +201,20 @@ class ODEFunctionGenerator:
 
     # ------------------------------------------------------------ the model
     def equations(self):
-        """(M, f, kinematics) of the speeds: ``M u' = f`` and ``kinematics =
-        0`` (linear in q' and u), from whichever form was given."""
+        """The equations of the speeds, from whichever form was given.
+
+        Returns
+        -------
+        tuple of sympy Matrix
+            (M, f, kinematics): ``M u' = f`` and ``kinematics = 0``, linear in
+            q' and u (``q' - G`` for the minimal form and x' = F).
+
+        Raises
+        ------
+        gen.ModelError
+            When a full mass matrix couples the kinematic rows with u' or the
+            dynamic rows with q' (the block and an entry are named).
+        """
         nq, nu = self.num_coordinates, self.num_speeds
         t = me.dynamicsymbols._t
         qd = sm.Matrix([qi.diff(t) for qi in self.coordinates])
@@ -225,8 +237,15 @@ class ODEFunctionGenerator:
         return M[nq:, nq:], F[nq:, :], M[:nq, :nq] * qd - F[:nq, :]
 
     def model(self):
-        """The :class:`gen.Model` of the equations (constants and specifieds
-        in the model's order: given, or by name when given as a set)."""
+        """The :class:`gen.Model` of the equations.
+
+        Returns
+        -------
+        gen.Model
+            Through :meth:`gen.Model.from_matrices`; constants and specifieds in
+            the order given, or by name when given as a set. The constants'
+            values are placeholders (every call of ``rhs`` passes p).
+        """
         M, f, kin = self.equations()
         consts = [self.constants[i] for i in self._p_order]
         inputs = ([] if self.specifieds is None else

@@ -375,3 +375,25 @@ def test_import_gen_does_not_import_pydy():
             "sys.modules; assert gen.pydy.ODEFunctionGenerator.__name__ == "
             "'ODEFunctionGenerator'; assert 'pydy' not in sys.modules")
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_derivative_specifieds_and_time():
+    """A specified's derivative as a specified (PyDy allows Derivative
+    specifieds), against PyDy's lambdify generator and the hand-written
+    value; an explicit t in the forcing (PyDy's generators cannot take it)
+    against the hand-written value."""
+    x, v, y = sm.Function("x")(sm.Symbol("t")), sm.Function("v")(sm.Symbol("t")), \
+        sm.Function("y")(sm.Symbol("t"))
+    k, c, m, t = sm.symbols("k c m t")
+    M, G = sm.Matrix([[m]]), sm.Matrix([v])
+    F = sm.Matrix([-k * (x - y) - c * (v - y.diff(t))])
+    X, r, p = np.array([0.3, -0.2]), np.array([0.1, 0.5]), np.array([2.0, 0.3, 1.5])
+    expected = np.array([-0.2, (-2.0 * (0.3 - 0.1) - 0.3 * (-0.2 - 0.5)) / 1.5])
+    kw = dict(mass_matrix=M, coordinate_derivatives=G, specifieds=[y, y.diff(t)])
+    ours = generate_ode_function(F, [x], [v], [k, c, m], generator=OURS, **kw)
+    ref = generate_ode_function(F, [x], [v], [k, c, m], generator="lambdify", **kw)
+    assert rel_err(ours(X, 0.7, r, p), expected) < 1e-15
+    assert rel_err(ours(X, 0.7, r, p), ref(X, 0.7, r, p)) < 1e-15
+    timed = generate_ode_function(F + sm.Matrix([sm.sin(t)]), [x], [v], [k, c, m],
+                                  generator=OURS, **kw)
+    assert rel_err(timed(X, 0.7, r, p), expected + [0, np.sin(0.7) / 1.5]) < 1e-15
