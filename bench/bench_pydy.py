@@ -22,6 +22,7 @@ PyDy's Cython rhs returns the same array on every call: its call time is of
 the bare function (a caller that keeps results pays a .copy() on top).
 
     python bench/bench_pydy.py [--n 1 2 3 4 5] [--reps 15] [--calls 2000] [--json PATH]
+    python bench/bench_pydy.py --report PATH     (the tables of a --json file again)
 """
 from __future__ import annotations
 
@@ -111,7 +112,8 @@ def run(ns, reps, calls, tmp):
 
 
 def fmt_ratio(a, b):
-    return f"{a / b:.1f}x"
+    r = a / b
+    return f"{r:.1f}x" if r >= 1 else f"{r:.2f}x"
 
 
 def report(res, reps, calls):
@@ -155,7 +157,11 @@ def main(argv=None):
     ap.add_argument("--reps", type=int, default=15)
     ap.add_argument("--calls", type=int, default=2000)
     ap.add_argument("--json", help="write the measurements here")
+    ap.add_argument("--report", help="print the report of a --json file (no measuring)")
     a = ap.parse_args(argv)
+    if a.report:
+        print(report(json.loads(Path(a.report).read_text()), a.reps, a.calls))
+        return
     with tempfile.TemporaryDirectory(prefix="bench-pydy-") as tmp:
         res = run(a.n, a.reps, a.calls, tmp)
     print(report(res, a.reps, a.calls))
