@@ -31,3 +31,11 @@ __all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "Eo
            "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "UnusedInputWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
            "export_fmu", "Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult",
            "__version__"]
+
+
+def __getattr__(name):
+    # gen.pydy (the PyDy drop-in) is loaded on first use: `import gen` stays as it was
+    if name == "pydy":
+        import importlib
+        return importlib.import_module(".pydy", __name__)
+    raise AttributeError(f"module 'gen' has no attribute {name!r}")

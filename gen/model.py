@@ -764,6 +764,88 @@ class Model:
         return builder(obj, constants=constants, inputs=inputs, name=name, energy=energy,
                        outputs=outputs, **partition)
 
+    # ---- from matrices (gen.pydy: PyDy's forms; any M, f and kinematics) ----
+    @classmethod
+    def from_matrices(cls, mass_matrix, forcing, coordinates, speeds, kinematics,
+                      constants=None, inputs=None, name="model", energy=None, outputs=None):
+        """Build from the equations themselves, without a formed method.
+
+        ``mass_matrix * speeds' = forcing``, with the kinematic equations
+        ``kinematics = 0`` (as ``KanesMethod``'s ``kd_eqs``: linear in the
+        coordinate derivatives and in the speeds, one row per coordinate).
+        No constraints: the speeds are all independent.
+
+        Parameters
+        ----------
+        mass_matrix : sympy Matrix, shape (nu, nu)
+            M(q, t); it must not depend on the speeds or the inputs.
+        forcing : sympy Matrix, shape (nu, 1)
+            f(q, u, r, t).
+        coordinates, speeds : list
+            The coordinates q and speeds u (functions of time), in the order of
+            the kinematic rows and of the mass matrix's rows and columns.
+        kinematics : sympy Matrix, shape (nq, 1)
+            Expressions that vanish, ``q' - G(q, u)`` for explicit kinematics.
+        constants, inputs, name, energy, outputs
+            As for :meth:`from_kanes`.
+
+        Returns
+        -------
+        Model
+            The canonical model, validated.
+
+        Raises
+        ------
+        gen.ModelError
+            As :meth:`from_kanes`; also when a shape does not match or the
+            kinematics are not linear in q' and u (the row is named).
+        """
+        validate_name(name)
+        t = me.dynamicsymbols._t
+        q, u = list(coordinates), list(speeds)
+        nq, nu = len(q), len(u)
+        M = sm.Matrix(mass_matrix)
+        f = _as_matrix(forcing, "forcing")
+        kd = _as_matrix(kinematics, "kinematics")
+        if M.shape != (nu, nu):
+            raise ModelError(f"mass_matrix has shape {M.shape}, expected ({nu}, {nu}) "
+                             f"for {nu} speed(s)")
+        if f.shape != (nu, 1):
+            raise ModelError(f"forcing has shape {f.shape}, expected ({nu}, 1)")
+        if kd.shape != (nq, 1):
+            raise ModelError(f"kinematics has shape {kd.shape}, expected ({nq}, 1) "
+                             f"for {nq} coordinate(s)")
+        qdots = [qi.diff(t) for qi in q]
+        # Kqd q' + Ku u + kf = 0: the coefficients, and the check that no row
+        # holds q' or u beyond them (the linearization relies on the split)
+        Qd = [sm.Dummy(f"qd{i}") for i in range(nq)]
+        Ud = [sm.Dummy(f"u{i}") for i in range(nu)]
+        kd_ = kd.xreplace(dict(zip(qdots, Qd))).xreplace(dict(zip(u, Ud)))
+        Kqd = kd_.jacobian(Qd)
+        Ku = kd_.jacobian(Ud)
+        kf = kd_.xreplace({s: 0 for s in Qd + Ud})
+        for i in range(nq):
+            if any(e.has(*Qd, *Ud) for e in list(Kqd[i, :]) + list(Ku[i, :])):
+                raise ModelError(
+                    f"kinematics row {i} ({kd[i]}) is not linear in the coordinate "
+                    "derivatives and the speeds")
+        back = dict(zip(Ud, u))
+        Kqd, Ku = Kqd.xreplace(back), Ku.xreplace(back)
+        kf = kf.xreplace(back)
+        # explicit kinematics (Kqd diagonal): q' in M and f becomes its value
+        qdot_map = {}
+        if all(Kqd[i, j] == 0 for i in range(nq) for j in range(nq) if i != j) \
+                and all(Kqd[i, i] != 0 for i in range(nq)):
+            qdot_map = {qd_: -(Ku[i, :].dot(sm.Matrix(u)) + kf[i]) / Kqd[i, i]
+                        for i, qd_ in enumerate(qdots)}
+        return cls._finish(
+            name=name, method="kane", t=t, q=q, u=u, qdots=qdots,
+            udots=[ui.diff(t) for ui in u], q_ind=list(range(nq)), q_dep=[],
+            u_ind=list(range(nu)), u_dep=[], Kqd=Kqd, Ku=Ku, kf=kf, M=M, f=f,
+            A=sm.zeros(0, nu), b=sm.zeros(0, 1), fc=sm.zeros(0, 1), qdot_subs=qdot_map,
+            constants=constants, inputs=inputs, energy=energy,
+            speed_names=[_sym_name(x) for x in u], outputs=outputs)
+
     # ------------------------------------------------------------ internals
     @classmethod
     def _finish(cls, *, name, method, t, q, u, qdots, udots, q_ind, q_dep, u_ind,

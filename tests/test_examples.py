@@ -148,3 +148,19 @@ def test_every_example_compiles_strict(tmp_path, which):
                                    os.devnull, "-I", str(tmp_path)],
                                   capture_output=True, text=True)
             assert proc.returncode == 0, f"{path.name}:\n{proc.stderr}"
+
+
+# ------------------------------------------------ a PyDy script, switched
+def test_pydy_switch_example():
+    """examples/pydy_switch.py (issue 33): PyDy's System.integrate over
+    generator=gen.pydy.ODEFunctionGenerator follows PyDy's own lambdify
+    generator within odeint's tolerance (rtol 1e-10), and the script runs."""
+    pytest.importorskip("pydy")
+    import pydy_switch
+    t, X, _ = pydy_switch.simulate(gen.pydy.ODEFunctionGenerator)
+    _, Y, _ = pydy_switch.simulate("lambdify")
+    assert X.shape == Y.shape == (len(t), 6)
+    assert np.max(np.abs(X[-1] - X[0])) > 0.5          # it moved
+    assert rel_err(X, Y) < 1e-7
+    diff = pydy_switch.main([])
+    assert diff < 1e-7
