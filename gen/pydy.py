@@ -270,7 +270,7 @@ class ODEFunctionGenerator:
             :class:`gen.Model`) give the rest of eomgen; ``constants`` and
             ``specifieds`` are the orders of the arrays p and r.
         """
-        from .build import compile as gen_compile
+        from .pipeline import compile as gen_compile
         model = self.model()
         sim = gen_compile(model, backend=self.backend,
                           verbose=bool(self.options.get("verbose", False)))
