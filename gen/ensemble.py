@@ -599,8 +599,16 @@ def _run_local(sim, jobs, workers, bar):
 
     if workers == 1 or len(jobs) == 1:
         return [one(j) for j in jobs]
-    with ThreadPoolExecutor(max_workers=workers) as ex:
+    ex = ThreadPoolExecutor(max_workers=workers)
+    try:
         return list(ex.map(one, jobs))
+    except BaseException:
+        # Ctrl-C (or a failed chunk): the chunks not started never start; the
+        # running ones stop at their cancellation flag (gen/interrupt.py)
+        ex.shutdown(wait=True, cancel_futures=True)
+        raise
+    finally:
+        ex.shutdown(wait=True)
 
 
 # ------------------------------------------------------------------ Dask
