@@ -45,8 +45,7 @@ from ._version import __version__
 from .errors import BuildError, ModelError
 from .eigen import eigen_version, find_eigen
 from .ir import DERIVATIVE_KERNELS, plan as make_plan, with_derivatives
-from .render import (EIGEN_SOURCES, RUNTIME_HEADERS, RUNTIME_SOURCES, Rendered, plan_lin,
-                     render)
+from .render import RUNTIME_HEADERS, RUNTIME_SOURCES, Rendered, plan_lin, render
 
 __all__ = ["compile", "cache_dir", "build", "build_derivatives", "load", "Built", "cache_info",
            "clear_cache", "compile_objects", "link_library"]
@@ -335,7 +334,7 @@ def build(rendered: Rendered, verbose=False, timings=None):
     if backend != "c":
         # the backend, its flags and the Eigen it compiles against
         parts.append(f"backend={backend}\0{' '.join(CXX_FLAGS)}\0{_cxx_compiler()}\0"
-                     f"eigen={eigen_dir}:{eigen_version(eigen_dir)}")
+                     f"eigen={eigen_dir}:{eigen_version(eigen_dir)}\0face")
     for k in sorted(files):
         parts += [k, files[k]]
     key = _hash(*parts)
@@ -360,18 +359,15 @@ def build(rendered: Rendered, verbose=False, timings=None):
             (tmp / "obj").mkdir()
         except OSError as e:
             raise _cache_error(e, root, "write the sources") from None
-        if backend == "c":
-            lin = f"{name}_lin.c" if rendered.derivatives else f"{name}_lin_stub.c"
-            own = [(f"{name}_lin.c", C_LIN_FLAGS)] if rendered.derivatives else []
-            own += [(f"{name}_kernels.c", ()), (f"{name}.c", ()), (f"{name}_api.c", ())]
-            if not rendered.derivatives:
-                own.append((lin, ()))
-            objects = compile_objects(src, tmp / "obj", _own(own), name)
-            so = _link(modname, objects, tmp, cxx=False)
-        else:
-            own = [s.format(name=name) for s in EIGEN_SOURCES]
-            objects = _eigen_objects(src, tmp / "obj", own, name, eigen_dir)
-            so = _link(modname, objects, tmp, cxx=True)
+        lin = f"{name}_lin.c" if rendered.derivatives else f"{name}_lin_stub.c"
+        own = [(f"{name}_lin.c", C_LIN_FLAGS)] if rendered.derivatives else []
+        own += [(f"{name}_kernels.c", ()), (f"{name}.c", ()), (f"{name}_api.c", ())]
+        if not rendered.derivatives:
+            own.append((lin, ()))
+        objects = compile_objects(src, tmp / "obj", _own(own), name)
+        if backend == "eigen":   # the C objects above, the second copy and the face
+            objects += _eigen_objects(src, tmp / "obj", name, rendered, eigen_dir)
+        so = _link(modname, objects, tmp, cxx=backend == "eigen")
         _store(tmp, final, modname, so, src, keep_objects=(backend == "c"
                                                            and not rendered.derivatives))
     finally:
@@ -586,14 +582,23 @@ def _own(files_flags):
     return [(f, [*C_FLAGS, "-fPIC", *extra]) for f, extra in files_flags]
 
 
-def _eigen_objects(src: Path, objdir: Path, own, name, eigen_dir):
-    """The Eigen backend's objects: its C++ sources (the extern "C" layer
-    over the typed API) and the plugin table, in parallel."""
+def _eigen_objects(src: Path, objdir: Path, name, rendered, eigen_dir):
+    """The Eigen backend's objects beyond the C backend's (gen/eigen.py):
+    the model and the runtime for the other scalar type (GEN_RT_ALT_REAL:
+    its names prefixed) and the face instantiated, in parallel."""
     from concurrent.futures import ThreadPoolExecutor
+    from .eigen import ALT_DEFINE, sources
     cxx, cc = _cxx_compiler(), _compiler()
-    jobs = [(cxx, f, objdir / (Path(f).stem + ".o"),
+    _, alt, own = sources(name, rendered.real, rendered.derivatives)
+    (objdir / "alt").mkdir()
+    alt_flag = "-D" + ALT_DEFINE
+    jobs = [(cxx, f, objdir / (Path(f).stem + "_cxx.o"),   # <name>.c has <name>.o
              [*CXX_FLAGS, "-fPIC", "-isystem", str(eigen_dir)]) for f in own]
-    jobs.append((cc, f"{name}_api.c", objdir / f"{name}_api.o", [*C_FLAGS, "-fPIC"]))
+    jobs += [(cc, f, objdir / "alt" / (Path(f).stem + ".o"),
+              [*C_FLAGS, "-fPIC", alt_flag, *(C_LIN_FLAGS if f.endswith("_lin.c") else ())])
+             for f in alt]
+    jobs += [(cc, f, objdir / "alt" / (Path(f).stem + ".o"), [*RUNTIME_FLAGS, alt_flag])
+             for f in RUNTIME_SOURCES]
     with ThreadPoolExecutor(max_workers=max(1, min(len(jobs), os.cpu_count() or 1))) as ex:
         futures = [ex.submit(_cc_object, c, src, f, o, fl) for c, f, o, fl in jobs]
         try:

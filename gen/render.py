@@ -25,7 +25,8 @@ from ._version import __version__
 from .abi import METHODS, interface
 from .errors import ModelError
 from .ir import DERIVATIVE_KERNELS, plan as make_plan
-from .printers import ModelCPrinter, ModelCxxPrinter, kernel_statements, print_kernel_body
+from .eigen import RUNTIME_HEADERS as EIGEN_RUNTIME_HEADERS, TEMPLATES as EIGEN_TEMPLATES
+from .printers import ModelCPrinter, kernel_statements, print_kernel_body
 from .resources import csrc_dir, templates_dir
 from .solvers import demand_order, ldlt_lines, ldlt_work_index, ldlt_program
 
@@ -38,9 +39,6 @@ RUNTIME_SOURCES = ["gen_rt_status.c", "gen_rt_linalg.c", "gen_rt_dynamics.c",
                    "gen_rt_model.c", "gen_rt_simulate.c", "gen_rt_expm.c", "gen_rt_sens.c"]
 RUNTIME_HEADERS = ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h", "gen_rt_rodas4.h", "gen_rt_expm.h",
                    "gen_rt_sens.h", "gen_rt_ldlt.h"]
-# the C++ runtime of the Eigen backend and the tables it shares with the C one
-EIGEN_RUNTIME_HEADERS = ["eigen/gen_rt_eigen.hpp", "eigen/gen_rt_expm.hpp", "gen_rt_status.h", "gen_rt_rodas4.h",
-                         "gen_rt_dopri5.h"]
 
 # (file name, template, role) for the C backend: the list is data. role:
 # "model" (compiled into the model library by gen.build), "lin" (the
@@ -61,21 +59,8 @@ C_TEMPLATES = [
     ("arm-none-eabi.cmake", "c/arm-none-eabi.cmake.j2", "project"),  # Cortex-M4F toolchain
 ]
 
-# The C++17/Eigen backend: the typed API (header-only templates over the
-# scalar type, on the C++ runtime), an extern "C" layer with the C backend's
-# API (the same header, from the same interface description), and the same
-# standalone simulator main.c linked against that layer.
-EIGEN_TEMPLATES = [
-    ("{name}.h", "c/model.h.j2", "model"),
-    ("{name}.hpp", "eigen/model.hpp.j2", "model"),
-    ("{name}.cpp", "eigen/model.cpp.j2", "model"),
-    ("{name}_api.c", "c/model_api.c.j2", "model"),
-    ("main.c", "c/main.c.j2", "project"),
-    ("CMakeLists.txt", "eigen/CMakeLists.txt.j2", "project"),
-]
-# the C++ sources of the extern "C" library (compiled by gen.build)
-EIGEN_SOURCES = ["{name}.cpp"]
-
+# The C++/Eigen backend (gen/eigen.py): the C backend's files twice (float
+# and double) and a typed face over them; EIGEN_TEMPLATES are its own.
 BACKENDS = {"c": C_TEMPLATES, "eigen": EIGEN_TEMPLATES}
 # the kernels of <name>_lin.c (C backend)
 LIN_KERNELS = DERIVATIVE_KERNELS
@@ -87,19 +72,6 @@ def model_sources(name):
     table <name>_api.c is extra)."""
     return [f.format(name=name) for f, _, role in C_TEMPLATES
             if role in ("model", "lin") and f.endswith(".c") and f != "{name}_api.c"]
-
-# the model prefix is also the C++ namespace of the Eigen backend
-CXX_RESERVED = frozenset("""
-alignas alignof and and_eq asm auto bitand bitor bool break case catch char char8_t
-char16_t char32_t class compl concept const consteval constexpr constinit const_cast
-continue co_await co_return co_yield decltype default delete do double dynamic_cast
-else enum explicit export extern false float for friend goto if inline int long
-mutable namespace new noexcept not not_eq nullptr operator or or_eq private
-protected public register reinterpret_cast requires return short signed sizeof
-static static_assert static_cast struct switch template this thread_local throw
-true try typedef typeid typename union unsigned using virtual void volatile
-wchar_t while xor xor_eq std Eigen eomgen detail gen_rt
-""".split())
 
 _KERNEL_DOCS = {
     "mass_matrix": "M(q)",
@@ -280,10 +252,7 @@ def build_context(plan, iface, timings=None, backend="c"):
     m = plan.model
     kernels = plan.kernels
     real = iface.real
-    if backend == "eigen":
-        printer = ModelCxxPrinter(_symbol_map(m, kernels), "Scalar")
-    else:
-        printer = ModelCPrinter(_symbol_map(m, kernels), real)
+    printer = ModelCPrinter(_symbol_map(m, kernels), real)
     p = m.name
     # the fused right-hand side (C backend, unconstrained, explicit
     # kinematics, the unrolled LDL^T): rhs_terms also solves for u', its M
@@ -367,28 +336,9 @@ def build_context(plan, iface, timings=None, backend="c"):
         "ind_names": m.independent_state_names,
         "runtime_sources": RUNTIME_SOURCES,
     }
-    if backend == "eigen":
-        ctx.update(_eigen_context(m, kernels))
     if timings is not None:
         timings["printing"] = t2 - t1
     return ctx
-
-
-def _eigen_context(model, kernels):
-    """What the C++ templates need beyond the C context."""
-    m = model
-    if m.name in CXX_RESERVED:
-        raise ModelError(f"model name {m.name!r} is a C++ keyword or reserved namespace; the "
-                         f"Eigen backend uses the name as a namespace: choose another "
-                         f"(for example 'my_{m.name}')")
-    return {
-        "nqi": m.nq - m.mc, "nui": m.nu - m.mv,
-        # how gen_rt::Runtime solves the accelerations (the traits' ACCEL)
-        "accel": ("spd" if not m.mv else "partitioned" if m.method == "kane" else "kkt"),
-        # the lin_terms kernel's outputs in its parameter order (gen_rt::LinOut fields)
-        "lin_outputs": [o.name for o in kernels["lin_terms"].outputs],
-        "cxx_sources": [f.format(name=m.name) for f in EIGEN_SOURCES],
-    }
 
 
 def render(plan, real="double", backend="c", timings=None, project=True, only=None):
@@ -403,6 +353,9 @@ def render(plan, real="double", backend="c", timings=None, project=True, only=No
     if backend not in BACKENDS:
         raise ModelError(f"unknown backend {backend!r}: choose one of {sorted(BACKENDS)}")
     timings = {} if timings is None else timings
+    if backend == "eigen":
+        from . import eigen
+        return eigen.render(plan, real=real, timings=timings, project=project, only=only)
     iface = interface(plan.model, real=real, accel=plan.accel)
     ctx = build_context(plan, iface, timings=timings, backend=backend)
     env = template_env()
@@ -414,8 +367,7 @@ def render(plan, real="double", backend="c", timings=None, project=True, only=No
     roles = {"model", "lin" if plan.derivatives else "stub"} | ({"project"} if project else set())
     files = {fname.format(name=name): env.get_template(tname).render(**ctx)
              for fname, tname, role in BACKENDS[backend] if role in (only or roles)}
-    runtime = (RUNTIME_SOURCES + RUNTIME_HEADERS) if backend == "c" else EIGEN_RUNTIME_HEADERS
-    for src in runtime if only is None else ():
+    for src in (RUNTIME_SOURCES + RUNTIME_HEADERS) if only is None else ():
         files[Path(src).name] = (csrc_dir() / src).read_text()
     timings["templates"] = time.perf_counter() - t0
     return Rendered(files, iface, backend, real, plan.derivatives, timings)
@@ -431,10 +383,10 @@ def render_files(model, real="double", backend="c", timings=None):
 
 
 def plan_lin(backend):
-    """How a backend's plan generates the Jacobian blocks: the C backend
-    chooses by size (gen/ir.py JVP_MIN_VARIABLES); the Eigen backend's
-    templates print the unrolled kernel."""
-    return "auto" if backend == "c" else "unrolled"
+    """How a backend's plan generates the Jacobian blocks: by size
+    (gen/ir.py JVP_MIN_VARIABLES); the Eigen backend's library is the C
+    backend's, so its plan is too."""
+    return "auto"
 
 
 def write_atomic(files, out_dir):
