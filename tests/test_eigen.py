@@ -196,7 +196,7 @@ def _states(key, sim, rng):
             x = np.array([rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1.2, 1.2),
                           rng.uniform(-2, 2), rng.uniform(-2, 2), 0.0])
             x = sim.consistent_state(x)
-        elif key in ("cart", "double_pendulum"):
+        elif key in ("cart", "double_pendulum", "nonsym"):
             x = np.concatenate([rng.uniform(-1, 1, sim.nq), rng.uniform(-2, 2, sim.nu)])
         elif key == "rolling_disc":
             x = np.concatenate([rng.uniform(-0.5, 0.5, sim.nq), rng.uniform(-2, 2, 3),

@@ -102,6 +102,11 @@ inline constexpr int u_ind[1] = { 0 };
 inline constexpr int u_dep[1] = { 1 };
 
 namespace detail {
+// A scalar argument of a function whose scalar type comes from its typed
+// arguments (no deduction from it: eval_rhs(0.0, x_float, ...) is float).
+template <typename S> struct Identity { using type = S; };
+template <typename S> using Real = typename Identity<S>::type;
+
 // The C functions and structs of each scalar type.
 template <typename S> struct Api {
     static_assert(sizeof(S) == 0, "pendulum_kane: the scalar type is float or double");
@@ -281,69 +286,69 @@ struct SimStats : detail::Api<S>::sim_stats {
 
 /* Mass matrix M(q) of the unconstrained equations, NU x NU. */
 template <typename S>
-inline int eval_mass_matrix(const Coords<S> &q, const Params<S> &p, S t, MassMatrix<S> &M) noexcept
+inline int eval_mass_matrix(const Coords<S> &q, const Params<S> &p, detail::Real<S> t, MassMatrix<S> &M) noexcept
 {
     return detail::Api<S>::eval_mass_matrix(q.data(), p.data(), t, M.data());
 }
 
 /* Forcing f(q, u, r, t) of the unconstrained equations M u' = f + A^T lam, NU. */
 template <typename S>
-inline int eval_forcing(const Coords<S> &q, const Speeds<S> &u, const Inputs<S> &r, const Params<S> &p, S t, Speeds<S> &f) noexcept
+inline int eval_forcing(const Coords<S> &q, const Speeds<S> &u, const Inputs<S> &r, const Params<S> &p, detail::Real<S> t, Speeds<S> &f) noexcept
 {
     return detail::Api<S>::eval_forcing(q.data(), u.data(), r.data(), p.data(), t, f.data());
 }
 
 /* Coordinate rates q' from the kinematic differential equations, NQ. */
 template <typename S>
-inline int eval_kinematics(const Coords<S> &q, const Speeds<S> &u, const Params<S> &p, S t, Coords<S> &qdot) noexcept
+inline int eval_kinematics(const Coords<S> &q, const Speeds<S> &u, const Params<S> &p, detail::Real<S> t, Coords<S> &qdot) noexcept
 {
     return detail::Api<S>::eval_kinematics(q.data(), u.data(), p.data(), t, qdot.data());
 }
 
 /* Configuration-constraint residuals f_c(q), MC. */
 template <typename S>
-inline int eval_constraints(const Coords<S> &q, const Params<S> &p, S t, ConfigResiduals<S> &fc) noexcept
+inline int eval_constraints(const Coords<S> &q, const Params<S> &p, detail::Real<S> t, ConfigResiduals<S> &fc) noexcept
 {
     return detail::Api<S>::eval_constraints(q.data(), p.data(), t, fc.data());
 }
 
 /* Configuration-constraint Jacobian d f_c / dq, MC x NQ. */
 template <typename S>
-inline int eval_constraint_jacobian(const Coords<S> &q, const Params<S> &p, S t, ConstraintJacobian<S> &Jc) noexcept
+inline int eval_constraint_jacobian(const Coords<S> &q, const Params<S> &p, detail::Real<S> t, ConstraintJacobian<S> &Jc) noexcept
 {
     return detail::Api<S>::eval_constraint_jacobian(q.data(), p.data(), t, Jc.data());
 }
 
 /* Velocity-constraint residuals A(q) u + b(q, t), MV. */
 template <typename S>
-inline int eval_velocity_constraints(const Coords<S> &q, const Speeds<S> &u, const Params<S> &p, S t, Multipliers<S> &fv) noexcept
+inline int eval_velocity_constraints(const Coords<S> &q, const Speeds<S> &u, const Params<S> &p, detail::Real<S> t, Multipliers<S> &fv) noexcept
 {
     return detail::Api<S>::eval_velocity_constraints(q.data(), u.data(), p.data(), t, fv.data());
 }
 
 /* Velocity-constraint matrix A (MV x NU) and term b (MV). */
 template <typename S>
-inline int eval_velocity_constraint_matrix(const Coords<S> &q, const Params<S> &p, S t, VelocityMatrix<S> &A, Multipliers<S> &b) noexcept
+inline int eval_velocity_constraint_matrix(const Coords<S> &q, const Params<S> &p, detail::Real<S> t, VelocityMatrix<S> &A, Multipliers<S> &b) noexcept
 {
     return detail::Api<S>::eval_velocity_constraint_matrix(q.data(), p.data(), t, A.data(), b.data());
 }
 
 /* Total energy (only when the model was given one; else ERR_BAD_ARG). */
 template <typename S>
-inline int eval_energy(const Coords<S> &q, const Speeds<S> &u, const Params<S> &p, S t, S &E) noexcept
+inline int eval_energy(const Coords<S> &q, const Speeds<S> &u, const Params<S> &p, detail::Real<S> t, detail::Real<S> &E) noexcept
 {
     return detail::Api<S>::eval_energy(q.data(), u.data(), p.data(), t, &E);
 }
 
 /* State derivative x' (NX) and, if lam != NULL, the multipliers (MV). */
 template <typename S>
-inline int eval_rhs(S t, const State<S> &x, const Inputs<S> &r, const Params<S> &p, State<S> &dxdt, Multipliers<S> &lam) noexcept
+inline int eval_rhs(detail::Real<S> t, const State<S> &x, const Inputs<S> &r, const Params<S> &p, State<S> &dxdt, Multipliers<S> &lam) noexcept
 {
     return detail::Api<S>::eval_rhs(t, x.data(), r.data(), p.data(), dxdt.data(), lam.data());
 }
 
 template <typename S>
-inline int eval_rhs(S t, const State<S> &x, const Inputs<S> &r, const Params<S> &p, State<S> &dxdt) noexcept
+inline int eval_rhs(detail::Real<S> t, const State<S> &x, const Inputs<S> &r, const Params<S> &p, State<S> &dxdt) noexcept
 {
     return detail::Api<S>::eval_rhs(t, x.data(), r.data(), p.data(), dxdt.data(), nullptr);
 }
@@ -352,7 +357,7 @@ inline int eval_rhs(S t, const State<S> &x, const Inputs<S> &r, const Params<S> 
  * the right-hand side, then F_aux reactions = -g_aux (ERR_SINGULAR when F_aux
  * is); NA == 0: nothing written. */
 template <typename S>
-inline int eval_auxiliary_forces(S t, const State<S> &x, const Inputs<S> &r, const Params<S> &p, AuxiliaryForces<S> &F) noexcept
+inline int eval_auxiliary_forces(detail::Real<S> t, const State<S> &x, const Inputs<S> &r, const Params<S> &p, AuxiliaryForces<S> &F) noexcept
 {
     return detail::Api<S>::eval_auxiliary_forces(t, x.data(), r.data(), p.data(), F.data());
 }
@@ -360,7 +365,7 @@ inline int eval_auxiliary_forces(S t, const State<S> &x, const Inputs<S> &r, con
 /* Project x onto f_c = 0 (Gauss-Newton, minimum norm) and the velocity
  * constraints; x unchanged on failure. */
 template <typename S>
-inline int project(S t, const Params<S> &p, S tol, int max_iter, State<S> &x) noexcept
+inline int project(detail::Real<S> t, const Params<S> &p, detail::Real<S> tol, int max_iter, State<S> &x) noexcept
 {
     return detail::Api<S>::project(t, p.data(), tol, max_iter, x.data());
 }
@@ -368,7 +373,7 @@ inline int project(S t, const Params<S> &p, S tol, int max_iter, State<S> &x) no
 /* Solve the dependent coordinates and speeds from the independent ones (the
  * dependent entries of x are the starting guess). */
 template <typename S>
-inline int consistent_state(S t, const Params<S> &p, S tol, int max_iter, State<S> &x) noexcept
+inline int consistent_state(detail::Real<S> t, const Params<S> &p, detail::Real<S> tol, int max_iter, State<S> &x) noexcept
 {
     return detail::Api<S>::consistent_state(t, p.data(), tol, max_iter, x.data());
 }
@@ -376,7 +381,7 @@ inline int consistent_state(S t, const Params<S> &p, S tol, int max_iter, State<
 /* One classic RK4 step of size h from t, x updated in place (unchanged on
  * failure). */
 template <typename S>
-inline int step_rk4(S t, S h, const Inputs<S> &r, const Params<S> &p, int project, State<S> &x) noexcept
+inline int step_rk4(detail::Real<S> t, detail::Real<S> h, const Inputs<S> &r, const Params<S> &p, int project, State<S> &x) noexcept
 {
     return detail::Api<S>::step_rk4(t, h, r.data(), p.data(), project, x.data());
 }
@@ -384,7 +389,7 @@ inline int step_rk4(S t, S h, const Inputs<S> &r, const Params<S> &p, int projec
 /* Integrate x from t0 to t1 (one RK4 step, or adaptive DOPRI5 or RODAS4
  * steps); stats accumulate. */
 template <typename S>
-inline int advance(S t0, S t1, const Inputs<S> &r, const Params<S> &p, const SimOptions<S> &opts, SimStats<S> &stats, State<S> &x) noexcept
+inline int advance(detail::Real<S> t0, detail::Real<S> t1, const Inputs<S> &r, const Params<S> &p, const SimOptions<S> &opts, SimStats<S> &stats, State<S> &x) noexcept
 {
     return detail::Api<S>::advance(t0, t1, r.data(), p.data(), &opts, &stats, x.data());
 }
@@ -402,7 +407,7 @@ inline int simulate_rows(S t0, S t_end, S dt) noexcept
  * failure the rows written are stats->n_out and stats->x_last holds the last
  * good state. */
 template <typename S>
-inline int simulate(const State<S> &x0, S t0, S t_end, S dt, const Inputs<S> &r, const Params<S> &p, const SimOptions<S> &opts, int capacity, S *t_out, S *x_out, S *lam_out, SimStats<S> &stats) noexcept
+inline int simulate(const State<S> &x0, detail::Real<S> t0, detail::Real<S> t_end, detail::Real<S> dt, const Inputs<S> &r, const Params<S> &p, const SimOptions<S> &opts, int capacity, detail::Real<S> *t_out, detail::Real<S> *x_out, detail::Real<S> *lam_out, SimStats<S> &stats) noexcept
 {
     return detail::Api<S>::simulate(x0.data(), t0, t_end, dt, r.data(), p.data(), &opts, capacity, t_out, x_out, lam_out, &stats);
 }
@@ -411,7 +416,7 @@ inline int simulate(const State<S> &x0, S t0, S t_end, S dt, const Inputs<S> &r,
  * callback; continuous or sampled): r_out (NR per row, may be NULL) gets the
  * inputs in effect from each output time on. */
 template <typename S>
-inline int simulate_input(const State<S> &x0, S t0, S t_end, S dt, const Input<S> &in, const Params<S> &p, const SimOptions<S> &opts, int capacity, S *t_out, S *x_out, S *lam_out, S *r_out, SimStats<S> &stats) noexcept
+inline int simulate_input(const State<S> &x0, detail::Real<S> t0, detail::Real<S> t_end, detail::Real<S> dt, const Input<S> &in, const Params<S> &p, const SimOptions<S> &opts, int capacity, detail::Real<S> *t_out, detail::Real<S> *x_out, detail::Real<S> *lam_out, detail::Real<S> *r_out, SimStats<S> &stats) noexcept
 {
     return detail::Api<S>::simulate_input(x0.data(), t0, t_end, dt, &in, p.data(), &opts, capacity, t_out, x_out, lam_out, r_out, &stats);
 }
@@ -419,7 +424,7 @@ inline int simulate_input(const State<S> &x0, S t0, S t_end, S dt, const Input<S
 /* simulate_input() with events (ev): crossings logged in ev's log, a terminal
  * event ends the run with its state as the last row (stats->terminal). */
 template <typename S>
-inline int simulate_events(const State<S> &x0, S t0, S t_end, S dt, const Input<S> &in, const Events<S> &ev, const Params<S> &p, const SimOptions<S> &opts, int capacity, S *t_out, S *x_out, S *lam_out, S *r_out, SimStats<S> &stats) noexcept
+inline int simulate_events(const State<S> &x0, detail::Real<S> t0, detail::Real<S> t_end, detail::Real<S> dt, const Input<S> &in, const Events<S> &ev, const Params<S> &p, const SimOptions<S> &opts, int capacity, detail::Real<S> *t_out, detail::Real<S> *x_out, detail::Real<S> *lam_out, detail::Real<S> *r_out, SimStats<S> &stats) noexcept
 {
     return detail::Api<S>::simulate_events(x0.data(), t0, t_end, dt, &in, &ev, p.data(), &opts, capacity, t_out, x_out, lam_out, r_out, &stats);
 }
@@ -427,7 +432,7 @@ inline int simulate_events(const State<S> &x0, S t0, S t_end, S dt, const Input<
 /* Linearize about any operating point: A (NS x NS) and B (NS x NR) for the
  * independent state [q_ind, u_ind]. */
 template <typename S>
-inline int linearize(const State<S> &x_op, const Inputs<S> &r_op, const Params<S> &p, S t, StateMatrix<S> &A, InputMatrix<S> &B) noexcept
+inline int linearize(const State<S> &x_op, const Inputs<S> &r_op, const Params<S> &p, detail::Real<S> t, StateMatrix<S> &A, InputMatrix<S> &B) noexcept
 {
     return detail::Api<S>::linearize(x_op.data(), r_op.data(), p.data(), t, A.data(), B.data());
 }
@@ -435,7 +440,7 @@ inline int linearize(const State<S> &x_op, const Inputs<S> &r_op, const Params<S
 /* The full-state Jacobian of the right-hand side, d x'/dx (NX x NX) and d
  * x'/dr (NX x NR), every entry of x free (dependent entries included). */
 template <typename S>
-inline int jacobian(S t, const State<S> &x, const Inputs<S> &r, const Params<S> &p, Mat<S, NX, NX> &Jx, Mat<S, NX, NR> &Jr) noexcept
+inline int jacobian(detail::Real<S> t, const State<S> &x, const Inputs<S> &r, const Params<S> &p, Mat<S, NX, NX> &Jx, Mat<S, NX, NR> &Jr) noexcept
 {
     return detail::Api<S>::jacobian(t, x.data(), r.data(), p.data(), Jx.data(), Jr.data());
 }
@@ -445,7 +450,7 @@ inline int jacobian(S t, const State<S> &x, const Inputs<S> &r, const Params<S> 
  * dx1_ind/dx_ind (NS x NS) with the dependent entries of x following the
  * constraints to first order, Fr = dx1_ind/dr (NS x NR). */
 template <typename S>
-inline int step_sensitivity(S t, S h, const Inputs<S> &r, const Params<S> &p, State<S> &x, StateMatrix<S> &Fx, InputMatrix<S> &Fr) noexcept
+inline int step_sensitivity(detail::Real<S> t, detail::Real<S> h, const Inputs<S> &r, const Params<S> &p, State<S> &x, StateMatrix<S> &Fx, InputMatrix<S> &Fr) noexcept
 {
     return detail::Api<S>::step_sensitivity(t, h, r.data(), p.data(), x.data(), Fx.data(), Fr.data());
 }
@@ -453,7 +458,7 @@ inline int step_sensitivity(S t, S h, const Inputs<S> &r, const Params<S> &p, St
 /* The outputs y(q, u, r, t), NY (the model's outputs={...}); NY == 0: nothing
  * written. */
 template <typename S>
-inline int eval_outputs(S t, const State<S> &x, const Inputs<S> &r, const Params<S> &p, Outputs<S> &y) noexcept
+inline int eval_outputs(detail::Real<S> t, const State<S> &x, const Inputs<S> &r, const Params<S> &p, Outputs<S> &y) noexcept
 {
     return detail::Api<S>::eval_outputs(t, x.data(), r.data(), p.data(), y.data());
 }
@@ -461,7 +466,7 @@ inline int eval_outputs(S t, const State<S> &x, const Inputs<S> &r, const Params
 /* linearize() and the outputs' C = dy/dx_ind (NY x NS), D = dy/dr (NY x NR),
  * the dependent entries following the constraints as for A. */
 template <typename S>
-inline int linearize_outputs(const State<S> &x_op, const Inputs<S> &r_op, const Params<S> &p, S t, StateMatrix<S> &A, InputMatrix<S> &B, OutputMatrix<S> &C, FeedthroughMatrix<S> &D) noexcept
+inline int linearize_outputs(const State<S> &x_op, const Inputs<S> &r_op, const Params<S> &p, detail::Real<S> t, StateMatrix<S> &A, InputMatrix<S> &B, OutputMatrix<S> &C, FeedthroughMatrix<S> &D) noexcept
 {
     return detail::Api<S>::linearize_outputs(x_op.data(), r_op.data(), p.data(), t, A.data(), B.data(), C.data(), D.data());
 }
@@ -470,7 +475,7 @@ inline int linearize_outputs(const State<S> &x_op, const Inputs<S> &r_op, const 
  * exp(A dt) (NS x NS), Bd = int_0^dt exp(A s) ds B (NS x NR), by scaling and
  * squaring (ERR_BAD_ARG unless dt > 0). */
 template <typename S>
-inline int linearize_discrete(const State<S> &x_op, const Inputs<S> &r_op, const Params<S> &p, S t, S dt, StateMatrix<S> &Ad, InputMatrix<S> &Bd) noexcept
+inline int linearize_discrete(const State<S> &x_op, const Inputs<S> &r_op, const Params<S> &p, detail::Real<S> t, detail::Real<S> dt, StateMatrix<S> &Ad, InputMatrix<S> &Bd) noexcept
 {
     return detail::Api<S>::linearize_discrete(x_op.data(), r_op.data(), p.data(), t, dt, Ad.data(), Bd.data());
 }
