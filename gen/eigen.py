@@ -123,9 +123,14 @@ def render(plan, real="double", timings=None, project=True, only=None):
     the C backend's files for `real`, the C model again for the other
     scalar type under alt_name's prefix, the face and the CMake project."""
     from . import render as rmod
+    name = plan.model.name
+    if name in CXX_RESERVED:
+        from .errors import ModelError
+        raise ModelError(f"model name {name!r} is a C++ keyword or reserved namespace; the "
+                         f"Eigen backend uses the name as a namespace: choose another "
+                         f"(for example 'my_{name}')")
     main = rmod.render(plan, real=real, backend="c", timings=timings, project=project,
                        only=only)
-    name = plan.model.name
     alt = alt_name(name, real)
     roles = set(only) if only else ({"model", "lin" if plan.derivatives else "stub"}
                                     | ({"project"} if project else set()))
@@ -137,7 +142,7 @@ def render(plan, real="double", timings=None, project=True, only=None):
                              project=False, only=alt_roles)
         files.update({k: v for k, v in second.files.items()
                       if k not in ("gen_rt_config.h", f"{alt}_api.c")})
-    ctx = context(main.interface, plan, real)
+    ctx = context(main.interface, real)
     env = rmod.template_env()
     for fname, tname, role in TEMPLATES:
         if role in roles:
@@ -152,26 +157,23 @@ def sources(name, real, derivatives=True):
     the C backend has them, C files of the other type (compiled with
     ALT_DEFINE, with the runtime's), C++ files)."""
     from .render import C_TEMPLATES
+    roles = ("model", "lin" if derivatives else "stub")
+
     def model_c(n):
         return [f.format(name=n) for f, _, role in C_TEMPLATES
-                if f.endswith(".c") and (role == "model" or role == ("lin" if derivatives
-                                                                     else "stub"))
-                and f != "{name}_api.c"]
+                if f.endswith(".c") and role in roles and f != "{name}_api.c"]
     return model_c(name), model_c(alt_name(name, real)), [f"{name}.cpp"]
 
 
-def context(iface, plan, real):
+def context(iface, real):
     """The Jinja2 context of the face."""
-    name = iface.name
-    if name in CXX_RESERVED:
-        from .errors import ModelError
-        raise ModelError(f"model name {name!r} is a C++ keyword or reserved namespace; the "
-                         f"Eigen backend uses the name as a namespace: choose another "
-                         f"(for example 'my_{name}')")
     from ._version import __version__
     from .abi import METHODS
-    from .render import RUNTIME_SOURCES, C_TEMPLATES
+    from .render import RUNTIME_SOURCES
+    name = iface.name
     alt = alt_name(name, real)
+    main_c, alt_c, cxx = sources(name, real, True)
+
     def lit(v, r):
         s = repr(float(v))
         return s + "F" if r == "float" else s
@@ -179,18 +181,14 @@ def context(iface, plan, real):
     return {
         "iface": iface, "name": name, "p": name, "P": name.upper(), "version": __version__,
         "real": real, "alt_real": other_real(real), "alt": alt, "ALT": alt.upper(),
-        "alt_define": ALT_DEFINE, "accel": plan.accel,
+        "alt_define": ALT_DEFINE,
         # (scalar type, C prefix): the build's own first
         "copies": [(real, name), (other_real(real), alt)],
         "sizes": sizes, "methods": sorted(METHODS.items(), key=lambda kv: kv[1]),
         "p_default": {r: [lit(v, r) for v in iface.constants] for r in ("float", "double")},
         "partition": {k: getattr(iface, k) for k in ("q_ind", "q_dep", "u_ind", "u_dep")},
         "runtime_sources": RUNTIME_SOURCES,
-        "model_sources": sources(name, real, True)[0],
-        "alt_sources": sources(name, real, True)[1],
-        "cxx_sources": [f"{name}.cpp"],
-        "lin_sources": [f.format(name=n) for n in (name, alt) for f, _, role in C_TEMPLATES
-                        if role == "lin"],
+        "model_sources": main_c, "alt_sources": alt_c, "cxx_sources": cxx,
         "eigen_type": _eigen_type,
         "structs": {s.name: s.cxx_name for s in iface.structs},
     }

@@ -38,7 +38,7 @@ MODELS = {
 
 def _build(job):
     model, backend = job
-    gen.compile(model, backend=backend)              # into the cache the fixture reads
+    gen.compile(model, backend=backend, derivatives=True)   # into the cache the fixture reads
 
 
 @pytest.fixture(scope="module")
@@ -54,7 +54,8 @@ def sims():
             f.result()
     out = {}
     for k, m in models.items():
-        out[k] = (gen.compile(m), gen.compile(m, backend="eigen"))
+        # the derivative kernels now: _advance calls RODAS4 through the raw C API
+        out[k] = (gen.compile(m, derivatives=True), gen.compile(m, backend="eigen"))
         assert out[k][1].build_info["backend"] == "eigen"
     return out
 
