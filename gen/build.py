@@ -660,8 +660,8 @@ def compile(model, backend="c", real="double", verbose=False, sources=None,  # n
     model : gen.Model
         The model.
     backend : {"c", "eigen"}, optional
-        C99 over the C runtime, or C++17 over Eigen 3.4 through its
-        ``extern "C"`` layer (the same API, the same Simulator).
+        C99 over the C runtime, or the same C library under a typed C++17
+        face over Eigen 3.4 (gen/eigen.py; the same API, the same bits).
     real : {"double", "float"}, optional
         The scalar type.
     verbose : bool, optional

@@ -433,9 +433,9 @@ def generate(model, out_dir, backend="c", real="double", timings=None):
         The folder to write into (created; files written atomically, the same
         model gives the same bytes).
     backend : {"c", "eigen"}, optional
-        ``"c"``: the C99 model over the C runtime; ``"eigen"``: a C++17 header
-        over Eigen 3.4 (the scalar type a template parameter) on the C++
-        runtime, plus an ``extern "C"`` layer with the C backend's API.
+        ``"c"``: the C99 model over the C runtime; ``"eigen"``: the same,
+        twice (float and double), under a typed C++17 face over Eigen 3.4
+        (the scalar type a template parameter; gen/eigen.py).
     real : {"double", "float"}, optional
         The scalar type (``float``: the embedded profile).
     timings : dict, optional
