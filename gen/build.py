@@ -45,7 +45,7 @@ from ._version import __version__
 from .errors import BuildError, ModelError
 from .eigen import eigen_version, find_eigen
 from .ir import DERIVATIVE_KERNELS, plan as make_plan, with_derivatives
-from .render import RUNTIME_HEADERS, RUNTIME_SOURCES, Rendered, plan_lin, render
+from .render import C_TEMPLATES, RUNTIME_HEADERS, RUNTIME_SOURCES, Rendered, plan_lin, render
 
 __all__ = ["compile", "cache_dir", "build", "build_derivatives", "load", "Built", "cache_info",
            "clear_cache", "compile_objects", "link_library"]
@@ -589,7 +589,7 @@ def _eigen_objects(src: Path, objdir: Path, name, rendered, eigen_dir):
     from concurrent.futures import ThreadPoolExecutor
     from .eigen import ALT_DEFINE, sources
     cxx, cc = _cxx_compiler(), _compiler()
-    _, alt, own = sources(name, rendered.real, rendered.derivatives)
+    _, alt, own = sources(name, rendered.real, rendered.derivatives, C_TEMPLATES)
     (objdir / "alt").mkdir()
     alt_flag = "-D" + ALT_DEFINE
     jobs = [(cxx, f, objdir / (Path(f).stem + "_cxx.o"),   # <name>.c has <name>.o

@@ -118,19 +118,21 @@ def _renamed(plan, name):
     return dataclasses.replace(plan, model=model)
 
 
-def render(plan, real="double", timings=None, project=True, only=None):
-    """The Eigen backend's files (gen.render.render with backend="eigen"):
-    the C backend's files for `real`, the C model again for the other
-    scalar type under alt_name's prefix, the face and the CMake project."""
-    from . import render as rmod
+def render(plan, real, timings, project, only, *, render_c, env, c_templates,
+           runtime_sources):
+    """The Eigen backend's files (gen.render.render with backend="eigen",
+    which passes its C backend's render function, template environment,
+    template list and runtime sources): the C backend's files for `real`,
+    the C model again for the other scalar type under alt_name's prefix,
+    the face and the CMake project."""
+    from .resources import csrc_dir
     name = plan.model.name
     if name in CXX_RESERVED:
         from .errors import ModelError
         raise ModelError(f"model name {name!r} is a C++ keyword or reserved namespace; the "
                          f"Eigen backend uses the name as a namespace: choose another "
                          f"(for example 'my_{name}')")
-    main = rmod.render(plan, real=real, backend="c", timings=timings, project=project,
-                       only=only)
+    main = render_c(plan, real=real, backend="c", timings=timings, project=project, only=only)
     alt = alt_name(name, real)
     roles = set(only) if only else ({"model", "lin" if plan.derivatives else "stub"}
                                     | ({"project"} if project else set()))
@@ -138,41 +140,39 @@ def render(plan, real="double", timings=None, project=True, only=None):
              if k not in ("CMakeLists.txt", "arm-none-eabi.cmake")}
     alt_roles = roles & {"model", "lin", "stub"}
     if alt_roles:
-        second = rmod.render(_renamed(plan, alt), real=other_real(real), backend="c",
-                             project=False, only=alt_roles)
+        second = render_c(_renamed(plan, alt), real=other_real(real), backend="c",
+                          project=False, only=alt_roles)
         files.update({k: v for k, v in second.files.items()
                       if k not in ("gen_rt_config.h", f"{alt}_api.c")})
-    ctx = context(main.interface, real)
-    env = rmod.template_env()
+    ctx = context(main.interface, real, c_templates, runtime_sources)
     for fname, tname, role in TEMPLATES:
         if role in roles:
             files[fname.format(name=name)] = env.get_template(tname).render(**ctx)
     for src in RUNTIME_HEADERS if only is None else ():
-        files[Path(src).name] = (rmod.csrc_dir() / src).read_text()
-    return rmod.Rendered(files, main.interface, "eigen", real, plan.derivatives, main.timings)
+        files[Path(src).name] = (csrc_dir() / src).read_text()
+    return dataclasses.replace(main, files=files, backend="eigen")
 
 
-def sources(name, real, derivatives=True):
+def sources(name, real, derivatives, c_templates):
     """What an Eigen build compiles: (C files of the build's scalar type as
     the C backend has them, C files of the other type (compiled with
-    ALT_DEFINE, with the runtime's), C++ files)."""
-    from .render import C_TEMPLATES
+    ALT_DEFINE, with the runtime's), C++ files); c_templates: the C
+    backend's (file, template, role) list (gen/render.py C_TEMPLATES)."""
     roles = ("model", "lin" if derivatives else "stub")
 
     def model_c(n):
-        return [f.format(name=n) for f, _, role in C_TEMPLATES
+        return [f.format(name=n) for f, _, role in c_templates
                 if f.endswith(".c") and role in roles and f != "{name}_api.c"]
     return model_c(name), model_c(alt_name(name, real)), [f"{name}.cpp"]
 
 
-def context(iface, real):
+def context(iface, real, c_templates, runtime_sources):
     """The Jinja2 context of the face."""
     from ._version import __version__
     from .abi import METHODS
-    from .render import RUNTIME_SOURCES
     name = iface.name
     alt = alt_name(name, real)
-    main_c, alt_c, cxx = sources(name, real, True)
+    main_c, alt_c, cxx = sources(name, real, True, c_templates)
 
     def lit(v, r):
         s = repr(float(v))
@@ -187,7 +187,7 @@ def context(iface, real):
         "sizes": sizes, "methods": sorted(METHODS.items(), key=lambda kv: kv[1]),
         "p_default": {r: [lit(v, r) for v in iface.constants] for r in ("float", "double")},
         "partition": {k: getattr(iface, k) for k in ("q_ind", "q_dep", "u_ind", "u_dep")},
-        "runtime_sources": RUNTIME_SOURCES,
+        "runtime_sources": runtime_sources,
         "model_sources": main_c, "alt_sources": alt_c, "cxx_sources": cxx,
         "eigen_type": _eigen_type,
         "structs": {s.name: s.cxx_name for s in iface.structs},

@@ -355,7 +355,9 @@ def render(plan, real="double", backend="c", timings=None, project=True, only=No
     timings = {} if timings is None else timings
     if backend == "eigen":
         from . import eigen
-        return eigen.render(plan, real=real, timings=timings, project=project, only=only)
+        return eigen.render(plan, real, timings, project, only, render_c=render,
+                            env=template_env(), c_templates=C_TEMPLATES,
+                            runtime_sources=RUNTIME_SOURCES)
     iface = interface(plan.model, real=real, accel=plan.accel)
     ctx = build_context(plan, iface, timings=timings, backend=backend)
     env = template_env()

@@ -73,13 +73,13 @@ def test_eigen_backend_under_sanitizers(tmp_path, key):
     scalar types, the second copy's names prefixed, and the face
     instantiated) obeys the same rules through its C API."""
     from gen.eigen import ALT_DEFINE, sources
-    from gen.render import RUNTIME_SOURCES
+    from gen.render import C_TEMPLATES, RUNTIME_SOURCES
     inc = require_eigen()
     model = MODELS[key]()
     out = tmp_path
     gen.generate(model, out, backend="eigen")
     p = model.name
-    main, alt, cxx = sources(p, "double")
+    main, alt, cxx = sources(p, "double", True, C_TEMPLATES)
     units = [(HARNESS, "gcc", "-std=c99", "harness")]
     units += [(out / f, "gcc", "-std=c99", Path(f).stem) for f in main + RUNTIME_SOURCES]
     units += [(out / f, "gcc", f"-D{ALT_DEFINE}", "alt_" + Path(f).stem)
