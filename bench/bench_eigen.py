@@ -5,7 +5,10 @@ a cart (n = 2, 4, 8 by default).
 Timed in compiled code, not through Python: for each model both backends
 are generated (prefixes <model>_c and <model>_e), and a small C++ driver
 calls the C backend's <p>_eval_rhs / <p>_linearize and the Eigen backend's
-typed eval_rhs / linearize in a loop over 64 precomputed states. Batches of
+typed eval_rhs / linearize in a loop over 64 precomputed states. The Eigen
+backend is a typed face over the C runtime (gen/eigen.py): the driver links
+its C model (<model>_e.c, ...) and one copy of the runtime, which both
+models share (the same sources and flags). Batches of
 each are interleaved and repeated; the table shows the median ns/call and
 the ratio Eigen/C (< 1: Eigen faster). Both sides are compiled with the same
 optimization (-O2 -DNDEBUG, no -march), both check their inputs for NaN/inf.
@@ -32,6 +35,7 @@ sys.path.insert(0, str(ROOT / "examples"))
 import gen  # noqa: E402
 from gen.backends import eigen_include_dir  # noqa: E402
 from gen.backends import RUNTIME_SOURCES  # noqa: E402
+from gen.render import model_sources  # noqa: E402
 
 DRIVER = r"""
 // bench driver for {P}: C backend ({pc}_*) against the typed Eigen API ({pe}::)
@@ -173,10 +177,11 @@ def build(work: Path, label, make, stem, fill, eigen):
     gen.generate(me, d / "e", backend="eigen")
     (d / "driver.cpp").write_text(DRIVER.format(P=label, pc=pc, pe=pe, fill=fill))
     objs = []
-    for src in [f"{pc}.c"] + RUNTIME_SOURCES:
+    for folder, src in ([("c", s) for s in model_sources(pc) + RUNTIME_SOURCES]
+                        + [("e", s) for s in model_sources(pe)]):
         o = d / (src + ".o")
-        subprocess.run([CC, "-std=c99", *FLAGS, "-c", str(d / "c" / src), "-o", str(o),
-                        "-I", str(d / "c")], check=True)
+        subprocess.run([CC, "-std=c99", *FLAGS, "-c", str(d / folder / src), "-o", str(o),
+                        "-I", str(d / folder)], check=True)
         objs.append(str(o))
     exe = d / "bench"
     r = subprocess.run([CXX, "-std=c++17", *FLAGS, "-I", str(d / "c"), "-I", str(d / "e"),

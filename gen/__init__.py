@@ -14,7 +14,7 @@ from ._version import __version__
 
 from .errors import (BuildError, ConvergenceError, DivergenceError, EomgenError,  # noqa: E402
                      InputError, MissingDependencyError, ModelError, SingularError, SolverError,
-                     UnusedConstantWarning, UnusedInputWarning)
+                     UnusedConstantWarning, UnusedInputWarning, MasslessSpeedWarning)
 from .solution import Event, Solution  # noqa: E402
 from .bindings import Simulator  # noqa: E402
 from .model import Model  # noqa: E402
@@ -28,7 +28,7 @@ from .ensemble import At, EnsembleResult, Final, Max, Mean, Min, Sampler  # noqa
 
 __all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "EomgenError",
            "ModelError", "BuildError", "InputError", "MissingDependencyError",
-           "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "UnusedInputWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
+           "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "UnusedInputWarning", "MasslessSpeedWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
            "export_fmu", "Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult",
            "__version__"]
 

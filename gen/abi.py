@@ -5,14 +5,12 @@ data: the public functions (name, parameters with their role and shape,
 return type, documentation), the batch entry points of the Python module,
 the structs (options and statistics of the integrators), the status codes
 with their messages, and the model's plain metadata (names, sizes,
-partition, default constants). The C header, the cffi cdef, the C++
-declarations and the extern "C" layer of the Eigen backend are rendered
-from it; the bindings map status codes to exceptions with it; the footprint
+partition, default constants). The C header, the cffi cdef and the
+typed C++ face of the Eigen backend are rendered from it; the bindings map status codes to exceptions with it; the footprint
 report lists its public functions from it.
 
 The status table itself is the runtime's (``csrc/gen_rt_status.h``): it is
-read from there, so the C runtime, the C++ runtime and this description
-cannot disagree.
+read from there, so the C runtime and this description cannot disagree.
 
     iface = abi.interface(model, real="double")
     iface.functions            # [Function], in header order

@@ -26,10 +26,12 @@ import os
 import shutil
 import sys
 import sysconfig
+from pathlib import Path
 
-from .eigen import eigen_version, find_eigen
+from . import eigen as eigen_face
+from .eigen import CXX_RESERVED, eigen_version, find_eigen
 from .errors import BuildError, ModelError
-from .printers import ModelCPrinter, ModelCxxPrinter
+from .printers import ModelCPrinter
 
 __all__ = ["Backend", "CBackend", "EigenBackend", "FmuBackend", "BACKENDS", "get_backend",
            "backend_names", "c_compiler", "cxx_compiler", "eigen_include_dir",
@@ -48,8 +50,9 @@ RUNTIME_HEADERS = ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h", "gen_rt_rod
 # only, never a library's)
 RUNTIME_MAIN = ["gen_rt_main.c", "gen_rt_main.h"]
 # the C++ runtime of the Eigen backend and the tables it shares with the C one
-EIGEN_RUNTIME_HEADERS = ["eigen/gen_rt_eigen.hpp", "eigen/gen_rt_expm.hpp", "gen_rt_status.h", "gen_rt_rodas4.h",
-                         "gen_rt_dopri5.h"]
+# the Eigen face's own runtime header (beside the C runtime, which it links
+# once per scalar type; gen/eigen.py)
+EIGEN_RUNTIME_HEADERS = list(eigen_face.RUNTIME_HEADERS)
 
 # ------------------------------------------------------------- the flags
 # -ffp-contract=off: no fused multiply-add where the target has one (GCC's
@@ -132,19 +135,9 @@ C_TEMPLATES = [
     ("arm-none-eabi.cmake", "c/arm-none-eabi.cmake.j2", "project"),  # Cortex-M4F toolchain
 ]
 
-# The C++17/Eigen backend: the typed API (header-only templates over the
-# scalar type, on the C++ runtime), an extern "C" layer with the C backend's
-# API (the same header, from the same interface description), and the same
-# standalone simulator main.c linked against that layer.
-EIGEN_TEMPLATES = [
-    ("{name}.h", "c/model.h.j2", "model"),
-    ("{name}.hpp", "eigen/model.hpp.j2", "model"),
-    ("{name}.cpp", "eigen/model.cpp.j2", "model"),
-    ("{name}_api.c", "c/model_api.c.j2", "model"),
-    ("gen_rt_abi.h", "c/gen_rt_abi.h.j2", "model"),  # the C runtime's structs (gen/abi.py)
-    ("main.c", "c/main.c.j2", "project"),
-    ("CMakeLists.txt", "eigen/CMakeLists.txt.j2", "project"),
-]
+# The C++17/Eigen backend's own templates (the face, its CMake project):
+# gen/eigen.py; the rest of its files are the C backend's, rendered twice.
+EIGEN_TEMPLATES = list(eigen_face.TEMPLATES)
 
 # The FMU's model sources: the C backend's, without the plugin table (the
 # FMU's entry points are FMI's) and the project; gen/fmu.py adds the FMI
@@ -163,18 +156,7 @@ FMU_TEMPLATES = {
 FMU_GLUE = {"2.0": ["gen_fmu.h", "gen_fmu.c", "gen_fmu_fmi2.c"],
             "3.0": ["gen_fmu.h", "gen_fmu.c", "gen_fmu_fmi3.c"]}
 
-# the model prefix is also the C++ namespace of the Eigen backend
-CXX_RESERVED = frozenset("""
-alignas alignof and and_eq asm auto bitand bitor bool break case catch char char8_t
-char16_t char32_t class compl concept const consteval constexpr constinit const_cast
-continue co_await co_return co_yield decltype default delete do double dynamic_cast
-else enum explicit export extern false float for friend goto if inline int long
-mutable namespace new noexcept not not_eq nullptr operator or or_eq private
-protected public register reinterpret_cast requires return short signed sizeof
-static static_assert static_cast struct switch template this thread_local throw
-true try typedef typeid typename union unsigned using virtual void volatile
-wchar_t while xor xor_eq std Eigen eomgen detail gen_rt
-""".split())
+# (CXX_RESERVED, the names a face's namespace may not take: gen/eigen.py)
 
 
 # ------------------------------------------------------------ the types
@@ -200,6 +182,9 @@ class Backend:
     loadable = True
     #: gen.generate writes a project (CMake, main.c) for it
     project = True
+    #: it renders through its own render() (a composite of other backends'
+    #: files), not by its template list alone
+    composite = False
     #: its CMake project bounds the library's frames (<P>_STACK_LIMIT)
     stack_limit = False
     #: what names its cache folder: _eomgen_<model><tag>_<key>
@@ -270,58 +255,66 @@ class CBackend(Backend):
         return [(f, cc, [*C_FLAGS, "-fPIC", *extra]) for f, extra in own]
 
 
-class EigenBackend(Backend):
-    """C++17 over Eigen 3.4: a typed header and an extern "C" layer with
-    the C backend's API (the same plugin table, the same Simulator)."""
+class EigenBackend(CBackend):
+    """C++17 over Eigen 3.4, a typed face over the one C runtime
+    (gen/eigen.py): its library is the C backend's for the build's scalar
+    type (the same files, the same API, the same bits), the C model and
+    runtime again for the other scalar type under a prefixed name, and the
+    face, <name>.hpp (Eigen types in and out, the scalar a template
+    parameter), instantiated in <name>.cpp."""
     name = "eigen"
     templates = tuple(EIGEN_TEMPLATES)
-    runtime_files = tuple(EIGEN_RUNTIME_HEADERS)
+    runtime_files = tuple(RUNTIME_SOURCES + RUNTIME_HEADERS + EIGEN_RUNTIME_HEADERS)
     project_runtime_files = tuple(RUNTIME_MAIN)
-    runtime_sources = ()
-    # its templates print the unrolled Jacobian kernel
-    lin = "unrolled"
+    runtime_sources = tuple(RUNTIME_SOURCES)
+    # the plan of the C backend's (its library is the C backend's)
+    lin = "auto"
+    lazy_derivatives = False
+    stack_limit = False
+    composite = True
     tag = "_eigen"
     link_cxx = True
-    #: the C++ sources of the extern "C" library
-    sources = ("{name}.cpp",)
 
-    def printer(self, symbol_map, real):
-        return ModelCxxPrinter(symbol_map, "Scalar")
+    def render(self, plan, real, timings, project, only, *, render_c, env):
+        """The C backend's files for real, the C model again for the other
+        scalar type, the face and the project (render_c: gen.render.render)."""
+        return eigen_face.render(plan, real, timings, project, only, render_c=render_c,
+                                  env=env, c_templates=C_TEMPLATES,
+                                  runtime_sources=RUNTIME_SOURCES)
 
     def include_dir(self):
         """Eigen's include directory (gen/eigen.py finds it)."""
         return eigen_include_dir()
-
-    def context(self, model, kernels):
-        m = model
-        if m.name in CXX_RESERVED:
-            raise ModelError(f"model name {m.name!r} is a C++ keyword or reserved namespace; "
-                             f"the Eigen backend uses the name as a namespace: choose another "
-                             f"(for example 'my_{m.name}')")
-        return {
-            "nqi": m.nq - m.mc, "nui": m.nu - m.mv,
-            # how gen_rt::Runtime solves the accelerations (the traits' ACCEL)
-            "accel": ("spd" if not m.mv else "partitioned" if m.method == "kane" else "kkt"),
-            # the lin_terms kernel's outputs in its parameter order (gen_rt::LinOut fields)
-            "lin_outputs": [o.name for o in kernels["lin_terms"].outputs],
-            "cxx_sources": [f.format(name=m.name) for f in self.sources],
-        }
 
     def cache_parts(self):
         d = self.include_dir()
         # the backend, its flags and the Eigen it compiles against
         return [*super().cache_parts(),
                 f"backend={self.name}\0{' '.join(CXX_FLAGS)}\0{cxx_compiler()}\0"
-                f"eigen={d}:{eigen_version(d)}"]
+                f"eigen={d}:{eigen_version(d)}\0face"]
 
     def units(self, name, files, derivatives, includes=()):
-        cxx_flags = [*CXX_FLAGS, "-fPIC", "-isystem", str(self.include_dir())]
-        return ([(f.format(name=name), cxx_compiler(), cxx_flags) for f in self.sources]
-                + [(f"{name}_api.c", c_compiler(), [*C_FLAGS, "-fPIC"])])
+        """The C backend's units, then the other scalar type's model and
+        runtime (compiled with gen/eigen.py's ALT_DEFINE: the runtime's names
+        prefixed) and the face (C++): [(file, compiler, flags, object)]."""
+        cc = c_compiler()
+        real = "float" if f"{eigen_face.alt_name(name, 'float')}.c" in files else "double"
+        _, alt, cxx = eigen_face.sources(name, real, derivatives, C_TEMPLATES)
+        alt_flag = "-D" + eigen_face.ALT_DEFINE
+        units = [(f, c, fl, Path(f).stem + ".o")
+                 for f, c, fl in super().units(name, files, derivatives, includes)]
+        units += [(f, cc, [*C_FLAGS, "-fPIC", alt_flag,
+                           *(C_LIN_FLAGS if f.endswith("_lin.c") else ())],
+                   "alt_" + Path(f).stem + ".o") for f in alt]
+        units += [(f, cc, [*RUNTIME_FLAGS, alt_flag], "alt_" + Path(f).stem + ".o")
+                  for f in RUNTIME_SOURCES]
+        units += [(f, cxx_compiler(), [*CXX_FLAGS, "-fPIC", "-isystem", str(self.include_dir())],
+                   Path(f).stem + "_cxx.o") for f in cxx]
+        return units
 
     def diagnose(self, name, units):
-        return (cxx_compiler(), [*CXX_STRICT_FLAGS, "-isystem", str(self.include_dir())],
-                [f.format(name=name) for f in self.sources])
+        cxx = [u[0] for u in units if u[0].endswith(".cpp")]
+        return (cxx_compiler(), [*CXX_STRICT_FLAGS, "-isystem", str(self.include_dir())], cxx)
 
 
 class FmuBackend(CBackend):

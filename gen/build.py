@@ -293,7 +293,9 @@ def compile_units(src: Path, objdir: Path, units, backend, name):
     cc = c_compiler()
     if rt_sources:
         runtime, rt_folder = _runtime_objects(src, cc, rt_sources)
-    jobs = [(c, f, objdir / (Path(f).stem + ".o"), list(fl)) for f, c, fl in units]
+    # a unit is (file, compiler, flags) or (file, compiler, flags, object name)
+    jobs = [(u[1], u[0], objdir / (u[3] if len(u) > 3 else Path(u[0]).stem + ".o"), list(u[2]))
+            for u in units]
     n_own = len(jobs)
     if runtime is None:
         rt_tmp = objdir.parent / "runtime"

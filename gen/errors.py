@@ -109,6 +109,14 @@ class UnusedConstantWarning(UserWarning):
     effect on the results."""
 
 
+class MasslessSpeedWarning(UserWarning):
+    """Some speeds have an identically zero row in the mass matrix and no
+    velocity constraint involves them: the equations do not determine
+    their accelerations (a massless particle or body), so a simulation
+    reports a singular configuration. Their mass matrix, forcing and
+    linearization blocks are still generated."""
+
+
 class UnusedInputWarning(UserWarning):
     """An input given in ``inputs`` appears in no expression of the model (a
     misspelt or stale entry); it is kept as an input but has no effect on

@@ -991,14 +991,23 @@ class Model:
                 and all(A_[k, i] == 0 for k in range(A_.shape[0]))]
         if zero:
             names = [str(speed_names[i]) for i in zero]
-            whole = len(zero) == nu
-            raise ModelError(
-                f"model '{name}': the mass matrix is {'identically zero' if whole else 'zero'}"
-                f"{'' if whole else ' in the row(s) of'} {'(speeds ' if whole else 'speed(s) '}"
-                f"{', '.join(names)}{')' if whole else ''}: the equations of motion do not "
-                "determine those accelerations at any state (every simulation would fail "
-                "as singular). Give the bodies their masses and inertias (particles, rigid "
-                "bodies) in the equations you formed")
+            if len(zero) == nu:       # nothing to simulate: refused
+                raise ModelError(
+                    f"model '{name}': the mass matrix is identically zero (speeds "
+                    f"{', '.join(names)}): the equations of motion do not determine the "
+                    "accelerations at any state (every simulation would fail as singular). "
+                    "Give the bodies their masses and inertias (particles, rigid bodies) in "
+                    "the equations you formed")
+            # a massless part: its M and f (and sympy's own tests of them) are
+            # meaningful, a simulation is not
+            import warnings
+            from .errors import MasslessSpeedWarning
+            warnings.warn(MasslessSpeedWarning(
+                f"model '{name}': the mass matrix is zero in the row(s) of speed(s) "
+                f"{', '.join(names)}: the equations of motion do not determine those "
+                "accelerations (a massless particle or body?), so a simulation will stop "
+                "as singular; M, f and their Jacobians are generated as given"),
+                stacklevel=_user_stacklevel())
         for mat, what in ((Kqd_, "kinematic q' coefficients"), (Ku_, "kinematic u coefficients"),
                           (A_, "velocity-constraint matrix")):
             if any(e.has(*U) for e in mat) or any(e.has(*R) for e in mat):

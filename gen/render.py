@@ -361,6 +361,9 @@ def render(plan, real="double", backend="c", timings=None, project=True, only=No
         raise ModelError(f"real must be 'double' or 'float', got {real!r}")
     b = get_backend(backend)
     timings = {} if timings is None else timings
+    if b.composite:          # the Eigen face: the C backend's files and its own
+        return b.render(plan, real, timings, project, only, render_c=render,
+                        env=template_env())
     iface = interface(plan.model, real=real, accel=plan.accel)
     ctx = build_context(plan, iface, timings=timings, backend=b)
     env = template_env()

@@ -1,21 +1,17 @@
 """The matrix exponential and the zero-order-hold discretization of the
-runtimes: csrc/gen_rt_expm.c (C) and csrc/eigen/gen_rt_expm.hpp (C++/Eigen).
+runtime, csrc/gen_rt_expm.c (the Eigen backend's too: its face calls it).
 
 * tests/c/test_expm.c (closed forms, statuses, work-array guards) built with
   the strict C99 flags in double, in float (-DGEN_RT_REAL_FLOAT, as the CMake
   option EOMGEN_REAL_FLOAT does) and under ASan + UBSan (slow);
 * gen_rt_expm and gen_rt_c2d_zoh through cffi against scipy.linalg.expm
   (random matrices of sizes 1..12 and 1-norms 1e-3..1e3; the augmented
-  matrix [[A, B], [0, 0]] dt for the discretization), in double and float;
-* tests/cpp/test_expm.cpp with -DEIGEN_RUNTIME_NO_MALLOC: its numbers against
-  scipy (fast: the driver built with only its comparison), its closed forms
-  and statuses, and the header included after gen_rt_eigen.hpp (slow).
+  matrix [[A, B], [0, 0]] dt for the discretization), in double and float.
 
 The fast builds start together (a thread per build) when the module's first
 test asks for one of them.
 """
 import os
-import shutil
 import subprocess
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -24,16 +20,13 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from conftest import require_eigen, require_tool
+from conftest import require_tool
 
 ROOT = Path(__file__).resolve().parent.parent
 CSRC = ROOT / "csrc"
 C_TEST = ROOT / "tests" / "c" / "test_expm.c"
-CPP_TEST = ROOT / "tests" / "cpp" / "test_expm.cpp"
 RT_SOURCES = [CSRC / "gen_rt_expm.c", CSRC / "gen_rt_linalg.c", CSRC / "gen_rt_status.c"]
 C_FLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"]
-CXX_FLAGS = ["-std=c++17", "-Wall", "-Wextra", "-Werror", "-pedantic",
-             "-DEIGEN_RUNTIME_NO_MALLOC"]
 SAN_FLAGS = ["-fsanitize=address,undefined", "-fno-omit-frame-pointer",
              "-fno-sanitize-recover=all"]
 FLOAT = ["-DGEN_RT_REAL_FLOAT"]  # what CMake's EOMGEN_REAL_FLOAT defines
@@ -60,36 +53,6 @@ int expm_iwork(int n);
 int c2d_work(int ns, int nr);
 int c2d_iwork(int ns, int nr);
 """
-
-# the C++ runtime header included after (and before) the full C++ runtime
-BOTH_HEADERS_CPP = r"""
-#include "gen_rt_eigen.hpp"
-#include "gen_rt_expm.hpp"
-static_assert(gen_rt::expm_detail::OK == gen_rt::OK, "");
-static_assert(gen_rt::expm_detail::ERR_SINGULAR == gen_rt::ERR_SINGULAR, "");
-static_assert(gen_rt::expm_detail::ERR_DIVERGED == gen_rt::ERR_DIVERGED, "");
-int both_headers()
-{
-    gen_rt::Mat<double, 3, 3> A = gen_rt::Mat<double, 3, 3>::Zero(), E;
-    gen_rt::Mat<double, 3, 1> B = gen_rt::Mat<double, 3, 1>::Ones(), Bd;
-    gen_rt::Mat<float, 2, 2> Af = gen_rt::Mat<float, 2, 2>::Identity(), Ef;
-    int st = gen_rt::expm(A, E);
-    st += gen_rt::c2d_zoh(A, B, 0.1, E, Bd);
-    st += gen_rt::expm(Af, Ef);
-    return st == gen_rt::OK ? 0 : 1;
-}
-"""
-REVERSED_CPP = r"""
-#include "gen_rt_expm.hpp"
-#include "gen_rt_eigen.hpp"
-int main()
-{
-    Eigen::Matrix<double, 2, 2> A = Eigen::Matrix<double, 2, 2>::Zero(), E;
-    extern int both_headers();
-    return gen_rt::expm(A, E) == gen_rt::OK && E(0, 0) == 1.0 ? both_headers() : 1;
-}
-"""
-
 
 def _run(cmd, **kw):
     return subprocess.run([str(c) for c in cmd], capture_output=True, text=True, **kw)
@@ -121,36 +84,16 @@ def builds(tmp_path_factory):
                   out / "sizes.c", *RT_SOURCES, "-o", lib, "-lm"])
         return r, lib
 
-    # the C++ build only when g++ and Eigen are there (the test itself skips,
-    # or fails under CI=true, through require_tool / require_eigen)
-    from gen.eigen import find_eigen
-    eigen = find_eigen()[0] if shutil.which("g++") else None
-    if eigen is not None:
-        def cpp_compare():
-            exe = out / "test_expm_compare"
-            r = _run(["g++", *CXX_FLAGS, "-DTEST_EXPM_COMPARE_ONLY", "-I", CSRC / "eigen",
-                      "-I", CSRC, "-isystem", eigen, CPP_TEST, "-o", exe])
-            return r, exe
-        jobs["cpp_compare"] = cpp_compare   # built on first use (a slow test)
     jobs["c_double"] = pool.submit(c_test, "test_expm_double", [])
     jobs["c_float"] = pool.submit(c_test, "test_expm_float", FLOAT)
     jobs["lib_double"] = pool.submit(shared, "expm_double", [])
     jobs["lib_float"] = pool.submit(shared, "expm_float", FLOAT)
-    yield {"dir": out, "jobs": jobs, "eigen": eigen}
+    yield {"dir": out, "jobs": jobs}
     pool.shutdown(wait=True)
 
 
 def _get(builds, key):
-    if key not in builds["jobs"]:
-        # g++ or Eigen missing: skip (fails under CI=true)
-        require_tool("g++")
-        require_eigen()
-        pytest.fail(f"{key} was not built")
-    job = builds["jobs"][key]
-    if callable(job):
-        r, path = job()
-    else:
-        r, path = job.result()
+    r, path = builds["jobs"][key].result()
     _check(r, f"build of {key}")
     return path
 
@@ -376,72 +319,3 @@ def test_c2d_known_units(rt_double):
     assert rel_err(Ad, sla.expm(A * dt)) < 1e-14
     assert rel_err(Ad, refA) < 1e-13
     assert rel_err(Bd, refB) < 1e-13
-
-
-# ---------------------------------------------------------- C++ (Eigen) runtime
-def _cpp_compare(exe, single):
-    rng = np.random.default_rng(11)
-    A = rng.standard_normal((5, 5))
-    A *= 30.0 / norm1(A)  # beyond theta_13: scaled and squared
-    A3 = rng.standard_normal((3, 3))
-    A3 *= 2.0 / norm1(A3)
-    B3 = rng.standard_normal((3, 2)) * 3.0
-    dt = 0.37
-    if single:
-        A, A3, B3 = (m.astype(np.float32).astype(np.float64) for m in (A, A3, B3))
-        dt = float(np.float32(dt))
-    text = " ".join(repr(float(v)) for v in [*A.ravel(), *A3.ravel(), *B3.ravel(), dt])
-    r = _check(_run([exe, "compare", "float" if single else "double"], input=text),
-               "test_expm compare")
-    lines = [np.array(line.split(), dtype=float) for line in r.stdout.strip().splitlines()]
-    assert len(lines) == 4
-    assert lines[0][0] == OK and lines[1][0] == OK and lines[3][0] == OK
-    E, Ad, Bd, Ad0 = (lines[0][1:].reshape(5, 5), lines[1][1:].reshape(3, 3),
-                      lines[2].reshape(3, 2), lines[3][1:].reshape(3, 3))
-    refA, refB = c2d_reference(A3, B3, dt)
-    tol = float_tol(30.0) if single else 1e-12
-    errs = [rel_err(E, sla.expm(A)), rel_err(Ad, refA), rel_err(Bd, refB),
-            rel_err(Ad0, sla.expm(A3 * dt))]
-    assert max(errs) < tol, errs
-    return max(errs)
-
-
-@pytest.mark.eigen
-@pytest.mark.slow
-@pytest.mark.parametrize("single", [False, True], ids=["double", "float"])
-def test_cpp_vs_scipy(builds, single):
-    exe = _get(builds, "cpp_compare")
-    err = _cpp_compare(exe, single)
-    print(f"gen_rt::expm / c2d_zoh {'float' if single else 'double'}: max relative error {err:.3g}")
-
-
-@pytest.mark.eigen
-@pytest.mark.slow
-def test_cpp_closed_forms(tmp_path):
-    """tests/cpp/test_expm.cpp in full: closed forms and statuses, double and
-    float, no heap; then its comparison again (the full build)"""
-    require_tool("g++")
-    eigen = require_eigen()
-    exe = tmp_path / "test_expm"
-    _check(_run(["g++", *CXX_FLAGS, "-I", CSRC / "eigen", "-I", CSRC, "-isystem", eigen,
-                 CPP_TEST, "-o", exe]), "build of tests/cpp/test_expm.cpp")
-    r = _check(_run([exe]), "tests/cpp/test_expm.cpp")
-    assert "0 failed" in r.stdout
-    _cpp_compare(exe, False)
-    _cpp_compare(exe, True)
-
-
-@pytest.mark.eigen
-@pytest.mark.slow
-def test_cpp_header_with_full_runtime(tmp_path):
-    """gen_rt_expm.hpp after gen_rt_eigen.hpp in one translation unit and
-    before it in another, linked together: no clash of names or codes"""
-    require_tool("g++")
-    eigen = require_eigen()
-    (tmp_path / "both.cpp").write_text(BOTH_HEADERS_CPP)
-    (tmp_path / "reversed.cpp").write_text(REVERSED_CPP)
-    exe = tmp_path / "both"
-    _check(_run(["g++", *CXX_FLAGS, "-I", CSRC / "eigen", "-I", CSRC, "-isystem", eigen,
-                 tmp_path / "both.cpp", tmp_path / "reversed.cpp", "-o", exe]),
-           "build with gen_rt_eigen.hpp")
-    _check(_run([exe]), "run with gen_rt_eigen.hpp")

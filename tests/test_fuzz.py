@@ -69,15 +69,25 @@ def test_hostile_inputs_under_sanitizers(tmp_path, key):
 @pytest.mark.eigen
 @pytest.mark.parametrize("key", ["rolling_disc", "box_friction"])
 def test_eigen_backend_under_sanitizers(tmp_path, key):
-    """The C++/Eigen backend's extern "C" layer obeys the same rules."""
+    """The C++/Eigen backend's library (the C model and runtime for both
+    scalar types, the second copy's names prefixed, and the face
+    instantiated) obeys the same rules through its C API."""
+    from gen.eigen import ALT_DEFINE, sources
+    from gen.render import C_TEMPLATES, RUNTIME_SOURCES
     inc = require_eigen()
     model = MODELS[key]()
     out = tmp_path
     gen.generate(model, out, backend="eigen")
     p = model.name
+    main, alt, cxx = sources(p, "double", True, C_TEMPLATES)
+    units = [(HARNESS, "gcc", "-std=c99", "harness")]
+    units += [(out / f, "gcc", "-std=c99", Path(f).stem) for f in main + RUNTIME_SOURCES]
+    units += [(out / f, "gcc", f"-D{ALT_DEFINE}", "alt_" + Path(f).stem)
+              for f in alt + RUNTIME_SOURCES]
+    units += [(out / f, "g++", "-std=c++17", Path(f).stem + "_cxx") for f in cxx]
     objs = []
-    for src, cc, std in ((HARNESS, "gcc", "-std=c99"), (out / f"{p}.cpp", "g++", "-std=c++17")):
-        obj = out / (Path(src).stem + ".o")
+    for src, cc, std, stem in units:
+        obj = out / (stem + ".o")
         cmd = [cc, std, "-g", "-O0", "-I", str(out), "-isystem", str(inc),
                f'-DMODEL_H="{p}.h"', f"-DP(x)={p}_##x", f"-DPU(x)={p.upper()}_##x", *SAN,
                "-c", str(src), "-o", str(obj)]
