@@ -633,3 +633,20 @@ def test_partly_declared_forces_are_still_refused():
     km, consts, (f1, f2) = rolling_disc(normal=False)
     with pytest.raises(ModelError, match=r"2 auxiliary speed\(s\).*1 reaction.*\['f2'\]"):
         gen.Model.from_kanes(km, constants=consts, inputs=[f1], name="disc_half")
+
+
+@pytest.mark.slow
+@pytest.mark.eigen
+def test_eigen_backend_with_declared_forces_matches_c():
+    from conftest import require_eigen
+    require_eigen()
+    km, consts, (f1, f2) = rolling_disc(normal=False)
+    model = gen.Model.from_kanes(km, constants=consts, inputs=[f1, f2], name="disc_in")
+    c, e = gen.compile(model), gen.compile(model, backend="eigen")
+    assert e.auxiliary_names == ["u4", "u5"]
+    X = random_states(10, 6, 12)
+    R = np.random.default_rng(12).uniform(-3, 3, (10, 2))
+    got = np.array([e.auxiliary_forces(0.0, x, r=r) for x, r in zip(X, R)])
+    ref = np.array([sympy_auxiliary_values(km, consts, [x], [f1, f2], r)[0] for x, r in zip(X, R)])
+    assert rel_err(got, ref) < 1e-12
+    assert rel_err(got, [c.auxiliary_forces(0.0, x, r=r) for x, r in zip(X, R)]) < 1e-13
