@@ -650,3 +650,21 @@ def test_eigen_backend_with_declared_forces_matches_c():
     ref = np.array([sympy_auxiliary_values(km, consts, [x], [f1, f2], r)[0] for x, r in zip(X, R)])
     assert rel_err(got, ref) < 1e-12
     assert rel_err(got, [c.auxiliary_forces(0.0, x, r=r) for x, r in zip(X, R)]) < 1e-13
+
+
+@pytest.mark.slow
+@pytest.mark.eigen
+def test_eigen_backend_reports_singular_reactions():
+    from conftest import require_eigen
+    require_eigen()
+    th, w, ua1, ua2, R1, R2 = me.dynamicsymbols('theta omega ua1 ua2 R1 R2')
+    N = me.ReferenceFrame('N')
+    P = me.Point('P')
+    P.set_vel(N, w * N.x + ua1 * N.y + ua2 * N.y)
+    km = me.KanesMethod(N, q_ind=[th], u_ind=[w], kd_eqs=[th.diff(t) - w],
+                        u_auxiliary=[ua1, ua2])
+    km.kanes_equations([me.Particle('p', P, 1)], [(P, R1 * N.y + R2 * N.y)])
+    sim = gen.compile(gen.Model.from_kanes(km, name="sing"), backend="eigen")
+    with pytest.raises(gen.SingularError, match=r"\(the reactions R1, R2\) "
+                                                r"\[ERR_SINGULAR_REACTIONS\]"):
+        sim.auxiliary_forces(0.0, [0.1, 0.2])

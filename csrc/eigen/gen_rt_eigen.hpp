@@ -915,8 +915,9 @@ struct Runtime {
             if (!finite(Fr) || !finite(g)) return ERR_NONFINITE_MODEL;
             const Eigen::Matrix<S, NA, NA> Fm = Fr;
             const AuxiliaryForces rhs = -g;
-            if (lu_solve<S, NA>(Fm, S(0), rhs, sol)) return ERR_SINGULAR;
-            if (!finite(sol)) return ERR_NONFINITE_MODEL;
+            /* a singular F (finite): the reactions are not determined here */
+            if (lu_solve<S, NA>(Fm, S(0), rhs, sol) || !finite(sol))
+                return ERR_SINGULAR_REACTIONS;
             F = sol;
         } else {
             (void)F;
