@@ -68,7 +68,7 @@ typedef double gen_rt_real;
 #define GEN_RT_STATUS_ENUM_(name, value, text) GEN_RT_##name = (value),
 enum gen_rt_status { GEN_RT_STATUS_TABLE(GEN_RT_STATUS_ENUM_) GEN_RT_STATUS_END_ = 1 };
 #undef GEN_RT_STATUS_ENUM_
-#define GEN_RT_STATUS_MIN (-13)
+#define GEN_RT_STATUS_MIN (-14)
 
 /* The integration methods, the table holds, the stack bound and the structs
  * of the public API (gen_rt_sim_options, gen_rt_sim_stats, gen_rt_input,

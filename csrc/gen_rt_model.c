@@ -228,9 +228,10 @@ int gen_rt_model_eval_auxiliary_forces(const gen_rt_model *m, gen_rt_real t,
     m->auxiliary(x, x + m->nq, dx + m->nq, r, p, t, Fm, g);
     if (!finite_n(na * na, Fm) || !finite_n(na, g)) return GEN_RT_ERR_NONFINITE_MODEL;
     for (i = 0; i < na; ++i) g[i] = -g[i];
-    if ((st = gen_rt_lu_factor(na, Fm, iwork, 0))) return st;
-    if ((st = gen_rt_lu_solve(na, Fm, iwork, 1, g))) return st;
-    if (!finite_n(na, g)) return GEN_RT_ERR_NONFINITE_MODEL;
+    /* a singular F (finite): the reactions are not determined here */
+    if (gen_rt_lu_factor(na, Fm, iwork, 0) || gen_rt_lu_solve(na, Fm, iwork, 1, g) ||
+        !finite_n(na, g))
+        return GEN_RT_ERR_SINGULAR_REACTIONS;
     copy_n(na, g, F);
     return GEN_RT_OK;
 }

@@ -31,7 +31,10 @@
                          "type (overflow) during integration")                          \
     X(ERR_CONTROLLER, -12, "the controller callback returned an error")                \
     X(ERR_CANCELLED, -13, "cancelled: the caller set the cancellation flag of the "     \
-                          "options (sim_options.cancel)")
+                          "options (sim_options.cancel)")                              \
+    X(ERR_SINGULAR_REACTIONS, -14, "the reaction forces of the auxiliary speeds are "   \
+                                   "not determined at this state: the matrix of their " \
+                                   "auxiliary equations is singular")
 
 /* the message of a code outside the table */
 #define GEN_RT_STATUS_UNKNOWN "unknown status code"

@@ -301,8 +301,10 @@ FUNCTIONS = (
     Function("eval_auxiliary_forces",
              _params("t:scalar, x:in:NX, r:in?:NR=r, p:in?:NP=p, F:out:NA"),
              "Reaction forces along the auxiliary speeds (Kane's u_auxiliary), NA: u' from the "
-             "right-hand side, then F_aux reactions = -g_aux (GEN_RT_ERR_SINGULAR when F_aux "
-             "is); NA == 0: nothing written.",
+             "right-hand side, then F_aux reactions = -g_aux (GEN_RT_ERR_SINGULAR_REACTIONS "
+             "when F_aux is singular); with no unknown force along them (all declared inputs) "
+             "the values of the auxiliary equations at the inputs given; NA == 0: nothing "
+             "written.",
              work="AUX", iwork=True, work_args="NA"),
     Function("project", _params("t:scalar, p:in?:NP=p, tol:value, max_iter:value::int, x:inout:NX"),
              "Project x onto f_c = 0 (Gauss-Newton, minimum norm) and the velocity constraints; "

@@ -40,6 +40,7 @@ EXCEPTIONS = {
     "ERR_DIVERGED": DivergenceError,
     "ERR_CONTROLLER": SolverError,
     "ERR_CANCELLED": KeyboardInterrupt,   # Ctrl-C (gen/interrupt.py)
+    "ERR_SINGULAR_REACTIONS": SingularError,
 }
 
 
@@ -356,6 +357,8 @@ class Simulator:
                         raise InputError(f"{self._p}_{where}: {e}", e.argument, e.index,
                                          e.value) from None
         msg = self._ffi.string(self._fn("status_message")(status)).decode()
+        if name == "ERR_SINGULAR_REACTIONS" and self.auxiliary_names:
+            msg += f" (the reactions {', '.join(self.auxiliary_names)})"
         text = f"{self._p}_{where}: {msg} [{name}]"
         if t is not None:
             text += f" at t = {float(t):.17g}"

@@ -466,7 +466,14 @@ class Model:
         reactions : list, optional
             With ``u_auxiliary``: the unknown reaction forces (functions of time),
             in the order wanted; by default found in ``km.auxiliary_eqs`` and
-            ordered by name.
+            ordered by name. When the auxiliary equations hold no unknown force
+            (every force along the auxiliary directions is a declared input or
+            constant), the model is built all the same and
+            ``sim.auxiliary_forces`` gives, for each auxiliary speed (named
+            after it), the value of its auxiliary equation (Kane's Fr + Fr*)
+            at the declared inputs: zero when they are the forces the
+            auxiliary direction carries; a further generalized force of minus
+            that value would be needed otherwise.
         outputs : dict, optional
             ``{name: expression}`` of quantities to measure (sensor readings,
             point positions) in the coordinates, speeds, inputs, constants and t
@@ -923,7 +930,7 @@ class Model:
             out_labels, exprs = _outputs_of(outputs)
             Y_ = conv(sm.Matrix(exprs), "outputs") if exprs else sm.zeros(0, 1)
         # auxiliary equations F reactions + g = 0: u' becomes the symbols UD
-        UD, aux_F_, aux_g_, reactions = [], None, None, []
+        UD, aux_F_, aux_g_, reactions, aux_of = [], None, None, [], []
         if aux is not None:
             UD = [sm.Dummy(f"ud{i}") for i in range(nu)]
             usub = dict(zip(udots, UD))
@@ -942,7 +949,9 @@ class Model:
 
             aux_F_ = conv_aux(aux[0], "auxiliary equations (reaction coefficients)")
             aux_g_ = conv_aux(aux[2], "auxiliary equations")
-            reactions = list(aux[1])
+            # the reactions solved for, and what names the auxiliary forces:
+            # the reactions, or the auxiliary speeds when none is unknown
+            reactions, aux_of = list(aux[1]), list(aux[3] if len(aux) > 3 else aux[1])
 
         # ---- constants that no expression uses: a warning naming them ----
         used = set()
@@ -1040,7 +1049,7 @@ class Model:
         state_labels = [_sym_name(s) for s in q] + list(speed_names)
         input_labels = [_sym_name(s) for s in inputs]
         constant_labels = [str(s) for s in constants]
-        aux_labels = [_sym_name(s) for s in reactions]
+        aux_labels = [_sym_name(s) for s in aux_of]
         all_labels = state_labels + input_labels + constant_labels + aux_labels + out_labels
         dup = sorted({n_ for n_ in all_labels if all_labels.count(n_) > 1})
         if dup:
@@ -1153,11 +1162,18 @@ def _aux_zero(uaux, t):
 
 
 def _kane_auxiliary(km, q, u, uaux, inputs, reactions, t, zero):
-    """(F, reactions, g) with km.auxiliary_eqs = F reactions + g (in the
-    user's functions of time; u' appear in g). The reactions are the
+    """(F, reactions, g, named) with km.auxiliary_eqs = F reactions + g (in
+    the user's functions of time; u' appear in g). The reactions are the
     user's (reactions=[...]) or the functions of time in the auxiliary
     equations that are neither coordinates, speeds, their derivatives nor
-    declared inputs, ordered by name."""
+    declared inputs, ordered by name; named are the symbols that name the
+    auxiliary forces (the reactions).
+
+    When none is found (every force along the auxiliary directions is a
+    declared input or constant), there is nothing to solve for: F = -I,
+    reactions = [], g = the auxiliary equations, named = the auxiliary
+    speeds, so that the auxiliary forces are the values of the auxiliary
+    equations (Kane's Fr + Fr*) at the declared inputs."""
     eqs = sm.Matrix(km.auxiliary_eqs).xreplace(zero[0]).xreplace(zero[1])
     na = len(uaux)
     if eqs.shape[0] != na:
@@ -1183,6 +1199,13 @@ def _kane_auxiliary(km, q, u, uaux, inputs, reactions, t, zero):
                 f"reactions must be distinct symbols or functions of time that are not "
                 f"coordinates, speeds or inputs; got {[_sym_name(r_) for r_ in reactions]}")
     names = [_sym_name(r_) for r_ in reactions]
+    if not reactions and where.startswith("found"):
+        # no unknown force: every force along the auxiliary directions is a
+        # declared input (or constant). The model is well posed; what the
+        # auxiliary equations give is the generalized force each auxiliary
+        # direction needs, their value at the declared inputs: F = -I makes
+        # the runtime's solve of F w + g = 0 return w = g exactly
+        return -sm.eye(na), [], eqs, list(uaux)
     if len(reactions) != na:
         raise ModelError(
             f"{na} auxiliary speed(s) {[_sym_name(s) for s in uaux]} but {len(reactions)} "
@@ -1197,7 +1220,7 @@ def _kane_auxiliary(km, q, u, uaux, inputs, reactions, t, zero):
         raise ModelError(f"the auxiliary equations are not linear in the reaction force(s) "
                          f"{', '.join(nonlin)}")
     g = eqs.xreplace({r_: 0 for r_ in reactions})
-    return F, reactions, g
+    return F, reactions, g, reactions
 
 
 
@@ -1239,7 +1262,7 @@ def _eliminate_reactions(M, f, aux, udots, coords):
     aux_F must be free of the state, inputs and time (a reaction applied
     along its auxiliary direction, the usual case), so that its inverse
     cannot divide by zero at some configuration; it is refused otherwise."""
-    F, reactions, g = aux
+    F, reactions, g = aux[:3]
     names = [_sym_name(r_) for r_ in reactions]
     inM = [n for r_, n in zip(reactions, names) if M.has(r_)]
     if inM:

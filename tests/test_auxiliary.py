@@ -382,9 +382,13 @@ def test_singular_reaction_matrix_is_reported():
                         u_auxiliary=[ua1, ua2])
     km.kanes_equations([me.Particle('p', P, 1)], [(P, R1 * N.y + R2 * N.y)])
     sim = gen.compile(gen.Model.from_kanes(km, name="sing"))
-    with pytest.raises(gen.SingularError if hasattr(gen, "SingularError") else Exception,
-                       match="ERR_SINGULAR"):
+    with pytest.raises(gen.SingularError,
+                       match=r"not determined at this state.*\(the reactions R1, R2\) "
+                             r"\[ERR_SINGULAR_REACTIONS\]") as e:
         sim.auxiliary_forces(0.0, [0.1, 0.2])
+    assert e.value.status == -14 and e.value.status_name == "ERR_SINGULAR_REACTIONS"
+    # the motion itself is regular there
+    np.testing.assert_allclose(sim.rhs(0.0, [0.1, 0.2]), [0.2, 0.0], atol=1e-15)
 
 
 @pytest.mark.slow
@@ -487,3 +491,180 @@ def test_verify_checks_the_auxiliary_forces():
                         linearize_samples=1)
     assert report.ok, report.table()
     assert "eval_auxiliary_forces" in report.table()
+
+
+# ------------------------------------------- issue 33: no unknown reaction
+# Every force along the auxiliary directions declared an input: nothing to
+# solve for, the model is built all the same, and sim.auxiliary_forces gives
+# the value of each auxiliary equation (Kane's Fr + Fr*) at the inputs given,
+# one per auxiliary speed, named after it.
+def rolling_disc_aux_dep():
+    """sympy's test_kane2.test_aux_dep, its KanesMethod as written there: a
+    rolling disc with a dependent coordinate q3 (configuration constraint),
+    three dependent speeds u3, u4, u5 (velocity constraints) and three
+    auxiliary speeds ua0..ua2 of the contact point P carrying the contact
+    force Fx A.x + Fy A.y + Fz A.z (plain symbols, declared inputs here)."""
+    r, m, g, I, J = sm.symbols('r m g I J')
+    Fx, Fy, Fz = sm.symbols('Fx Fy Fz')
+    q = me.dynamicsymbols('q:4')
+    qd = [qi.diff(t) for qi in q]
+    u = me.dynamicsymbols('u:6')
+    ua = me.dynamicsymbols('ua:3')
+    N = me.ReferenceFrame('N')
+    A = N.orientnew('A', 'Axis', [q[0], N.z])
+    B = A.orientnew('B', 'Axis', [q[1], A.x])
+    C = B.orientnew('C', 'Axis', [q[2], B.y])
+    C.set_ang_vel(N, u[0] * B.x + u[1] * B.y + u[2] * B.z)
+    C.set_ang_acc(N, C.ang_vel_in(N).diff(t, B) + me.cross(B.ang_vel_in(N), C.ang_vel_in(N)))
+    P = me.Point('P')
+    P.set_vel(N, ua[0] * A.x + ua[1] * A.y + ua[2] * A.z)
+    O = P.locatenew('O', q[3] * A.z + r * sm.sin(q[1]) * A.y)
+    O.set_vel(N, u[3] * A.x + u[4] * A.y + u[5] * A.z)
+    O.set_acc(N, O.vel(N).diff(t, A) + me.cross(A.ang_vel_in(N), O.vel(N)))
+    w_c_n_qd = qd[0] * A.z + qd[1] * B.x + qd[2] * B.y
+    v_o_n_qd = O.pos_from(P).diff(t, A) + me.cross(A.ang_vel_in(N), O.pos_from(P))
+    kindiffs = sm.Matrix([me.dot(w_c_n_qd - C.ang_vel_in(N), uv) for uv in B]
+                         + [me.dot(v_o_n_qd - O.vel(N), A.z)])
+    f_c = sm.Matrix([me.dot(-r * B.z, A.z) - q[3]])
+    f_v = sm.Matrix([me.dot(O.vel(N) - (P.vel(N) + me.cross(C.ang_vel_in(N), O.pos_from(P))),
+                            ai).expand() for ai in A])
+    disc = me.RigidBody('disc', O, C, m, (me.inertia(B, I, J, I), O))
+    loads = [(O, m * g * A.z), (P, Fx * A.x + Fy * A.y + Fz * A.z)]
+    km = me.KanesMethod(N, q_ind=q[:3], u_ind=u[:3], kd_eqs=kindiffs, q_dependent=q[3:],
+                        configuration_constraints=f_c, u_dependent=u[3:],
+                        velocity_constraints=f_v, u_auxiliary=ua)
+    km.kanes_equations([disc], loads)
+    return km, {r: 0.3, m: 1.2, g: 9.81, I: 0.027, J: 0.054}, [Fx, Fy, Fz]
+
+
+def sympy_auxiliary_values(km, consts, X, inputs, r_vals):
+    """sympy's own auxiliary equations at the states X with the inputs
+    given: u' from numpy.linalg.solve of mass_matrix_full / forcing_full,
+    then km.auxiliary_eqs evaluated (the auxiliary speeds and their
+    derivatives zero)."""
+    q, u = list(km.q), list(km.u)
+    ud = [s.diff(t) for s in u]
+    uaux = list(km._uaux)
+    zero = {s.diff(t): 0 for s in uaux}
+    zero.update({s: 0 for s in uaux})
+    args = q + u + list(inputs)
+    Mf = sm.lambdify(args, km.mass_matrix_full.xreplace(zero).xreplace(consts))
+    ff = sm.lambdify(args, km.forcing_full.xreplace(zero).xreplace(consts))
+    fa = sm.lambdify(q + u + ud + list(inputs),
+                     km.auxiliary_eqs.xreplace(zero).xreplace(consts))
+    out = []
+    for x in X:
+        xd = np.linalg.solve(np.array(Mf(*x, *r_vals), dtype=float),
+                             np.array(ff(*x, *r_vals), dtype=float).ravel())
+        out.append(np.array(fa(*x, *xd[len(q):], *r_vals), dtype=float).ravel())
+    return np.array(out)
+
+
+def test_sympy_test_aux_with_declared_forces():
+    # sympy's test_aux (KM2): f1, f2 along u4, u5 declared inputs
+    km, consts, (f1, f2) = rolling_disc(normal=False)
+    model = gen.Model.from_kanes(km, constants=consts, inputs=[f1, f2], name="disc_in")
+    assert model.na == 2 and model.auxiliary_labels == ["u4", "u5"]
+    sim = gen.compile(model)
+    assert sim.auxiliary_names == ["u4", "u5"] and sim.nr == 2
+    X = random_states(20, sim.nx, 33)
+    R = np.random.default_rng(33).uniform(-3, 3, (20, 2))
+    got = np.array([sim.auxiliary_forces(0.0, x, r=r) for x, r in zip(X, R)])
+    ref = np.array([sympy_auxiliary_values(km, consts, [x], [f1, f2], r)[0]
+                    for x, r in zip(X, R)])
+    assert rel_err(got, ref) < 1e-12, rel_err(got, ref)
+    # the force along u4 enters Fr + Fr* as f1 itself: its derivative is one
+    x, r = X[0], R[0]
+    d = sim.auxiliary_forces(0.0, x, r=r + [1.0, 0.0]) - sim.auxiliary_forces(0.0, x, r=r)
+    np.testing.assert_allclose(d, [1.0, 0.0], atol=1e-12)
+    # where the declared forces are the reactions (from the reaction model),
+    # the auxiliary equations hold: zero
+    react = gen.compile(gen.Model.from_kanes(km, constants=consts, name="disc_aux"))
+    w = react.auxiliary_forces(0.0, x)
+    assert np.max(np.abs(sim.auxiliary_forces(0.0, x, r=w))) < 1e-12 * max(1.0, np.max(np.abs(w)))
+
+
+def test_sympy_test_aux_dep_with_declared_forces():
+    # sympy's test_kane2.test_aux_dep: dependent coordinate and speeds, three
+    # auxiliary speeds, the contact force symbols declared inputs
+    km, consts, forces = rolling_disc_aux_dep()
+    model = gen.Model.from_kanes(km, constants=consts, inputs=forces, name="auxdep")
+    assert model.mc == 1 and model.mv == 3 and model.na == 3
+    assert model.auxiliary_labels == ["ua0", "ua1", "ua2"]
+    sim = gen.compile(model)
+    rng = np.random.default_rng(5)
+    worst, n = 0.0, 0
+    for x in random_states(8, sim.nx, 8):
+        x = sim.consistent_state(x)
+        r = rng.uniform(-3, 3, 3)
+        ref = sympy_auxiliary_values(km, consts, [x], forces, r)[0]
+        got = sim.auxiliary_forces(0.0, x, r=r)
+        assert np.max(np.abs(ref)) > 0.1
+        worst = max(worst, rel_err(got, ref))
+        n += 1
+    assert n == 8 and worst < 1e-12, worst
+
+
+def test_sympy_box_on_ground_with_normal_force_declared():
+    # sympy's test_box_on_ground with N among the inputs: the motion is
+    # u' = (F - mu N)/m and the auxiliary equation N - m g (sympy's aux_eqs)
+    system, consts, F, Nf = box_on_ground(friction=True)
+    model = gen.Model.from_kanes(system, constants=consts, inputs=[F, Nf], name="box_in")
+    assert model.na == 1 and model.auxiliary_labels == ["ua"]
+    sim = gen.compile(model)
+    m, g, mu = 1.7, 9.81, 0.3
+    rng = np.random.default_rng(9)
+    for x in random_states(10, 2, 9):
+        r = rng.uniform(0, 30, 2)
+        assert abs(sim.rhs(0.0, x, r=r)[1] - (r[0] - mu * r[1]) / m) < 1e-14 * 30
+        fa = sim.auxiliary_forces(0.0, x, r=r)
+        assert abs(fa[0] - (r[1] - m * g)) < 1e-14 * 30
+        ref = sympy_auxiliary_values(system.eom_method, consts, [x], [F, Nf], r)[0]
+        assert rel_err(fa, ref) < 1e-12
+    # with N = m g the auxiliary equation holds and the block slides at F/m - mu g
+    r = [5.0, m * g]
+    assert abs(sim.auxiliary_forces(0.0, [0.0, 1.0], r=r)[0]) < 1e-14
+    assert abs(sim.rhs(0.0, [0.0, 1.0], r=r)[1] - (5.0 / m - mu * g)) < 1e-14
+
+
+def test_partly_declared_forces_are_still_refused():
+    # f1 declared, f2 not: one unknown force for two auxiliary speeds is
+    # ambiguous, refused with the names
+    km, consts, (f1, f2) = rolling_disc(normal=False)
+    with pytest.raises(ModelError, match=r"2 auxiliary speed\(s\).*1 reaction.*\['f2'\]"):
+        gen.Model.from_kanes(km, constants=consts, inputs=[f1], name="disc_half")
+
+
+@pytest.mark.slow
+@pytest.mark.eigen
+def test_eigen_backend_with_declared_forces_matches_c():
+    from conftest import require_eigen
+    require_eigen()
+    km, consts, (f1, f2) = rolling_disc(normal=False)
+    model = gen.Model.from_kanes(km, constants=consts, inputs=[f1, f2], name="disc_in")
+    c, e = gen.compile(model), gen.compile(model, backend="eigen")
+    assert e.auxiliary_names == ["u4", "u5"]
+    X = random_states(10, 6, 12)
+    R = np.random.default_rng(12).uniform(-3, 3, (10, 2))
+    got = np.array([e.auxiliary_forces(0.0, x, r=r) for x, r in zip(X, R)])
+    ref = np.array([sympy_auxiliary_values(km, consts, [x], [f1, f2], r)[0] for x, r in zip(X, R)])
+    assert rel_err(got, ref) < 1e-12
+    assert rel_err(got, [c.auxiliary_forces(0.0, x, r=r) for x, r in zip(X, R)]) < 1e-13
+
+
+@pytest.mark.slow
+@pytest.mark.eigen
+def test_eigen_backend_reports_singular_reactions():
+    from conftest import require_eigen
+    require_eigen()
+    th, w, ua1, ua2, R1, R2 = me.dynamicsymbols('theta omega ua1 ua2 R1 R2')
+    N = me.ReferenceFrame('N')
+    P = me.Point('P')
+    P.set_vel(N, w * N.x + ua1 * N.y + ua2 * N.y)
+    km = me.KanesMethod(N, q_ind=[th], u_ind=[w], kd_eqs=[th.diff(t) - w],
+                        u_auxiliary=[ua1, ua2])
+    km.kanes_equations([me.Particle('p', P, 1)], [(P, R1 * N.y + R2 * N.y)])
+    sim = gen.compile(gen.Model.from_kanes(km, name="sing"), backend="eigen")
+    with pytest.raises(gen.SingularError, match=r"\(the reactions R1, R2\) "
+                                                r"\[ERR_SINGULAR_REACTIONS\]"):
+        sim.auxiliary_forces(0.0, [0.1, 0.2])

@@ -164,3 +164,41 @@ def test_pydy_switch_example():
     assert rel_err(X, Y) < 1e-7
     diff = pydy_switch.main([])
     assert diff < 1e-7
+
+
+# ------------------------------------------------ the friction block
+def test_friction_block_example_and_its_csv(tmp_path):
+    """examples/friction_block.py (issue 33): sympy's box on ground with
+    friction -mu N; the block slides at u' = F/m - mu g (analytic) with the
+    normal force N = m g, in the script and in `eomgen simulate --csv`'s N
+    column (the CLI in its own process, as a user runs it)."""
+    import sys
+    from pathlib import Path
+
+    import friction_block
+    m, g, mu = (friction_block.DEFAULTS[k] for k in ("m", "g", "mu"))
+    accel, N = friction_block.main(["--force", "8", "--t-end", "0.5"])
+    assert abs(accel - (8.0 / m - mu * g)) < 1e-12 * g
+    assert np.max(np.abs(N - m * g)) < 1e-12 * m * g
+    sim = gen.compile(friction_block.model())
+    assert sim.auxiliary_names == ["N"] and sim.input_names == ["F"]
+    for F in (0.0, 3.0, 20.0):
+        x = np.array([0.3, 0.7])
+        assert abs(sim.rhs(0.0, x, r=[F])[1] - (F / m - mu * g)) < 1e-12 * g
+    root = Path(__file__).resolve().parent.parent
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(root) + os.pathsep + env.get("PYTHONPATH", "")
+    out = tmp_path / "block.csv"
+    proc = subprocess.run([sys.executable, "-m", "gen", "simulate",
+                           str(root / "examples" / "friction_block.py"), "--t-end", "0.2",
+                           "--dt", "0.01", "--x0", "u=0.5", "--input", "F=4", "--csv", str(out)],
+                          capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stderr
+    lines = out.read_text().splitlines()
+    header = lines[0].split(",")
+    assert header == ["t", "q", "u", "N"]
+    data = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+    assert data.shape == (21, 4)
+    assert np.max(np.abs(data[:, 3] - m * g)) < 1e-12 * m * g
+    # u(t) = 0.5 + (F/m - mu g) t
+    assert np.max(np.abs(data[:, 2] - (0.5 + (4.0 / m - mu * g) * data[:, 0]))) < 1e-12

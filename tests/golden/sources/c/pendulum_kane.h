@@ -42,7 +42,8 @@ typedef double pendulum_kane_real;
 #define PENDULUM_KANE_ERR_DIVERGED (-11) /* the state diverged: it grew beyond the range of the scalar type (overflow) during integration */
 #define PENDULUM_KANE_ERR_CONTROLLER (-12) /* the controller callback returned an error */
 #define PENDULUM_KANE_ERR_CANCELLED (-13) /* cancelled: the caller set the cancellation flag of the options (sim_options.cancel) */
-#define PENDULUM_KANE_STATUS_MIN (-13) /* the most negative code */
+#define PENDULUM_KANE_ERR_SINGULAR_REACTIONS (-14) /* the reaction forces of the auxiliary speeds are not determined at this state: the matrix of their auxiliary equations is singular */
+#define PENDULUM_KANE_STATUS_MIN (-14) /* the most negative code */
 
 /* Integration methods for pendulum_kane_sim_options.method */
 #define PENDULUM_KANE_METHOD_RK4 0
@@ -171,7 +172,7 @@ int pendulum_kane_eval_energy(const pendulum_kane_real *q, const pendulum_kane_r
 /* State derivative x' (NX) and, if lam != NULL, the multipliers (MV). */
 int pendulum_kane_eval_rhs(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *dxdt, pendulum_kane_real *lam);
 
-/* Reaction forces along the auxiliary speeds (Kane's u_auxiliary), NA: u' from the right-hand side, then F_aux reactions = -g_aux (GEN_RT_ERR_SINGULAR when F_aux is); NA == 0: nothing written. */
+/* Reaction forces along the auxiliary speeds (Kane's u_auxiliary), NA: u' from the right-hand side, then F_aux reactions = -g_aux (GEN_RT_ERR_SINGULAR_REACTIONS when F_aux is singular); with no unknown force along them (all declared inputs) the values of the auxiliary equations at the inputs given; NA == 0: nothing written. */
 int pendulum_kane_eval_auxiliary_forces(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *F);
 
 /* Project x onto f_c = 0 (Gauss-Newton, minimum norm) and the velocity constraints; x unchanged on failure. */

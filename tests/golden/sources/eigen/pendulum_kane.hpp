@@ -65,6 +65,7 @@ inline constexpr Status ERR_SINGULAR_KINEMATICS = PENDULUM_KANE_ERR_SINGULAR_KIN
 inline constexpr Status ERR_DIVERGED = PENDULUM_KANE_ERR_DIVERGED;
 inline constexpr Status ERR_CONTROLLER = PENDULUM_KANE_ERR_CONTROLLER;
 inline constexpr Status ERR_CANCELLED = PENDULUM_KANE_ERR_CANCELLED;
+inline constexpr Status ERR_SINGULAR_REACTIONS = PENDULUM_KANE_ERR_SINGULAR_REACTIONS;
 inline const char *status_message(int status) noexcept { return pendulum_kane_status_message(status); }
 
 using Method = int;
@@ -359,8 +360,10 @@ inline int eval_rhs(detail::Real<S> t, const State<S> &x, const Inputs<S> &r, co
 }
 
 /* Reaction forces along the auxiliary speeds (Kane's u_auxiliary), NA: u' from
- * the right-hand side, then F_aux reactions = -g_aux (ERR_SINGULAR when F_aux
- * is); NA == 0: nothing written. */
+ * the right-hand side, then F_aux reactions = -g_aux (ERR_SINGULAR_REACTIONS
+ * when F_aux is singular); with no unknown force along them (all declared
+ * inputs) the values of the auxiliary equations at the inputs given; NA == 0:
+ * nothing written. */
 template <typename S>
 inline int eval_auxiliary_forces(detail::Real<S> t, const State<S> &x, const Inputs<S> &r, const Params<S> &p, AuxiliaryForces<S> &F) noexcept
 {
