@@ -1,0 +1,229 @@
+"""gen.casadi: the model as CasADi external functions (issue 36).
+
+Every function's value equals the Simulator's (the same C, called through
+CasADi's calling convention) to 1e-14; casadi.jacobian of each (jac_<f>),
+its forward and reverse derivatives (fwd1_/adj1_) equal this project's
+Jacobians (sim.jac, sim.jacobian, sim.step_sensitivity,
+sim.linearize_outputs) to 1e-12 and CasADi's own central finite
+differences to 1e-6; map over threads gives the same bits; bad use fails.
+"""
+import os
+
+import numpy as np
+import pytest
+
+import gen
+
+try:
+    import casadi as ca
+except ImportError:  # pragma: no cover - the CI installs it (the test extra)
+    ca = None
+
+if ca is None:
+    if os.environ.get("CI") == "true":
+        pytest.fail("casadi is required under CI=true (pip install eomgen[casadi])",
+                    pytrace=False)
+    pytestmark = pytest.mark.skip(reason="casadi not installed (pip install eomgen[casadi])")
+
+import gen.casadi as gc  # noqa: E402  (importable without casadi)
+
+
+@pytest.fixture(scope="module")
+def cart_model():
+    import cart_pole
+    return cart_pole.model()
+
+
+@pytest.fixture(scope="module")
+def cart_sim(cart_model):
+    return gen.compile(cart_model)
+
+
+def _case(request, which):
+    """(model, sim, F, x, r, p) of one model at a state away from zero."""
+    model = request.getfixturevalue(f"{which}_model")
+    sim = request.getfixturevalue(f"{which}_sim")
+    F = gc.functions(model)
+    rng = np.random.default_rng(36)
+    p = np.array(model.p_values, float) * 1.1      # not the defaults
+    x = rng.uniform(-0.6, 0.6, model.nx)
+    if model.mc or model.mv:
+        x = sim.consistent_state(np.array([0.5, 0.8, 0.1, 0.1]) if model.nx == 4 else x, p=p)
+    r = rng.uniform(-1, 1, model.nr)
+    return model, sim, F, x, r, p
+
+
+MODELS = ["kane", "lagrange", "cart"]
+
+
+def _v(a):
+    return np.asarray(ca.DM(a).full(), float).ravel()
+
+
+@pytest.mark.parametrize("which", MODELS)
+def test_values_equal_the_simulator(request, which):
+    model, sim, F, x, r, p = _case(request, which)
+    t, h = 0.3, 0.01
+    names = ["rhs", "implicit", "step"] + (["outputs"] if model.output_names else []) \
+        + (["constraints"] if model.mc + model.mv else [])
+    assert sorted(F) == sorted(names)
+    xdot = sim.rhs(t, x, r=r, p=p)
+    np.testing.assert_allclose(_v(F["rhs"](x, r, p, t)), xdot, rtol=0, atol=1e-14)
+    # implicit: xdot - rhs, then the constraint residuals
+    xd = np.linspace(-1, 1, model.nx)
+    res = xd - xdot
+    if model.mc:
+        res = np.r_[res, sim.constraints(x[:model.nq], p=p, t=t)]
+    if model.mv:
+        res = np.r_[res, sim.velocity_constraints(x[:model.nq], x[model.nq:], p=p, t=t)]
+    np.testing.assert_allclose(_v(F["implicit"](x, xd, r, p, t)), res, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(_v(F["step"](x, r, p, t, h)), sim.step(t, x, h, r=r, p=p),
+                               rtol=0, atol=1e-14)
+    if model.output_names:
+        np.testing.assert_allclose(_v(F["outputs"](x, r, p, t)), sim.outputs(t, x, r=r, p=p),
+                                   rtol=0, atol=1e-14)
+    if model.mc + model.mv:
+        np.testing.assert_allclose(_v(F["constraints"](x, p, t)), res[model.nx:],
+                                   rtol=0, atol=1e-14)
+        assert np.abs(res[model.nx:]).max() < 1e-10       # a consistent state
+
+
+def _jacobians(F, name, x, r, p, t, extra):
+    """casadi.jacobian of F[name] w.r.t. x and r (and their forward and
+    reverse products) as numpy arrays."""
+    X = ca.MX.sym("X", x.size)
+    R = ca.MX.sym("R", r.size)
+    args = {"x": X, "r": R, "p": p, "t": t, **extra}
+    (out,) = F[name].call(args).values()
+    n = out.size1()
+    v, w = np.linspace(0.5, 1.5, x.size), np.linspace(-1, 1, n)
+    G = ca.Function("G", [X, R], [ca.jacobian(out, X), ca.jacobian(out, R),
+                                  ca.jtimes(out, X, v), ca.jtimes(out, X, w, True)])
+    return [np.array(a.full()) for a in G(x, r)], v, w
+
+
+def _check(J, ref_x, ref_r, v, w):
+    Jx, Jr, fwd, adj = J
+    np.testing.assert_allclose(Jx, ref_x, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(Jr, ref_r, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(fwd.ravel(), ref_x @ v, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(adj.ravel(), ref_x.T @ w, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("which", MODELS)
+def test_rhs_jacobian_equals_sim_jac(request, which):
+    model, sim, F, x, r, p = _case(request, which)
+    J, v, w = _jacobians(F, "rhs", x, r, p, 0.3, {})
+    Jx, Jr = sim.jacobian(0.3, x, r=r, p=p)
+    np.testing.assert_array_equal(sim.jac(0.3, x, r=r, p=p), Jx)
+    _check(J, Jx, Jr, v, w)
+
+
+def test_cart_jacobians(cart_model, cart_sim):
+    """implicit, step and outputs of the (unconstrained) cart-pole."""
+    model, sim = cart_model, cart_sim
+    F = gc.functions(model)
+    x, r, p, t, h = np.array([0.1, 0.5, 0.2, -0.3]), np.array([0.7]), \
+        np.array(model.p_values, float), 0.3, 0.02
+    Jx, Jr = sim.jacobian(t, x, r=r, p=p)
+    J, v, w = _jacobians(F, "implicit", x, r, p, t, {"xdot": np.ones(4)})
+    _check(J, -Jx, -Jr, v, w)
+    J, v, w = _jacobians(F, "step", x, r, p, t, {"h": h})
+    _, Fx, Fr = sim.step_sensitivity(t, x, h, r=r, p=p)
+    _check(J, Fx, Fr, v, w)
+    A, B = sim.linearize(x, r=r, p=p, t=t)
+    np.testing.assert_allclose(Fx, np.eye(4) + h * A, atol=h * h * 50)    # the same A, to O(h^2)
+    J, v, w = _jacobians(F, "outputs", x, r, p, t, {})
+    _, _, C, D = sim.linearize_outputs(x, r=r, p=p, t=t)
+    _check(J, C, D, v, w)
+
+
+@pytest.mark.parametrize("name", ["rhs", "implicit", "step", "outputs"])
+def test_derivatives_against_casadi_finite_differences(cart_model, name):
+    """jac_/fwd1_/adj1_ against the same external function with CasADi's own
+    central differences (enable_fd, its derivative functions disabled):
+    the FD forward derivative, one seed per column of x and r."""
+    path = str(gc.library(cart_model))
+    sym = f"{cart_model.name}_{name}"
+    exact = ca.external(sym, path)
+    fd = ca.external(sym, path, {"enable_fd": True, "enable_jacobian": False,
+                                 "enable_forward": False, "enable_reverse": False,
+                                 "fd_method": "central"})
+    x, r, p = np.array([0.1, 0.5, 0.2, -0.3]), np.array([0.7]), np.array(cart_model.p_values)
+    extra = {"step": {"h": 0.02}, "implicit": {"xdot": np.ones(4)}}.get(name, {})
+    (Jx, Jr, fwd, adj), v, w = _jacobians({name: exact}, name, x, r, p, 0.3, extra)
+    f1 = fd.forward(1)
+    args = {"x": x, "r": r, "p": p, "t": 0.3, **extra}
+    nom = fd.call(args)
+    base = {**args, **{f"out_{k}": val for k, val in nom.items()},
+            **{f"fwd_{k}": 0 * ca.DM(val) for k, val in args.items()}}
+
+    def column(which, seed):
+        (d,) = f1.call({**base, f"fwd_{which}": seed}).values()
+        return np.array(d.full()).ravel()
+    fd_x = np.column_stack([column("x", e) for e in np.eye(4)])
+    fd_r = np.column_stack([column("r", [1.0])])
+    for a, b in [(Jx, fd_x), (Jr, fd_r), (fwd.ravel(), fd_x @ v), (adj.ravel(), fd_x.T @ w)]:
+        np.testing.assert_allclose(a, b, rtol=1e-6, atol=1e-7)
+    assert np.abs(Jx).max() > 0.5                   # not a trivial Jacobian
+
+
+def test_map_threads_same_bits(cart_model):
+    F = gc.functions(cart_model)
+    rng = np.random.default_rng(1)
+    X = rng.uniform(-1, 1, (4, 100))
+    R = rng.uniform(-1, 1, (1, 100))
+    p = np.array(cart_model.p_values)
+    for name, extra in [("rhs", []), ("step", [0.01])]:
+        M = F[name].map(100, "thread", 2)
+        got = np.array(M(X, R, p, 0.2, *extra).full())
+        one = np.column_stack([np.array(F[name](X[:, k], R[:, k], p, 0.2, *extra).full()).ravel()
+                               for k in range(100)])
+        assert got.tobytes() == one.tobytes()
+    # and the Jacobian through the map
+    Xs = ca.MX.sym("X", 4, 100)
+    Jm = ca.Function("Jm", [Xs], [ca.jacobian(F["rhs"].map(100, "thread", 2)(Xs, R, p, 0.2), Xs)])
+    Jd = np.array(ca.densify(Jm(X)).full())
+    sim = gen.compile(cart_model)
+    for k in (0, 57, 99):
+        blk = Jd[4 * k:4 * k + 4, 4 * k:4 * k + 4]
+        np.testing.assert_allclose(blk, sim.jac(0.2, X[:, k], r=R[:, k], p=p), rtol=0, atol=1e-12)
+
+
+def test_bad_use(cart_model, kane_model, monkeypatch):
+    F = gc.functions(cart_model)
+    x, p = np.array([0.1, 0.5, 0.2, -0.3]), np.array(cart_model.p_values)
+    # the model has an input: a call without r fails (r's default is NaN), never zeros
+    with pytest.raises(RuntimeError, match="cart_pole_rhs"):
+        F["rhs"](x=x, p=p, t=0)
+    with pytest.raises(RuntimeError, match="cart_pole_step"):
+        F["step"](x=x, r=0.3, p=p, t=0)            # no h
+    # wrong sizes: CasADi names the input
+    with pytest.raises(RuntimeError, match=r"Input 0 \(x\) has mismatching shape"):
+        F["rhs"](np.ones(3), 0.7, p, 0)
+    with pytest.raises(RuntimeError, match=r"Input 2 \(p\) has mismatching shape"):
+        F["rhs"](x, 0.7, p[:2], 0)
+    # no derivative w.r.t. the constants: an error, never a silent zero
+    P = ca.MX.sym("P", p.size)
+    Jp = ca.Function("Jp", [P], [ca.jacobian(F["rhs"](x, 0.7, P, 0), P)])
+    with pytest.raises(RuntimeError):
+        Jp(p)
+    # constrained model: no Jacobian for step (it would need the projection's)
+    Fk = gc.functions(kane_model)
+    Xk = ca.MX.sym("X", 4)
+    with pytest.raises(RuntimeError):
+        ca.Function("J", [Xk], [ca.jacobian(Fk["step"](Xk, [], kane_model.p_values, 0, 0.01),
+                                            Xk)])(np.ones(4))
+    with pytest.raises(gen.ModelError, match="gen.casadi"):
+        gc.functions("not a model")
+    # without casadi: MissingDependencyError naming the extra
+    import importlib
+    real = importlib.import_module
+
+    def no_casadi(name, *a, **k):
+        if name == "casadi":
+            raise ImportError("No module named 'casadi'")
+        return real(name, *a, **k)
+    monkeypatch.setattr(importlib, "import_module", no_casadi)
+    with pytest.raises(gen.MissingDependencyError, match=r"eomgen\[casadi\]"):
+        gc.functions(cart_model)
