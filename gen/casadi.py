@@ -82,7 +82,7 @@ def function_specs(model):
     m = model
     p = m.name
     nx, nr, np_, mc, mv, ny = m.nx, m.nr, m.np, m.mc, m.mv, len(m.output_names)
-    nan = "(0.0 / 0.0)"
+    nan = "NAN"
     # defaults: r, p, h are NaN when missing (the call fails), t is 0
     x_, r_, p_, t_ = ("x", nx, 0), ("r", nr, nan if nr else 0), ("p", np_, nan if np_ else 0), \
         ("t", 1, 0)

@@ -227,3 +227,18 @@ def test_bad_use(cart_model, kane_model, monkeypatch):
     monkeypatch.setattr(importlib, "import_module", no_casadi)
     with pytest.raises(gen.MissingDependencyError, match=r"eomgen\[casadi\]"):
         gc.functions(cart_model)
+
+
+@pytest.mark.parametrize("which", ["kane", "cart"])
+def test_wrappers_compile_strict(request, which):
+    """The generated <name>_casadi.c is clean under the project's strict
+    flags (-std=c99 -Wall -Wextra -Werror -pedantic)."""
+    import subprocess
+    from gen.backends import STRICT_FLAGS, c_compiler
+    model = request.getfixturevalue(f"{which}_model")
+    src = gc.library(model).parent / "src"
+    fname = f"{model.name}_casadi.c"
+    assert (src / fname).is_file()
+    proc = subprocess.run([c_compiler(), *STRICT_FLAGS, "-I", ".", "-c", fname, "-o", os.devnull],
+                          cwd=src, capture_output=True, text=True)
+    assert proc.returncode == 0 and not proc.stderr.strip(), proc.stderr
