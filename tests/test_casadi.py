@@ -242,3 +242,69 @@ def test_wrappers_compile_strict(request, which):
     proc = subprocess.run([c_compiler(), *STRICT_FLAGS, "-I", ".", "-c", fname, "-o", os.devnull],
                           cwd=src, capture_output=True, text=True)
     assert proc.returncode == 0 and not proc.stderr.strip(), proc.stderr
+
+
+def _cart_rhs_sx(x, u, p):
+    """The cart-pole's x' written by hand in CasADi symbols (Lagrange's
+    equations of examples/cart_pole.py: a uniform pole of half-length l,
+    theta from the upward vertical, positive to the left)."""
+    mc, mp, l, g = p[0], p[1], p[2], p[3]
+    th, v, w = x[1], x[2], x[3]
+    inertia = mp * (2 * l) ** 2 / 12
+    m11, m12, m22 = mc + mp, -mp * l * ca.cos(th), mp * l ** 2 + inertia
+    f1 = u - mp * l * ca.sin(th) * w ** 2
+    f2 = mp * g * l * ca.sin(th)
+    det = m11 * m22 - m12 * m12
+    return ca.vertcat(v, w, (m22 * f1 - m12 * f2) / det, (m11 * f2 - m12 * f1) / det)
+
+
+def _swing_up(step_all, N, h):
+    """Minimum-effort swing-up of the cart-pole from hanging to upright in
+    N h seconds, by multiple shooting in casadi.Opti (IPOPT); step_all maps
+    (X[:, :-1], U) to the next states. (objective, U, iterations, seconds)."""
+    import time
+    opti = ca.Opti()
+    X = opti.variable(4, N + 1)
+    U = opti.variable(1, N)
+    opti.minimize(h * ca.sumsqr(U))
+    opti.subject_to(X[:, 1:] == step_all(X[:, :-1], U))
+    opti.subject_to(X[:, 0] == [0, np.pi, 0, 0])
+    opti.subject_to(X[:, N] == [0, 0, 0, 0])
+    opti.subject_to(opti.bounded(-20, U, 20))
+    opti.subject_to(opti.bounded(-1.5, X[0, :], 1.5))
+    opti.set_initial(X[1, :], np.linspace(np.pi, 0, N + 1))
+    # the library has first derivatives only: IPOPT's quasi-Newton Hessian, for both
+    opti.solver("ipopt", {"print_time": False},
+                {"print_level": 0, "sb": "yes", "tol": 1e-10, "max_iter": 500,
+                 "hessian_approximation": "limited-memory"})
+    t0 = time.perf_counter()
+    sol = opti.solve()
+    dt = time.perf_counter() - t0
+    return sol.value(opti.f), np.array(sol.value(U)), sol.stats()["iter_count"], dt
+
+
+def test_opti_swing_up_equals_pure_sx(cart_model, cart_sim):
+    """The swing-up with gen's step (mapped over the 100 intervals) has the
+    optimum of the same problem in pure CasADi SX (the same RK4 by hand)."""
+    N, h = 100, 0.02
+    p = np.array(cart_model.p_values, float)
+    # the hand-written reference is the model
+    Xs, Us, Hs = ca.SX.sym("x", 4), ca.SX.sym("u"), ca.SX.sym("h")
+    f_sx = ca.Function("f", [Xs, Us], [_cart_rhs_sx(Xs, Us, p)])
+    for x in ([0.1, 0.5, 0.2, -0.3], [0, np.pi, 1, 2]):
+        np.testing.assert_allclose(_v(f_sx(x, 0.7)), cart_sim.rhs(0, np.array(x), r=[0.7]),
+                                   rtol=1e-14, atol=1e-14)
+    k1 = _cart_rhs_sx(Xs, Us, p)
+    k2 = _cart_rhs_sx(Xs + Hs / 2 * k1, Us, p)
+    k3 = _cart_rhs_sx(Xs + Hs / 2 * k2, Us, p)
+    k4 = _cart_rhs_sx(Xs + Hs * k3, Us, p)
+    step_sx = ca.Function("step_sx", [Xs, Us, Hs], [Xs + Hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)])
+    step = gc.functions(cart_model)["step"].map(N)
+    tk = (np.arange(N) * h).reshape(1, -1)
+    ours = _swing_up(lambda X, U: step(X, U, p, tk, h), N, h)
+    ref = _swing_up(lambda X, U: step_sx.map(N)(X, U, h), N, h)
+    assert ours[0] > 10                                       # a real swing-up, not U = 0
+    assert abs(ours[0] - ref[0]) <= 1e-6 * ref[0]
+    np.testing.assert_allclose(ours[1], ref[1], rtol=0, atol=1e-6)
+    print(f"swing-up: {ours[2]} iterations, {1e3 * ours[3] / ours[2]:.1f} ms/iteration; "
+          f"pure SX {ref[2]}, {1e3 * ref[3] / ref[2]:.1f} ms/iteration")
