@@ -39,6 +39,17 @@ def cart_sim(cart_model):
     return gen.compile(cart_model)
 
 
+@pytest.fixture(scope="module")
+def bicycle_model():
+    import bicycle
+    return bicycle.model()
+
+
+@pytest.fixture(scope="module")
+def bicycle_sim(bicycle_model):
+    return gen.compile(bicycle_model)
+
+
 def _case(request, which):
     """(model, sim, F, x, r, p) of one model at a state away from zero."""
     model = request.getfixturevalue(f"{which}_model")
@@ -47,13 +58,22 @@ def _case(request, which):
     rng = np.random.default_rng(36)
     p = np.array(model.p_values, float) * 1.1      # not the defaults
     x = rng.uniform(-0.6, 0.6, model.nx)
-    if model.mc or model.mv:
-        x = sim.consistent_state(np.array([0.5, 0.8, 0.1, 0.1]) if model.nx == 4 else x, p=p)
+    if which == "bicycle":
+        import bicycle
+        x = bicycle.upright_state(sim, 4.0, p=p)
+        names = list(sim.state_names)
+        x[names.index("q4")] += 0.1                   # leaning, steering, turning
+        x[names.index("u4")] += 0.3
+        x[names.index("u7")] -= 0.2
+        x = sim.consistent_state(x, p=p)
+    elif model.mc or model.mv:
+        x = sim.consistent_state(np.array([0.5, 0.8, 0.1, 0.1]), p=p)
     r = rng.uniform(-1, 1, model.nr)
     return model, sim, F, x, r, p
 
 
-MODELS = ["kane", "lagrange", "cart"]
+MODELS = ["kane", "lagrange", "cart",
+          pytest.param("bicycle", marks=pytest.mark.slow)]     # 20 s of compiles
 
 
 def _v(a):
