@@ -364,6 +364,7 @@ class FmuBackend(CBackend):
 # The CasADi library's sources: the C backend's model (with its derivative
 # kernels) without the plugin table, and the external-function wrappers
 CASADI_TEMPLATES = [t for t in C_TEMPLATES if t[2] != "project" and t[0] != "{name}_api.c"] + [
+    ("{name}_casadi.h", "casadi/casadi_ext.h.j2", "model"),
     ("{name}_casadi.c", "casadi/casadi_ext.c.j2", "model")]
 
 
