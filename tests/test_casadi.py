@@ -441,3 +441,15 @@ def test_sources_build_standalone(cart_model, tmp_path):
     J = ca.Function("J", [X], [ca.jacobian(step(X, 0.7, p, 0.3, 0.02), X)])
     _, Fx, _ = gen.compile(cart_model).step_sensitivity(0.3, x, 0.02, r=[0.7], p=p)
     np.testing.assert_allclose(np.array(J(x).full()), Fx, rtol=0, atol=1e-12)
+
+
+def test_lazy_import():
+    """gen.casadi is loaded on first use, and casadi only when a library is
+    loaded: `import gen` stays as it was."""
+    import subprocess
+    import sys
+    code = ("import sys, gen; a = 'gen.casadi' in sys.modules; f = gen.casadi.functions; "
+            "print(a, 'casadi' in sys.modules, f.__module__)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env={**os.environ, "PYTHONPATH": str(gc.__file__).rsplit("/gen/", 1)[0]})
+    assert out.stdout.split() == ["False", "False", "gen.casadi"], out.stderr
