@@ -384,7 +384,8 @@ class CasadiBackend(CBackend):
 
     def context(self, model, kernels):
         from .casadi import block_specs, function_specs
-        return {"cs_functions": function_specs(model), "cs_blocks": block_specs(model), "ny": len(model.output_names),
+        return {"cs_functions": function_specs(model), "cs_blocks": block_specs(model),
+                "ny": len(model.output_names),
                 "sz_nx": max(1, model.nx)}
 
     def cache_parts(self):

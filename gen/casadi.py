@@ -41,7 +41,7 @@ from .ir import plan as make_plan
 from .model import require_model
 from .render import render
 
-__all__ = ["functions", "library", "function_specs", "NAMES"]
+__all__ = ["functions", "library", "function_specs", "block_specs", "NAMES"]
 
 #: the functions, in the order of the dict functions() returns
 NAMES = ("rhs", "implicit", "step", "outputs", "constraints")

@@ -366,11 +366,13 @@ def test_sanitizers_every_entry_point(cart_model, tmp_path):
         for i, v in enumerate(ins):
             body.append(f"    static const double in{i}[{max(1, len(v))}] = "
                         f"{{{', '.join(repr(float(a)) for a in v) or '0'}}};")
-        body += [f"    const double *arg[{len(ins)}] = {{{', '.join(f'in{i}' for i in range(len(ins)))}}};",
+        arg_list = ", ".join(f"in{i}" for i in range(len(ins)))
+        body += [f"    const double *arg[{len(ins)}] = {{{arg_list}}};",
                  f"    double *res[{len(outs)}];",
                  "    double *w = malloc(sizeof(double) * (size_t)(nw > 0 ? nw : 1));"]
         for i, n in enumerate(outs):
-            body.append(f"    double *o{i} = malloc(sizeof(double) * {max(1, n)}); res[{i}] = o{i};")
+            body.append(f"    double *o{i} = malloc(sizeof(double) * {max(1, n)});"
+                        f" res[{i}] = o{i};")
         # a Jacobian with only its derivable blocks wanted (the others NULL)
         if mode in ("jac", "adj"):
             nod = next(s for s in specs if s["sym"] == f)["nodiff"]
@@ -394,8 +396,8 @@ def test_sanitizers_every_entry_point(cart_model, tmp_path):
     exe = tmp_path / "harness"
     flags = ["-std=c99", "-g", "-O1", "-fsanitize=address,undefined", "-fno-sanitize-recover=all",
              "-I", str(src)]
-    proc = subprocess.run([cc, *flags, str(tmp_path / "harness.c"), *sources, "-lm", "-o", str(exe)],
-                          capture_output=True, text=True)
+    proc = subprocess.run([cc, *flags, str(tmp_path / "harness.c"), *sources, "-lm",
+                           "-o", str(exe)], capture_output=True, text=True)
     if proc.returncode != 0 and "sanitize" in proc.stderr:
         pytest.skip(f"{cc} has no sanitizer runtime: {proc.stderr[:200]}")
     assert proc.returncode == 0, proc.stderr
