@@ -34,8 +34,9 @@ __all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "Eo
 
 
 def __getattr__(name):
-    # gen.pydy (the PyDy drop-in) is loaded on first use: `import gen` stays as it was
-    if name == "pydy":
+    # gen.pydy (the PyDy drop-in) and gen.casadi (CasADi external functions) are
+    # loaded on first use: `import gen` stays as it was
+    if name in ("pydy", "casadi"):
         import importlib
-        return importlib.import_module(".pydy", __name__)
+        return importlib.import_module(f".{name}", __name__)
     raise AttributeError(f"module 'gen' has no attribute {name!r}")

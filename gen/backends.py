@@ -16,6 +16,7 @@ its name.
     C      "c"      C99 over the C runtime (csrc/): gen.compile, gen.generate
     Eigen  "eigen"  C++17 over Eigen 3.4, an extern "C" layer with the C API
     FMU    "fmu"    the C model with the FMI glue, for gen.export_fmu (gen/fmu.py)
+    CasADi "casadi" the C model with CasADi's external-function wrappers (gen/casadi.py)
 
 A new backend is a subclass here (its templates under templates/<name>/)
 and one line in BACKENDS.
@@ -33,7 +34,7 @@ from .eigen import CXX_RESERVED, eigen_version, find_eigen
 from .errors import BuildError, ModelError
 from .printers import ModelCPrinter
 
-__all__ = ["Backend", "CBackend", "EigenBackend", "FmuBackend", "BACKENDS", "get_backend",
+__all__ = ["Backend", "CBackend", "EigenBackend", "FmuBackend", "CasadiBackend", "BACKENDS", "get_backend",
            "backend_names", "c_compiler", "cxx_compiler", "eigen_include_dir",
            "RUNTIME_SOURCES", "RUNTIME_HEADERS", "RUNTIME_MAIN", "EIGEN_RUNTIME_HEADERS", "C_FLAGS",
            "C_LIN_FLAGS", "RUNTIME_FLAGS", "STRICT_FLAGS", "CXX_FLAGS", "CXX_STRICT_FLAGS",
@@ -353,8 +354,45 @@ class FmuBackend(CBackend):
         return [*sorted(own), *runtime]
 
 
+# The CasADi library's sources: the C backend's model (with its derivative
+# kernels) without the plugin table, and the external-function wrappers
+CASADI_TEMPLATES = [t for t in C_TEMPLATES if t[2] != "project" and t[0] != "{name}_api.c"] + [
+    ("{name}_casadi.h", "casadi/casadi_ext.h.j2", "model"),
+    ("{name}_casadi.c", "casadi/casadi_ext.c.j2", "model")]
+
+
+class CasadiBackend(CBackend):
+    """The C model as CasADi external functions (gen/casadi.py): the C
+    backend's model and runtime and {name}_casadi.c, the functions in
+    CasADi's calling convention over the model's C API; one shared library
+    for casadi.external, always with the derivative kernels."""
+    name = "casadi"
+    templates = tuple(CASADI_TEMPLATES)
+    lazy_derivatives = False
+    loadable = False
+    project = False
+    project_runtime_files = ()
+    stack_limit = False
+    tag = "_casadi"
+
+    def context(self, model, kernels):
+        from .casadi import block_specs, function_specs
+        return {"cs_functions": function_specs(model), "cs_blocks": block_specs(model),
+                "ny": len(model.output_names),
+                "sz_nx": max(1, model.nx)}
+
+    def cache_parts(self):
+        return [*super().cache_parts(), f"backend={self.name}"]
+
+    def units(self, name, files, derivatives, includes=()):
+        cc = c_compiler()
+        own = [(f"{name}_lin.c", C_LIN_FLAGS)] if derivatives else [(f"{name}_lin_stub.c", ())]
+        own += [(f"{name}_kernels.c", ()), (f"{name}.c", ()), (f"{name}_casadi.c", ())]
+        return [(f, cc, [*C_FLAGS, "-fPIC", *extra]) for f, extra in own]
+
+
 #: the registry: every backend, by name
-BACKENDS = {b.name: b for b in (CBackend(), EigenBackend(), FmuBackend())}
+BACKENDS = {b.name: b for b in (CBackend(), EigenBackend(), FmuBackend(), CasadiBackend())}
 
 
 def backend_names(need=None):

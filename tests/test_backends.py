@@ -14,7 +14,7 @@ GEN = Path(gen.__file__).resolve().parent
 
 
 def test_one_object_per_backend_in_one_registry():
-    assert list(BACKENDS) == ["c", "eigen", "fmu"]
+    assert list(BACKENDS) == ["c", "eigen", "fmu", "casadi"]
     assert type(get_backend("c")) is CBackend
     assert type(get_backend("eigen")) is EigenBackend
     assert type(get_backend("fmu")) is FmuBackend
@@ -30,7 +30,7 @@ def test_one_object_per_backend_in_one_registry():
 
 def test_unknown_backend_names_the_known_ones(kane_model, tmp_path):
     with pytest.raises(gen.ModelError, match=r"unknown backend 'cuda': choose one of "
-                                             r"\['c', 'eigen', 'fmu'\]"):
+                                             r"\['c', 'eigen', 'fmu', 'casadi'\]"):
         get_backend("cuda")
     # gen.compile loads a library with a plugin table: the FMU has none
     with pytest.raises(gen.ModelError, match=r"unknown backend 'fmu': choose one of "

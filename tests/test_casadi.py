@@ -1,0 +1,457 @@
+"""gen.casadi: the model as CasADi external functions (issue 36).
+
+Every function's value equals the Simulator's (the same C, called through
+CasADi's calling convention) to 1e-14; casadi.jacobian of each (jac_<f>),
+its forward and reverse derivatives (fwd1_/adj1_) equal this project's
+Jacobians (sim.jac, sim.jacobian, sim.step_sensitivity,
+sim.linearize_outputs) to 1e-12 and CasADi's own central finite
+differences to 1e-6; map over threads gives the same bits; bad use fails.
+"""
+import os
+
+import numpy as np
+import pytest
+
+import gen
+
+try:
+    import casadi as ca
+except ImportError:  # pragma: no cover - the CI installs it (the test extra)
+    ca = None
+
+if ca is None:
+    if os.environ.get("CI") == "true":
+        pytest.fail("casadi is required under CI=true (pip install eomgen[casadi])",
+                    pytrace=False)
+    pytestmark = pytest.mark.skip(reason="casadi not installed (pip install eomgen[casadi])")
+
+import gen.casadi as gc  # noqa: E402  (importable without casadi)
+
+
+@pytest.fixture(scope="module")
+def cart_model():
+    import cart_pole
+    return cart_pole.model()
+
+
+@pytest.fixture(scope="module")
+def cart_sim(cart_model):
+    return gen.compile(cart_model)
+
+
+@pytest.fixture(scope="module")
+def bicycle_model():
+    import bicycle
+    return bicycle.model()
+
+
+@pytest.fixture(scope="module")
+def bicycle_sim(bicycle_model):
+    return gen.compile(bicycle_model)
+
+
+def _case(request, which):
+    """(model, sim, F, x, r, p) of one model at a state away from zero."""
+    model = request.getfixturevalue(f"{which}_model")
+    sim = request.getfixturevalue(f"{which}_sim")
+    F = gc.functions(model)
+    rng = np.random.default_rng(36)
+    p = np.array(model.p_values, float) * 1.1      # not the defaults
+    x = rng.uniform(-0.6, 0.6, model.nx)
+    if which == "bicycle":
+        import bicycle
+        x = bicycle.upright_state(sim, 4.0, p=p)
+        names = list(sim.state_names)
+        x[names.index("q4")] += 0.1                   # leaning, steering, turning
+        x[names.index("u4")] += 0.3
+        x[names.index("u7")] -= 0.2
+        x = sim.consistent_state(x, p=p)
+    elif model.mc or model.mv:
+        x = sim.consistent_state(np.array([0.5, 0.8, 0.1, 0.1]), p=p)
+    r = rng.uniform(-1, 1, model.nr)
+    return model, sim, F, x, r, p
+
+
+MODELS = ["kane", "lagrange", "cart",
+          pytest.param("bicycle", marks=pytest.mark.slow)]     # 20 s of compiles
+
+
+def _v(a):
+    return np.asarray(ca.DM(a).full(), float).ravel()
+
+
+@pytest.mark.parametrize("which", MODELS)
+def test_values_equal_the_simulator(request, which):
+    model, sim, F, x, r, p = _case(request, which)
+    t, h = 0.3, 0.01
+    names = ["rhs", "implicit", "step"] + (["outputs"] if model.output_names else []) \
+        + (["constraints"] if model.mc + model.mv else [])
+    assert sorted(F) == sorted(names)
+    xdot = sim.rhs(t, x, r=r, p=p)
+    np.testing.assert_allclose(_v(F["rhs"](x, r, p, t)), xdot, rtol=0, atol=1e-14)
+    # implicit: xdot - rhs, then the constraint residuals
+    xd = np.linspace(-1, 1, model.nx)
+    res = xd - xdot
+    if model.mc:
+        res = np.r_[res, sim.constraints(x[:model.nq], p=p, t=t)]
+    if model.mv:
+        res = np.r_[res, sim.velocity_constraints(x[:model.nq], x[model.nq:], p=p, t=t)]
+    np.testing.assert_allclose(_v(F["implicit"](x, xd, r, p, t)), res, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(_v(F["step"](x, r, p, t, h)), sim.step(t, x, h, r=r, p=p),
+                               rtol=0, atol=1e-14)
+    if model.output_names:
+        np.testing.assert_allclose(_v(F["outputs"](x, r, p, t)), sim.outputs(t, x, r=r, p=p),
+                                   rtol=0, atol=1e-14)
+    if model.mc + model.mv:
+        np.testing.assert_allclose(_v(F["constraints"](x, p, t)), res[model.nx:],
+                                   rtol=0, atol=1e-14)
+        assert np.abs(res[model.nx:]).max() < 1e-10       # a consistent state
+
+
+def _jacobians(F, name, x, r, p, t, extra):
+    """casadi.jacobian of F[name] w.r.t. x and r (and their forward and
+    reverse products) as numpy arrays."""
+    X = ca.MX.sym("X", x.size)
+    R = ca.MX.sym("R", r.size)
+    args = {"x": X, "r": R, "p": p, "t": t, **extra}
+    (out,) = F[name].call(args).values()
+    n = out.size1()
+    v, w = np.linspace(0.5, 1.5, x.size), np.linspace(-1, 1, n)
+    G = ca.Function("G", [X, R], [ca.jacobian(out, X), ca.jacobian(out, R),
+                                  ca.jtimes(out, X, v), ca.jtimes(out, X, w, True)])
+    return [np.array(a.full()) for a in G(x, r)], v, w
+
+
+def _check(J, ref_x, ref_r, v, w):
+    Jx, Jr, fwd, adj = J
+    np.testing.assert_allclose(Jx, ref_x, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(Jr, ref_r, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(fwd.ravel(), ref_x @ v, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(adj.ravel(), ref_x.T @ w, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("which", MODELS)
+def test_rhs_jacobian_equals_sim_jac(request, which):
+    model, sim, F, x, r, p = _case(request, which)
+    J, v, w = _jacobians(F, "rhs", x, r, p, 0.3, {})
+    Jx, Jr = sim.jacobian(0.3, x, r=r, p=p)
+    np.testing.assert_array_equal(sim.jac(0.3, x, r=r, p=p), Jx)
+    _check(J, Jx, Jr, v, w)
+
+
+def test_cart_jacobians(cart_model, cart_sim):
+    """implicit, step and outputs of the (unconstrained) cart-pole."""
+    model, sim = cart_model, cart_sim
+    F = gc.functions(model)
+    x, r, p, t, h = np.array([0.1, 0.5, 0.2, -0.3]), np.array([0.7]), \
+        np.array(model.p_values, float), 0.3, 0.02
+    Jx, Jr = sim.jacobian(t, x, r=r, p=p)
+    J, v, w = _jacobians(F, "implicit", x, r, p, t, {"xdot": np.ones(4)})
+    _check(J, -Jx, -Jr, v, w)
+    J, v, w = _jacobians(F, "step", x, r, p, t, {"h": h})
+    _, Fx, Fr = sim.step_sensitivity(t, x, h, r=r, p=p)
+    _check(J, Fx, Fr, v, w)
+    A, B = sim.linearize(x, r=r, p=p, t=t)
+    np.testing.assert_allclose(Fx, np.eye(4) + h * A, atol=h * h * 50)    # the same A, to O(h^2)
+    J, v, w = _jacobians(F, "outputs", x, r, p, t, {})
+    _, _, C, D = sim.linearize_outputs(x, r=r, p=p, t=t)
+    _check(J, C, D, v, w)
+
+
+@pytest.mark.parametrize("name", ["rhs", "implicit", "step", "outputs"])
+def test_derivatives_against_casadi_finite_differences(cart_model, name):
+    """jac_/fwd1_/adj1_ against the same external function with CasADi's own
+    central differences (enable_fd, its derivative functions disabled):
+    the FD forward derivative, one seed per column of x and r."""
+    path = str(gc.library(cart_model))
+    sym = f"{cart_model.name}_{name}"
+    exact = ca.external(sym, path)
+    fd = ca.external(sym, path, {"enable_fd": True, "enable_jacobian": False,
+                                 "enable_forward": False, "enable_reverse": False,
+                                 "fd_method": "central"})
+    x, r, p = np.array([0.1, 0.5, 0.2, -0.3]), np.array([0.7]), np.array(cart_model.p_values)
+    extra = {"step": {"h": 0.02}, "implicit": {"xdot": np.ones(4)}}.get(name, {})
+    (Jx, Jr, fwd, adj), v, w = _jacobians({name: exact}, name, x, r, p, 0.3, extra)
+    f1 = fd.forward(1)
+    args = {"x": x, "r": r, "p": p, "t": 0.3, **extra}
+    nom = fd.call(args)
+    base = {**args, **{f"out_{k}": val for k, val in nom.items()},
+            **{f"fwd_{k}": 0 * ca.DM(val) for k, val in args.items()}}
+
+    def column(which, seed):
+        (d,) = f1.call({**base, f"fwd_{which}": seed}).values()
+        return np.array(d.full()).ravel()
+    fd_x = np.column_stack([column("x", e) for e in np.eye(4)])
+    fd_r = np.column_stack([column("r", [1.0])])
+    for a, b in [(Jx, fd_x), (Jr, fd_r), (fwd.ravel(), fd_x @ v), (adj.ravel(), fd_x.T @ w)]:
+        np.testing.assert_allclose(a, b, rtol=1e-6, atol=1e-7)
+    assert np.abs(Jx).max() > 0.5                   # not a trivial Jacobian
+
+
+def test_map_threads_same_bits(cart_model):
+    F = gc.functions(cart_model)
+    rng = np.random.default_rng(1)
+    X = rng.uniform(-1, 1, (4, 100))
+    R = rng.uniform(-1, 1, (1, 100))
+    p = np.array(cart_model.p_values)
+    for name, extra in [("rhs", []), ("step", [0.01])]:
+        M = F[name].map(100, "thread", 2)
+        got = np.array(M(X, R, p, 0.2, *extra).full())
+        one = np.column_stack([np.array(F[name](X[:, k], R[:, k], p, 0.2, *extra).full()).ravel()
+                               for k in range(100)])
+        assert got.tobytes() == one.tobytes()
+    # and the Jacobian through the map
+    Xs = ca.MX.sym("X", 4, 100)
+    Jm = ca.Function("Jm", [Xs], [ca.jacobian(F["rhs"].map(100, "thread", 2)(Xs, R, p, 0.2), Xs)])
+    Jd = np.array(ca.densify(Jm(X)).full())
+    sim = gen.compile(cart_model)
+    for k in (0, 57, 99):
+        blk = Jd[4 * k:4 * k + 4, 4 * k:4 * k + 4]
+        np.testing.assert_allclose(blk, sim.jac(0.2, X[:, k], r=R[:, k], p=p), rtol=0, atol=1e-12)
+
+
+def test_bad_use(cart_model, kane_model, monkeypatch):
+    F = gc.functions(cart_model)
+    x, p = np.array([0.1, 0.5, 0.2, -0.3]), np.array(cart_model.p_values)
+    # the model has an input: a call without r fails (r's default is NaN), never zeros
+    with pytest.raises(RuntimeError, match="cart_pole_rhs"):
+        F["rhs"](x=x, p=p, t=0)
+    with pytest.raises(RuntimeError, match="cart_pole_step"):
+        F["step"](x=x, r=0.3, p=p, t=0)            # no h
+    # wrong sizes: CasADi names the input
+    with pytest.raises(RuntimeError, match=r"Input 0 \(x\) has mismatching shape"):
+        F["rhs"](np.ones(3), 0.7, p, 0)
+    with pytest.raises(RuntimeError, match=r"Input 2 \(p\) has mismatching shape"):
+        F["rhs"](x, 0.7, p[:2], 0)
+    # no derivative w.r.t. the constants: an error, never a silent zero
+    P = ca.MX.sym("P", p.size)
+    Jp = ca.Function("Jp", [P], [ca.jacobian(F["rhs"](x, 0.7, P, 0), P)])
+    with pytest.raises(RuntimeError):
+        Jp(p)
+    # constrained model: no Jacobian for step (it would need the projection's)
+    Fk = gc.functions(kane_model)
+    Xk = ca.MX.sym("X", 4)
+    with pytest.raises(RuntimeError):
+        ca.Function("J", [Xk], [ca.jacobian(Fk["step"](Xk, [], kane_model.p_values, 0, 0.01),
+                                            Xk)])(np.ones(4))
+    with pytest.raises(gen.ModelError, match="gen.casadi"):
+        gc.functions("not a model")
+    # without casadi: MissingDependencyError naming the extra
+    import importlib
+    real = importlib.import_module
+
+    def no_casadi(name, *a, **k):
+        if name == "casadi":
+            raise ImportError("No module named 'casadi'")
+        return real(name, *a, **k)
+    monkeypatch.setattr(importlib, "import_module", no_casadi)
+    with pytest.raises(gen.MissingDependencyError, match=r"eomgen\[casadi\]"):
+        gc.functions(cart_model)
+
+
+@pytest.mark.parametrize("which", ["kane", "cart"])
+def test_wrappers_compile_strict(request, which):
+    """The generated <name>_casadi.c is clean under the project's strict
+    flags (-std=c99 -Wall -Wextra -Werror -pedantic)."""
+    import subprocess
+    from gen.backends import STRICT_FLAGS, c_compiler
+    model = request.getfixturevalue(f"{which}_model")
+    src = gc.library(model).parent / "src"
+    fname = f"{model.name}_casadi.c"
+    assert (src / fname).is_file()
+    proc = subprocess.run([c_compiler(), *STRICT_FLAGS, "-I", ".", "-c", fname, "-o", os.devnull],
+                          cwd=src, capture_output=True, text=True)
+    assert proc.returncode == 0 and not proc.stderr.strip(), proc.stderr
+
+
+def _cart_rhs_sx(x, u, p):
+    """The cart-pole's x' written by hand in CasADi symbols (Lagrange's
+    equations of examples/cart_pole.py: a uniform pole of half-length l,
+    theta from the upward vertical, positive to the left)."""
+    mc, mp, l, g = p[0], p[1], p[2], p[3]
+    th, v, w = x[1], x[2], x[3]
+    inertia = mp * (2 * l) ** 2 / 12
+    m11, m12, m22 = mc + mp, -mp * l * ca.cos(th), mp * l ** 2 + inertia
+    f1 = u - mp * l * ca.sin(th) * w ** 2
+    f2 = mp * g * l * ca.sin(th)
+    det = m11 * m22 - m12 * m12
+    return ca.vertcat(v, w, (m22 * f1 - m12 * f2) / det, (m11 * f2 - m12 * f1) / det)
+
+
+def _swing_up(step_all, N, h):
+    """Minimum-effort swing-up of the cart-pole from hanging to upright in
+    N h seconds, by multiple shooting in casadi.Opti (IPOPT); step_all maps
+    (X[:, :-1], U) to the next states. (objective, U, iterations, seconds)."""
+    import time
+    opti = ca.Opti()
+    X = opti.variable(4, N + 1)
+    U = opti.variable(1, N)
+    opti.minimize(h * ca.sumsqr(U))
+    opti.subject_to(X[:, 1:] == step_all(X[:, :-1], U))
+    opti.subject_to(X[:, 0] == [0, np.pi, 0, 0])
+    opti.subject_to(X[:, N] == [0, 0, 0, 0])
+    opti.subject_to(opti.bounded(-20, U, 20))
+    opti.subject_to(opti.bounded(-1.5, X[0, :], 1.5))
+    opti.set_initial(X[1, :], np.linspace(np.pi, 0, N + 1))
+    # the library has first derivatives only: IPOPT's quasi-Newton Hessian, for both
+    opti.solver("ipopt", {"print_time": False},
+                {"print_level": 0, "sb": "yes", "tol": 1e-10, "max_iter": 500,
+                 "hessian_approximation": "limited-memory"})
+    t0 = time.perf_counter()
+    sol = opti.solve()
+    dt = time.perf_counter() - t0
+    return sol.value(opti.f), np.array(sol.value(U)), sol.stats()["iter_count"], dt
+
+
+def test_opti_swing_up_equals_pure_sx(cart_model, cart_sim):
+    """The swing-up with gen's step (mapped over the 100 intervals) has the
+    optimum of the same problem in pure CasADi SX (the same RK4 by hand)."""
+    N, h = 100, 0.02
+    p = np.array(cart_model.p_values, float)
+    # the hand-written reference is the model
+    Xs, Us, Hs = ca.SX.sym("x", 4), ca.SX.sym("u"), ca.SX.sym("h")
+    f_sx = ca.Function("f", [Xs, Us], [_cart_rhs_sx(Xs, Us, p)])
+    for x in ([0.1, 0.5, 0.2, -0.3], [0, np.pi, 1, 2]):
+        np.testing.assert_allclose(_v(f_sx(x, 0.7)), cart_sim.rhs(0, np.array(x), r=[0.7]),
+                                   rtol=1e-14, atol=1e-14)
+    k1 = _cart_rhs_sx(Xs, Us, p)
+    k2 = _cart_rhs_sx(Xs + Hs / 2 * k1, Us, p)
+    k3 = _cart_rhs_sx(Xs + Hs / 2 * k2, Us, p)
+    k4 = _cart_rhs_sx(Xs + Hs * k3, Us, p)
+    step_sx = ca.Function("step_sx", [Xs, Us, Hs], [Xs + Hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)])
+    step = gc.functions(cart_model)["step"].map(N)
+    tk = (np.arange(N) * h).reshape(1, -1)
+    ours = _swing_up(lambda X, U: step(X, U, p, tk, h), N, h)
+    ref = _swing_up(lambda X, U: step_sx.map(N)(X, U, h), N, h)
+    assert ours[0] > 10                                       # a real swing-up, not U = 0
+    assert abs(ours[0] - ref[0]) <= 1e-6 * ref[0]
+    np.testing.assert_allclose(ours[1], ref[1], rtol=0, atol=1e-6)
+    print(f"swing-up: {ours[2]} iterations, {1e3 * ours[3] / ours[2]:.1f} ms/iteration; "
+          f"pure SX {ref[2]}, {1e3 * ref[3] / ref[2]:.1f} ms/iteration")
+
+
+def test_sanitizers_every_entry_point(cart_model, tmp_path):
+    """Every function of the library, called through CasADi's convention
+    from C (the work sizes it reports, NULL inputs as zeros, NULL outputs
+    not written), is clean under AddressSanitizer and UBSan; the values
+    agree with the library CasADi loaded."""
+    import shutil
+    import subprocess
+    from gen.backends import c_compiler
+    src = gc.library(cart_model).parent / "src"
+    specs = gc.function_specs(cart_model)
+    p = np.array(cart_model.p_values)
+    lines = ["#include <stdio.h>", "#include <stdlib.h>", "#include <string.h>",
+             "typedef long long int ci;"]
+    calls = []
+    for s in specs:
+        f = s["sym"]
+        lines += [f"int {f}(const double **, double **, ci *, double *, int);",
+                  f"int {f}_work(ci *, ci *, ci *, ci *);", f"ci {f}_n_in(void);",
+                  f"ci {f}_n_out(void);", f"const ci *{f}_sparsity_out(ci);",
+                  f"int {f}_checkout(void);", f"void {f}_release(int);"]
+        ins = []
+        for name, sp, _ in s["ins"]:
+            n = sp[0] * sp[1]
+            val = {"p": list(p), "t": [0.3], "h": [0.02], "r": [0.7],
+                   # no derivative with respect to p, t, h: their seeds are zero
+                   "fwd_p": [], "fwd_t": [], "fwd_h": []}.get(name, list(np.linspace(0.1, 0.4, n)))
+            ins.append(val[:n] + [0.0] * (n - len(val)))
+        calls.append((f, ins, [sp[0] * sp[1] for _, sp in s["outs"]], s.get("mode")))
+    body = ["int main(void) {", "  int bad = 0;"]
+    for f, ins, outs, mode in calls:
+        body += ["  {", "    ci na, nr, niw, nw; int mem, st, k;",
+                 f"    {f}_work(&na, &nr, &niw, &nw);",
+                 f"    if (na != {f}_n_in() || nr != {f}_n_out()) bad = 1;"]
+        for i, v in enumerate(ins):
+            body.append(f"    static const double in{i}[{max(1, len(v))}] = "
+                        f"{{{', '.join(repr(float(a)) for a in v) or '0'}}};")
+        arg_list = ", ".join(f"in{i}" for i in range(len(ins)))
+        body += [f"    const double *arg[{len(ins)}] = {{{arg_list}}};",
+                 f"    double *res[{len(outs)}];",
+                 "    double *w = malloc(sizeof(double) * (size_t)(nw > 0 ? nw : 1));"]
+        for i, n in enumerate(outs):
+            body.append(f"    double *o{i} = malloc(sizeof(double) * {max(1, n)});"
+                        f" res[{i}] = o{i};")
+        # a Jacobian with only its derivable blocks wanted (the others NULL)
+        if mode in ("jac", "adj"):
+            nod = next(s for s in specs if s["sym"] == f)["nodiff"]
+            body += [f"    res[{i if mode == 'jac' else i[0]}] = 0;" for i in nod]
+        body += [f"    mem = {f}_checkout();", f"    st = {f}(arg, res, 0, w, mem);",
+                 f"    {f}_release(mem);",
+                 f'    printf("{f} %d", st);',
+                 *[f'    for (k = 0; k < {n}; ++k) if (res[{i}]) printf(" %.17g", o{i}[k]);'
+                   for i, n in enumerate(outs)],
+                 '    printf("\\n");', "    if (st) bad = 1;",
+                 # NULL inputs are zeros: no crash (a status is fine)
+                 f"    for (k = 0; k < {len(ins)}; ++k) arg[k] = 0;",
+                 f"    (void){f}(arg, res, 0, w, 0);",
+                 "    free(w);", *[f"    free(o{i});" for i in range(len(outs))], "  }"]
+    body += ["  return bad;", "}"]
+    (tmp_path / "harness.c").write_text("\n".join(lines + body) + "\n")
+    cc = c_compiler()
+    if shutil.which(cc) is None:
+        pytest.skip(f"{cc} not installed")
+    sources = [str(f) for f in sorted(src.glob("*.c")) if not f.name.endswith("_lin_stub.c")]
+    exe = tmp_path / "harness"
+    flags = ["-std=c99", "-g", "-O1", "-fsanitize=address,undefined", "-fno-sanitize-recover=all",
+             "-I", str(src)]
+    proc = subprocess.run([cc, *flags, str(tmp_path / "harness.c"), *sources, "-lm",
+                           "-o", str(exe)], capture_output=True, text=True)
+    if proc.returncode != 0 and "sanitize" in proc.stderr:
+        pytest.skip(f"{cc} has no sanitizer runtime: {proc.stderr[:200]}")
+    assert proc.returncode == 0, proc.stderr
+    run = subprocess.run([str(exe)], capture_output=True, text=True,
+                         env={**os.environ, "ASAN_OPTIONS": "detect_leaks=1"})
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "runtime error" not in run.stderr and "AddressSanitizer" not in run.stderr
+    got = {ln.split()[0]: [float(v) for v in ln.split()[2:]] for ln in run.stdout.splitlines()}
+    assert len(got) == len(specs)
+    # the C harness's numbers are CasADi's
+    F = gc.functions(cart_model)
+    x = np.linspace(0.1, 0.4, 4)
+    np.testing.assert_array_equal(got[f"{cart_model.name}_rhs"], _v(F["rhs"](x, 0.7, p, 0.3)))
+    np.testing.assert_array_equal(got[f"{cart_model.name}_step"],
+                                  _v(F["step"](x, 0.7, p, 0.3, 0.02)))
+
+
+def test_sources_build_standalone(cart_model, tmp_path):
+    """The library's src/ folder (the guide's file list: every .c but the
+    derivative stand-ins, the headers, <name>_casadi.h declaring the
+    functions) compiles on its own with a plain `cc -shared`, and that
+    library, loaded by casadi.external, gives the same bits."""
+    import subprocess
+    from gen.backends import c_compiler
+    src = gc.library(cart_model).parent / "src"
+    name = cart_model.name
+    header = (src / f"{name}_casadi.h").read_text()
+    for s in gc.function_specs(cart_model):
+        assert f"int {s['sym']}(const casadi_real **arg" in header
+    sources = [str(f) for f in sorted(src.glob("*.c")) if not f.name.endswith("_lin_stub.c")]
+    so = tmp_path / f"lib{name}_casadi.so"
+    proc = subprocess.run([c_compiler(), "-std=c99", "-O2", "-fPIC", "-shared", "-I", str(src),
+                           *sources, "-lm", "-o", str(so)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    F = gc.functions(cart_model)
+    x, p = np.array([0.1, 0.5, 0.2, -0.3]), np.array(cart_model.p_values)
+    for key in ("rhs", "step"):
+        mine = ca.external(f"{name}_{key}", str(so))
+        args = (x, 0.7, p, 0.3) + ((0.02,) if key == "step" else ())
+        assert _v(mine(*args)).tobytes() == _v(F[key](*args)).tobytes()
+    X = ca.MX.sym("X", 4)
+    step = ca.external(f"{name}_step", str(so))
+    J = ca.Function("J", [X], [ca.jacobian(step(X, 0.7, p, 0.3, 0.02), X)])
+    _, Fx, _ = gen.compile(cart_model).step_sensitivity(0.3, x, 0.02, r=[0.7], p=p)
+    np.testing.assert_allclose(np.array(J(x).full()), Fx, rtol=0, atol=1e-12)
+
+
+def test_lazy_import():
+    """gen.casadi is loaded on first use, and casadi only when a library is
+    loaded: `import gen` stays as it was."""
+    import subprocess
+    import sys
+    code = ("import sys, gen; a = 'gen.casadi' in sys.modules; f = gen.casadi.functions; "
+            "print(a, 'casadi' in sys.modules, f.__module__)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env={**os.environ, "PYTHONPATH": str(gc.__file__).rsplit("/gen/", 1)[0]})
+    assert out.stdout.split() == ["False", "False", "gen.casadi"], out.stderr
