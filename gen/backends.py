@@ -376,7 +376,7 @@ class CasadiBackend(CBackend):
     tag = "_casadi"
 
     def context(self, model, kernels):
-        from .casadi import block_specs, function_specs
+        from .casadi_specs import block_specs, function_specs
         return {"cs_functions": function_specs(model), "cs_blocks": block_specs(model),
                 "ny": len(model.output_names),
                 "sz_nx": max(1, model.nx)}
