@@ -48,6 +48,11 @@ def render(model, backend, real="double"):
     and source, gen/host.py)."""
     out = gen.render.render(gen.ir.plan(model), real=real, backend=backend)
     files = {k: v for k, v in out.files.items() if k not in RUNTIME_COPIES}
+    # the runtime's structs and codes: the csrc/ copy (tests/test_abi.py keeps
+    # that copy current), not a golden file of its own
+    from gen.resources import csrc_dir
+    assert files.pop("gen_rt_abi.h") == (csrc_dir() / "gen_rt_abi.h").read_text(), \
+        "the model's gen_rt_abi.h is not the runtime's csrc/gen_rt_abi.h"
     if backend == "c":
         core = gen.ir.plan(model, derivatives=False)
         files.update(gen.render.render(core, real=real, backend=backend, project=False,
