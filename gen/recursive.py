@@ -1,0 +1,432 @@
+"""Equations of motion of a sympy ``System``'s joint tree by recursive
+algorithms (issue 37), without ``KanesMethod.kanes_equations`` or
+``System.form_eoms``.
+
+``Model.from_system(system, formulation="recursive")`` lands here. The tree is
+read from the System's joints: each joint gives its child body a parent body,
+and the inertial frame's body (the System's frame) is the root. Every body
+carries its own coordinates: the axes of its frame, the origin at its mass
+centre. Per joint the module forms, from sympy's own joint kinematics, a few
+small expressions:
+
+- ``E``: the direction cosines from the parent's axes to the child's
+  (``child.frame.dcm(parent.frame)``), and ``r``: the child's mass centre from
+  the parent's, in the parent's axes;
+- the joint's relative motion ``[w_rel; v_rel] = S u_j`` in the child's axes:
+  the child frame's angular velocity in the parent frame and the derivative in
+  the parent frame of ``r``, with ``S`` its Jacobian in the joint's speeds.
+
+With those, the mass matrix comes from the composite rigid body algorithm
+(composite spatial inertias at the mass centres, ``M[i, j] = S_i^T X^T ...
+Ic_j S_j``) and the forcing from recursive Newton-Euler with ``u' = 0``
+(velocities and velocity-product accelerations outward, the body's
+``m a - F_ext`` and ``I alpha + w x I w - T_ext`` inward, projected on ``S``).
+So ``M u' = f`` are Kane's equations of the tree, the kinematics are the
+System's own ``kdes``, and the result goes to :meth:`gen.Model.from_matrices`
+as any model does: rhs, linearization, derivative kernels and every backend
+follow unchanged. Why CRBA + RNEA rather than the articulated body
+algorithm: the generated code keeps the canonical ``M u' = f`` form the rest
+of the pipeline (constraints, linearization, implicit solvers) takes, and the
+run-time factorization of ``M`` is the runtime's existing one; ABA would fold
+the solve into symbolic expressions with divisions the pipeline cannot see.
+
+The expressions share their sub-expressions (each body's quantities are built
+once from its parent's); the pipeline's CSE recovers the sharing, so they are
+never expanded or simplified here.
+
+Taken: trees of ``PinJoint``, ``PrismaticJoint``, ``CylindricalJoint``,
+``PlanarJoint``, ``SphericalJoint`` and ``WeldJoint`` between rigid bodies,
+with forces on points and torques on frames the tree knows (gravity from
+``apply_uniform_gravity``, loads, actuators). Not yet: loop closures and other
+constraints, auxiliary speeds, particles, joints whose motion depends
+explicitly on time; each is refused with a :class:`gen.ModelError` naming it.
+"""
+from __future__ import annotations
+
+import sympy as sm
+import sympy.physics.mechanics as me
+
+from .errors import ModelError
+
+__all__ = ["equations_of_tree", "SUPPORTED_JOINTS"]
+
+SUPPORTED_JOINTS = ("PinJoint", "PrismaticJoint", "CylindricalJoint", "PlanarJoint",
+                    "SphericalJoint", "WeldJoint")
+
+_T = me.dynamicsymbols._t
+
+
+def _name(obj):
+    return getattr(obj, "name", None) or str(obj)
+
+
+def _cross(a, b):
+    return sm.Matrix([a[1] * b[2] - a[2] * b[1],
+                      a[2] * b[0] - a[0] * b[2],
+                      a[0] * b[1] - a[1] * b[0]])
+
+
+def _skew(a):
+    return sm.Matrix([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+
+
+def _is_zero(e):
+    e = sm.expand(e)
+    if e == 0:
+        return True
+    return sm.simplify(e) == 0
+
+
+class _Body:
+    __slots__ = ("body", "joint", "parent", "children", "E", "r", "S", "rel_bias",
+                 "speed_idx", "w", "v", "al", "a", "F", "N", "Ic", "depth", "Ftot", "Ntot")
+
+    def __init__(self, body, joint, parent):
+        self.body, self.joint, self.parent = body, joint, parent
+        self.children = []
+
+
+class _Tree:
+    """The System's joint tree, checked, in an order parents first."""
+
+    def __init__(self, system):
+        if not isinstance(system, me.System):
+            raise ModelError(
+                f"formulation='recursive' needs a sympy System, got {type(system).__name__}")
+        self.system = system
+        self.N = system.frame
+        cons = []
+        if len(system.holonomic_constraints):
+            cons.append(f"{len(system.holonomic_constraints)} holonomic constraint(s)")
+        if len(system.nonholonomic_constraints):
+            cons.append(f"{len(system.nonholonomic_constraints)} nonholonomic constraint(s)")
+        if len(system.q_dep) or len(system.u_dep):
+            cons.append("dependent coordinates or speeds")
+        if len(system.u_aux):
+            cons.append(f"auxiliary speeds {list(system.u_aux)}")
+        if cons:
+            raise ModelError(
+                f"formulation='recursive' takes open joint trees only; the System has "
+                f"{', '.join(cons)}: use formulation='kane'")
+        self.q = list(system.q)
+        self.u = list(system.u)
+        child_of = {}
+        for j in system.joints:
+            kind = type(j).__name__
+            if kind not in SUPPORTED_JOINTS:
+                raise ModelError(
+                    f"joint {_name(j)!r} is a {kind}: formulation='recursive' takes "
+                    f"{', '.join(SUPPORTED_JOINTS)}")
+            for b in (j.parent, j.child):
+                if not isinstance(b, me.RigidBody):
+                    raise ModelError(
+                        f"body {_name(b)!r} of joint {_name(j)!r} is a {type(b).__name__}: "
+                        "formulation='recursive' takes rigid bodies")
+            if j.child in child_of:
+                raise ModelError(
+                    f"body {_name(j.child)!r} is the child of joints {_name(child_of[j.child])!r} "
+                    f"and {_name(j)!r}: a closed loop, which formulation='recursive' does not "
+                    "take (use formulation='kane')")
+            child_of[j.child] = j
+        # the root: the body (or bodies) whose frame is the System's frame
+        self.ground = set()
+        for j in system.joints:
+            if j.parent not in child_of:
+                if j.parent.frame != self.N:
+                    raise ModelError(
+                        f"body {_name(j.parent)!r} (parent of joint {_name(j)!r}) is not "
+                        f"connected to the tree: it is no joint's child and its frame "
+                        f"{j.parent.frame.name!r} is not the System's frame {self.N.name!r}")
+                self.ground.add(j.parent)
+        for b in system.bodies:
+            if b not in child_of and b not in self.ground and not (
+                    isinstance(b, me.RigidBody) and b.frame == self.N):
+                raise ModelError(
+                    f"body {_name(b)!r} is not connected to the tree: no joint has it as "
+                    "its child (formulation='recursive' needs every body joined, through "
+                    "joints, to the System's frame)")
+        # parents first
+        nodes, order = {}, []
+        pending = list(child_of.items())
+        while pending:
+            rest = []
+            for child, j in pending:
+                if j.parent in self.ground:
+                    parent = None
+                elif j.parent in nodes:
+                    parent = nodes[j.parent]
+                else:
+                    rest.append((child, j))
+                    continue
+                n = _Body(child, j, parent)
+                n.depth = 0 if parent is None else parent.depth + 1
+                if parent is not None:
+                    parent.children.append(n)
+                nodes[child] = n
+                order.append(n)
+            if len(rest) == len(pending):     # pragma: no cover - cycles are refused above
+                raise ModelError(f"joints {[_name(j) for _, j in rest]} do not form a tree")
+            pending = rest
+        self.nodes, self.order = nodes, order
+        # joint speeds -> positions in system.u
+        uidx = {s: i for i, s in enumerate(self.u)}
+        for n in order:
+            try:
+                n.speed_idx = [uidx[s] for s in n.joint.speeds]
+            except KeyError as e:
+                raise ModelError(f"speed {e.args[0]} of joint {_name(n.joint)!r} is not one "
+                                 "of the System's speeds") from None
+        self._qdot_map()
+
+    def _qdot_map(self):
+        """q' in q and u, from the System's kinematic equations (solved per
+        block of rows that share coordinates)."""
+        kd = sm.Matrix(self.system.kdes)
+        qd = [qi.diff(_T) for qi in self.q]
+        if kd.shape[0] != len(qd):
+            raise ModelError(f"the System has {kd.shape[0]} kinematic equation(s) for "
+                             f"{len(qd)} coordinate(s)")
+        self.kdes = kd
+        K = kd.jacobian(qd)
+        rest = kd.xreplace({x: 0 for x in qd})
+        if any(K[i, k] != 0 for i in range(len(qd)) for k in range(len(qd)) if i != k):
+            sol = K.LUsolve(-rest)
+        else:
+            if any(K[i, i] == 0 for i in range(len(qd))):
+                raise ModelError("the System's kinematic equations do not determine every q'")
+            sol = [-rest[i] / K[i, i] for i in range(len(qd))]
+        self.qdot = dict(zip(qd, sol))
+
+
+def equations_of_tree(system):
+    """M, f, q, u, kinematics of a System's joint tree (see the module docstring).
+
+    Returns
+    -------
+    (M, f, q, u, kdes) : sympy Matrix (nu, nu), Matrix (nu, 1), list, list, Matrix (nq, 1)
+        ``M u' = f`` in the System's speed order, and the System's kinematic
+        equations (``kdes = 0``).
+    """
+    tree = _Tree(system)
+    N = tree.N
+    nu = len(tree.u)
+    qset = set(tree.q)
+
+    # ---- per joint: E, r, S and the velocity-product part of d/dt [w_rel; v_rel]
+    for n in tree.order:
+        j, child, parent = n.joint, n.body, n.joint.parent
+        try:
+            n.E = sm.Matrix(child.frame.dcm(parent.frame))
+            n.r = child.masscenter.pos_from(parent.masscenter).to_matrix(parent.frame)
+            w_rel = child.frame.ang_vel_in(parent.frame).to_matrix(child.frame)
+        except ValueError as e:
+            raise ModelError(f"joint {_name(j)!r}: sympy cannot relate body "
+                             f"{_name(child)!r} to body {_name(parent)!r} ({e})") from None
+        v_rel = n.E * n.r.diff(_T)
+        rel = sm.Matrix.vstack(w_rel, v_rel).xreplace(tree.qdot)
+        S = rel.jacobian(list(j.speeds))
+        resid = rel - S * sm.Matrix(list(j.speeds))
+        if not all(_is_zero(e) for e in resid):
+            raise ModelError(
+                f"joint {_name(j)!r}: the child's motion relative to the parent is not "
+                "linear and homogeneous in the joint's speeds (an explicitly time-"
+                "dependent joint): formulation='recursive' does not take it")
+        if any(e.has(*[s.diff(_T) for s in tree.u]) for e in S):
+            raise ModelError(f"joint {_name(j)!r}: the joint's motion holds speed derivatives")
+        qs = sorted((S.atoms(sm.Function) & qset), key=sm.default_sort_key)
+        if qs:
+            dq = sm.Matrix([tree.qdot[x.diff(_T)] for x in qs])
+            # (dS/dt) u_j: the part of d/dt [w_rel; v_rel] (child's axes) without u'
+            n.rel_bias = (S * sm.Matrix(list(j.speeds))).jacobian(qs) * dq
+        else:
+            n.rel_bias = None
+        n.S = S
+
+    # ---- external loads, per body, in its axes at its mass centre
+    known_points, known_frames = {}, {}
+    for n in tree.order:
+        known_points[n.body.masscenter] = n.body
+        known_frames[n.body.frame] = n.body
+    ground_frames = {N} | {g.frame for g in tree.ground}
+    ground_points = {g.masscenter for g in tree.ground} | {system.fixed_point}
+    for j in system.joints:
+        for pt, fr, b in ((j.child_point, j.child_interframe, j.child),
+                          (j.parent_point, j.parent_interframe, j.parent)):
+            if b in tree.ground:
+                ground_points.add(pt)
+                ground_frames.add(fr)
+            else:
+                known_points.setdefault(pt, b)
+                known_frames.setdefault(fr, b)
+
+    memo = {}
+
+    def in_body(vec, node):
+        """A sympy Vector's components in node's axes; components given in an
+        ancestor's axes (or the inertial frame's) go down the tree one E at a
+        time, memoized, so gravity costs one 3x3 product per body."""
+        out = sm.zeros(3, 1)
+        for comp, frame in vec.args:
+            out += down(sm.ImmutableMatrix(comp), frame, node)
+        return out
+
+    def down(comp, frame, node):
+        key = (comp, frame, node.body)
+        if key in memo:
+            return memo[key]
+        if frame == node.body.frame:
+            res = sm.Matrix(comp)
+        elif frame in ground_frames or _ancestor_frame(frame, node):
+            if node.parent is None:
+                base = sm.Matrix(comp) if frame == node.joint.parent.frame else \
+                    me.Vector([(sm.Matrix(comp), frame)]).to_matrix(node.joint.parent.frame)
+            else:
+                base = down(comp, frame, node.parent)
+            res = node.E * base
+        else:
+            res = me.Vector([(sm.Matrix(comp), frame)]).to_matrix(node.body.frame)
+        memo[key] = res
+        return res
+
+    def _ancestor_frame(frame, node):
+        p = node.parent
+        while p is not None:
+            if p.body.frame == frame:
+                return True
+            p = p.parent
+        return False
+
+    def body_of_point(pt, what):
+        if pt in known_points:
+            return known_points[pt]
+        if pt in ground_points:
+            return None
+        for n in tree.order:
+            try:
+                rb = pt.pos_from(n.body.masscenter).to_matrix(n.body.frame)
+            except ValueError:
+                continue
+            if not any(e.has(_T) for e in rb):
+                known_points[pt] = n.body
+                return n.body
+        raise ModelError(
+            f"{what} acts on point {_name(pt)!r}, which the joint tree does not know: "
+            "not a body's mass centre, a joint's point, or a point fixed in a body")
+
+    def body_of_frame(fr, what):
+        if fr in known_frames:
+            return known_frames[fr]
+        if fr in ground_frames:
+            return None
+        for n in tree.order:
+            try:
+                d = fr.dcm(n.body.frame)
+            except ValueError:
+                continue
+            if not any(e.has(_T) for e in d):
+                known_frames[fr] = n.body
+                return n.body
+        raise ModelError(
+            f"{what} acts on frame {_name(fr)!r}, which the joint tree does not know: "
+            "not a body's frame, a joint's frame, or a frame fixed in a body")
+
+    for n in tree.order:
+        n.F, n.N = sm.zeros(3, 1), sm.zeros(3, 1)
+    loads = list(system.loads)
+    for act in system.actuators:
+        loads.extend(act.to_loads())
+    for ld in loads:
+        if isinstance(ld, me.Force):
+            b = body_of_point(ld.point, f"force {ld}")
+            if b is None:
+                continue
+            n = tree.nodes[b]
+            Fb = in_body(ld.vector, n)
+            n.F += Fb
+            if ld.point != b.masscenter:
+                rb = ld.point.pos_from(b.masscenter).to_matrix(b.frame)
+                n.N += _cross(rb, Fb)
+        elif isinstance(ld, me.Torque):
+            b = body_of_frame(ld.frame, f"torque {ld}")
+            if b is None:
+                continue
+            n = tree.nodes[b]
+            n.N += in_body(ld.vector, n)
+        else:      # pragma: no cover - sympy's loads are Force or Torque
+            raise ModelError(f"load {ld!r} is neither a Force nor a Torque")
+
+    # ---- RNEA with u' = 0: velocities and velocity-product accelerations out
+    zero = sm.zeros(3, 1)
+    for n in tree.order:
+        uj = sm.Matrix(list(n.joint.speeds))
+        rel = n.S * uj
+        w_rel, v_rel = rel[:3, :], rel[3:, :]
+        if n.parent is None:
+            w_p = v_p = al_p = a_p = zero
+        else:
+            w_p, v_p, al_p, a_p = n.parent.w, n.parent.v, n.parent.al, n.parent.a
+        E, r = n.E, n.r
+        wpc = E * w_p
+        n.w = wpc + w_rel
+        n.v = E * (v_p + _cross(w_p, r)) + v_rel
+        al = E * al_p + _cross(wpc, w_rel)
+        a = E * (a_p + _cross(al_p, r) + _cross(w_p, _cross(w_p, r))) \
+            + 2 * _cross(wpc, v_rel) + _cross(w_rel, v_rel)
+        if n.rel_bias is not None:
+            al += n.rel_bias[:3, :]
+            a += n.rel_bias[3:, :]
+        n.al, n.a = al, a
+    # forces in: each body's m a - F and I al + w x I w - T, plus its children's
+    f = sm.zeros(nu, 1)
+    for n in reversed(tree.order):
+        b = n.body
+        I = b.central_inertia.to_matrix(b.frame)
+        Fi = b.mass * n.a - n.F
+        Ni = I * n.al + _cross(n.w, I * n.w) - n.N
+        for c in n.children:
+            ET = c.E.T
+            Fc = ET * c.Ftot
+            Fi += Fc
+            Ni += ET * c.Ntot + _cross(c.r, Fc)
+        n.Ftot, n.Ntot = Fi, Ni
+        tau = n.S.T * sm.Matrix.vstack(Ni, Fi)
+        for k, idx in enumerate(n.speed_idx):
+            f[idx] = -tau[k]
+
+    # ---- CRBA: composite inertias in, then each joint's column up the tree
+    M = sm.zeros(nu, nu)
+    for n in reversed(tree.order):
+        b = n.body
+        I = b.central_inertia.to_matrix(b.frame)
+        Ic = sm.zeros(6, 6)
+        Ic[:3, :3] = I
+        Ic[3:, 3:] = b.mass * sm.eye(3)
+        for c in n.children:
+            X = _motion_transform(c)
+            Ic += X.T * c.Ic * X
+        n.Ic = Ic
+    for n in tree.order:
+        F = n.Ic * n.S
+        Mii = n.S.T * F
+        for a_, ia in enumerate(n.speed_idx):
+            for b_, ib in enumerate(n.speed_idx):
+                M[ia, ib] = Mii[a_, b_]
+        m = n
+        while m.parent is not None:
+            F = _motion_transform(m).T * F
+            m = m.parent
+            blk = F.T * m.S           # rows: n's speeds, columns: m's speeds
+            for a_, ia in enumerate(n.speed_idx):
+                for b_, ib in enumerate(m.speed_idx):
+                    M[ia, ib] = blk[a_, b_]
+                    M[ib, ia] = blk[a_, b_]
+    return M, f, tree.q, tree.u, tree.kdes
+
+
+def _motion_transform(n):
+    """6x6 X with [w; v]_child = X [w; v]_parent (each at its mass centre)."""
+    X = sm.zeros(6, 6)
+    X[:3, :3] = n.E
+    X[3:, 3:] = n.E
+    X[3:, :3] = -n.E * _skew(n.r)
+    return X
