@@ -66,6 +66,11 @@ def _cross(a, b):
                       a[0] * b[1] - a[1] * b[0]])
 
 
+def _col(xs):
+    xs = list(xs)
+    return sm.Matrix(xs) if xs else sm.zeros(0, 1)
+
+
 def _skew(a):
     return sm.Matrix([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
 
@@ -224,8 +229,8 @@ def equations_of_tree(system):
                              f"{_name(child)!r} to body {_name(parent)!r} ({e})") from None
         v_rel = n.E * n.r.diff(_T)
         rel = sm.Matrix.vstack(w_rel, v_rel).xreplace(tree.qdot)
-        S = rel.jacobian(list(j.speeds))
-        resid = rel - S * sm.Matrix(list(j.speeds))
+        S = rel.jacobian(list(j.speeds)) if len(j.speeds) else sm.zeros(6, 0)
+        resid = rel - S * _col(j.speeds)
         if not all(_is_zero(e) for e in resid):
             raise ModelError(
                 f"joint {_name(j)!r}: the child's motion relative to the parent is not "
@@ -237,7 +242,7 @@ def equations_of_tree(system):
         if qs:
             dq = sm.Matrix([tree.qdot[x.diff(_T)] for x in qs])
             # (dS/dt) u_j: the part of d/dt [w_rel; v_rel] (child's axes) without u'
-            n.rel_bias = (S * sm.Matrix(list(j.speeds))).jacobian(qs) * dq
+            n.rel_bias = (S * _col(j.speeds)).jacobian(qs) * dq
         else:
             n.rel_bias = None
         n.S = S
@@ -358,7 +363,7 @@ def equations_of_tree(system):
     # ---- RNEA with u' = 0: velocities and velocity-product accelerations out
     zero = sm.zeros(3, 1)
     for n in tree.order:
-        uj = sm.Matrix(list(n.joint.speeds))
+        uj = _col(n.joint.speeds)
         rel = n.S * uj
         w_rel, v_rel = rel[:3, :], rel[3:, :]
         if n.parent is None:

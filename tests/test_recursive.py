@@ -58,6 +58,26 @@ def _tree(spec, name="t", gravity=True, loads=True, actuator=True):
         elif kind == "prismatic":
             q, u = me.dynamicsymbols(f"q{i} u{i}")
             j = me.PrismaticJoint(f"J{i}", parent, body, q, u, ppt, cpt, joint_axis=axis)
+        elif kind == "cylindrical":
+            q, u, q2, u2 = me.dynamicsymbols(f"q{i} u{i} qt{i} ut{i}")
+            j = me.CylindricalJoint(f"J{i}", parent, body, rotation_coordinate=q,
+                                    translation_coordinate=q2, rotation_speed=u,
+                                    translation_speed=u2, parent_point=ppt,
+                                    child_point=cpt, joint_axis=axis)
+        elif kind == "planar":
+            q, u = me.dynamicsymbols(f"q{i} u{i}")
+            qa, qb, ua, ub = me.dynamicsymbols(f"qa{i} qb{i} ua{i} ub{i}")
+            j = me.PlanarJoint(f"J{i}", parent, body, rotation_coordinate=q,
+                               planar_coordinates=[qa, qb], rotation_speed=u,
+                               planar_speeds=[ua, ub], parent_point=ppt, child_point=cpt)
+        elif kind == "spherical":
+            q, qb, qc = me.dynamicsymbols(f"q{i} qb{i} qc{i}")
+            u, ub, uc = me.dynamicsymbols(f"u{i} ub{i} uc{i}")
+            j = me.SphericalJoint(f"J{i}", parent, body, coordinates=[q, qb, qc],
+                                  speeds=[u, ub, uc], parent_point=ppt, child_point=cpt)
+        elif kind == "weld":
+            q = u = sm.S.Zero
+            j = me.WeldJoint(f"J{i}", parent, body, parent_point=ppt, child_point=cpt)
         else:
             raise AssertionError(kind)
         system.add_joints(j)
@@ -82,6 +102,12 @@ CASES = {
     "chain3d4": [(-1, "pin", "y"), (0, "pin", "x"), (1, "prismatic", "xz"), (2, "pin", "z")],
     "tree5": [(-1, "pin", "z"), (0, "pin", "x"), (0, "prismatic", "y"), (1, "pin", "xz"),
               (2, "pin", "y")],
+    "cylinder2": [(-1, "cylindrical", "z"), (0, "pin", "x")],
+    "planar2": [(-1, "planar", "x"), (0, "pin", "y")],
+    "spherical2": [(-1, "spherical", "x"), (0, "pin", "z")],
+    "weld3": [(-1, "pin", "z"), (0, "weld", "x"), (1, "prismatic", "y")],
+    "mixed5": [(-1, "spherical", "x"), (0, "cylindrical", "y"), (0, "weld", "z"),
+               (2, "planar", "x"), (1, "prismatic", "xz")],
     "tree6": [(-1, "prismatic", "z"), (0, "pin", "y"), (1, "pin", "x"), (1, "pin", "z"),
               (3, "prismatic", "x"), (0, "pin", "xz")],
 }
@@ -138,9 +164,10 @@ def _compile(spec, name):
 def test_rhs_and_mass_matrix_match_form_eoms(case):
     spec = CASES[case]
     model, sim = _compile(spec, f"rec_{case}")
-    ref = _Ref(spec, with_jac=len(spec) <= 4)
-    nq = len(spec)
-    assert [str(s) for s in model.q_orig] == [f"q{i}(t)" for i in range(nq)]
+    ref = _Ref(spec, with_jac=model.nq <= 5)
+    nq = model.nq
+    assert model.nu == nq and nq == ref.nq
+    assert [str(s) for s in model.q_orig + model.u_orig] == [str(s) for s in ref.x]
     rng = np.random.default_rng(1)
     for _ in range(5):
         x = rng.uniform(-1.5, 1.5, 2 * nq)
@@ -151,7 +178,7 @@ def test_rhs_and_mass_matrix_match_form_eoms(case):
         Mw = ref.mass(x)
         Mg = sim.mass_matrix(x[:nq])
         assert np.max(np.abs(Mg - Mw)) <= TOL * max(1.0, np.max(np.abs(Mw)))
-        if len(spec) <= 4:
+        if nq <= 5:
             A, B = sim.linearize(x, r=r)
             Aw, Bw = ref.linear(x, r)
             scale = max(1.0, np.max(np.abs(Aw)))
