@@ -84,7 +84,8 @@ def _is_zero(e):
 
 class _Body:
     __slots__ = ("body", "joint", "parent", "children", "E", "r", "S", "rel_bias",
-                 "speed_idx", "w", "v", "al", "a", "F", "N", "Ic", "depth", "Ftot", "Ntot")
+                 "speed_idx", "w", "v", "al", "a", "F", "N", "Ic", "depth", "Ftot", "Ntot",
+                 "rep", "R", "Sw", "rw", "p", "Iw", "SO")
 
     def __init__(self, body, joint, parent):
         self.body, self.joint, self.parent = body, joint, parent
@@ -264,43 +265,6 @@ def equations_of_tree(system):
                 known_points.setdefault(pt, b)
                 known_frames.setdefault(fr, b)
 
-    memo = {}
-
-    def in_body(vec, node):
-        """A sympy Vector's components in node's axes; components given in an
-        ancestor's axes (or the inertial frame's) go down the tree one E at a
-        time, memoized, so gravity costs one 3x3 product per body."""
-        out = sm.zeros(3, 1)
-        for comp, frame in vec.args:
-            out += down(sm.ImmutableMatrix(comp), frame, node)
-        return out
-
-    def down(comp, frame, node):
-        key = (comp, frame, node.body)
-        if key in memo:
-            return memo[key]
-        if frame == node.body.frame:
-            res = sm.Matrix(comp)
-        elif frame in ground_frames or _ancestor_frame(frame, node):
-            if node.parent is None:
-                base = sm.Matrix(comp) if frame == node.joint.parent.frame else \
-                    me.Vector([(sm.Matrix(comp), frame)]).to_matrix(node.joint.parent.frame)
-            else:
-                base = down(comp, frame, node.parent)
-            res = node.E * base
-        else:
-            res = me.Vector([(sm.Matrix(comp), frame)]).to_matrix(node.body.frame)
-        memo[key] = res
-        return res
-
-    def _ancestor_frame(frame, node):
-        p = node.parent
-        while p is not None:
-            if p.body.frame == frame:
-                return True
-            p = p.parent
-        return False
-
     def body_of_point(pt, what):
         if pt in known_points:
             return known_points[pt]
@@ -335,6 +299,27 @@ def equations_of_tree(system):
             f"{what} acts on frame {_name(fr)!r}, which the joint tree does not know: "
             "not a body's frame, a joint's frame, or a frame fixed in a body")
 
+    # ---- each body's axes in the inertial frame's: R = A Rot(k, theta) B, the
+    # angles of consecutive joints about one axis summed (a chain of parallel
+    # pins keeps cos(q1 + ... + qn), not a product of n rotations)
+    for n in tree.order:
+        _orientation(n, tree)
+
+    def in_world(vec):
+        out = sm.zeros(3, 1)
+        for comp, frame in vec.args:
+            comp = sm.Matrix(comp)
+            if frame == N:
+                out += comp
+            elif frame in known_frames and frame not in ground_frames:
+                b = tree.nodes[known_frames[frame]]
+                if frame != b.body.frame:
+                    comp = me.Vector([(comp, frame)]).to_matrix(b.body.frame)
+                out += b.R * comp
+            else:
+                out += me.Vector([(comp, frame)]).to_matrix(N)
+        return out
+
     for n in tree.order:
         n.F, n.N = sm.zeros(3, 1), sm.zeros(3, 1)
     loads = list(system.loads)
@@ -346,92 +331,159 @@ def equations_of_tree(system):
             if b is None:
                 continue
             n = tree.nodes[b]
-            Fb = in_body(ld.vector, n)
-            n.F += Fb
+            Fw = in_world(ld.vector)
+            n.F += Fw
             if ld.point != b.masscenter:
                 rb = ld.point.pos_from(b.masscenter).to_matrix(b.frame)
-                n.N += _cross(rb, Fb)
+                n.N += _cross(n.R * rb, Fw)
         elif isinstance(ld, me.Torque):
             b = body_of_frame(ld.frame, f"torque {ld}")
             if b is None:
                 continue
             n = tree.nodes[b]
-            n.N += in_body(ld.vector, n)
+            n.N += in_world(ld.vector)
         else:      # pragma: no cover - sympy's loads are Force or Torque
             raise ModelError(f"load {ld!r} is neither a Force nor a Torque")
 
-    # ---- RNEA with u' = 0: velocities and velocity-product accelerations out
+    # ---- RNEA with u' = 0, in the inertial frame's axes, at the mass centres:
+    # velocities and velocity-product accelerations out
     zero = sm.zeros(3, 1)
     for n in tree.order:
-        uj = _col(n.joint.speeds)
-        rel = n.S * uj
+        R = n.R
+        n.Sw = sm.Matrix.vstack(R * n.S[:3, :], R * n.S[3:, :]) if n.S.shape[1] \
+            else sm.zeros(6, 0)
+        rel = n.Sw * _col(n.joint.speeds)
         w_rel, v_rel = rel[:3, :], rel[3:, :]
         if n.parent is None:
-            w_p = v_p = al_p = a_p = zero
+            w_p = v_p = al_p = a_p = p_p = zero
+            Rp = sm.eye(3)
         else:
             w_p, v_p, al_p, a_p = n.parent.w, n.parent.v, n.parent.al, n.parent.a
-        E, r = n.E, n.r
-        wpc = E * w_p
-        n.w = wpc + w_rel
-        n.v = E * (v_p + _cross(w_p, r)) + v_rel
-        al = E * al_p + _cross(wpc, w_rel)
-        a = E * (a_p + _cross(al_p, r) + _cross(w_p, _cross(w_p, r))) \
-            + 2 * _cross(wpc, v_rel) + _cross(w_rel, v_rel)
+            Rp, p_p = n.parent.R, n.parent.p
+        r = Rp * n.r
+        n.rw = r
+        n.p = p_p + r
+        n.w = w_p + w_rel
+        n.v = v_p + _cross(w_p, r) + v_rel
+        al = al_p + _cross(w_p, w_rel)
+        a = a_p + _cross(al_p, r) + _cross(w_p, _cross(w_p, r)) \
+            + 2 * _cross(w_p, v_rel) + _cross(w_rel, v_rel)
         if n.rel_bias is not None:
-            al += n.rel_bias[:3, :]
-            a += n.rel_bias[3:, :]
+            al += R * n.rel_bias[:3, :]
+            a += R * n.rel_bias[3:, :]
         n.al, n.a = al, a
+        b = n.body
+        n.Iw = R * b.central_inertia.to_matrix(b.frame) * R.T
     # forces in: each body's m a - F and I al + w x I w - T, plus its children's
     f = sm.zeros(nu, 1)
     for n in reversed(tree.order):
         b = n.body
-        I = b.central_inertia.to_matrix(b.frame)
         Fi = b.mass * n.a - n.F
-        Ni = I * n.al + _cross(n.w, I * n.w) - n.N
+        Ni = n.Iw * n.al + _cross(n.w, n.Iw * n.w) - n.N
         for c in n.children:
-            ET = c.E.T
-            Fc = ET * c.Ftot
-            Fi += Fc
-            Ni += ET * c.Ntot + _cross(c.r, Fc)
+            Fi += c.Ftot
+            Ni += c.Ntot + _cross(c.rw, c.Ftot)
         n.Ftot, n.Ntot = Fi, Ni
-        tau = n.S.T * sm.Matrix.vstack(Ni, Fi)
+        tau = n.Sw.T * sm.Matrix.vstack(Ni, Fi)
         for k, idx in enumerate(n.speed_idx):
             f[idx] = -tau[k]
 
-    # ---- CRBA: composite inertias in, then each joint's column up the tree
+    # ---- CRBA with spatial inertias about the origin (plain sums over the
+    # subtree), each joint's column [w; v_O] = [s_w; s_v + p x s_w]
     M = sm.zeros(nu, nu)
     for n in reversed(tree.order):
         b = n.body
-        I = b.central_inertia.to_matrix(b.frame)
+        pt = _skew(n.p)
         Ic = sm.zeros(6, 6)
-        Ic[:3, :3] = I
+        Ic[:3, :3] = n.Iw - b.mass * pt * pt
+        Ic[:3, 3:] = b.mass * pt
+        Ic[3:, :3] = -b.mass * pt
         Ic[3:, 3:] = b.mass * sm.eye(3)
         for c in n.children:
-            X = _motion_transform(c)
-            Ic += X.T * c.Ic * X
+            Ic += c.Ic
         n.Ic = Ic
+        nj = n.Sw.shape[1]
+        SO = sm.zeros(6, nj)
+        for k in range(nj):
+            sw, sv = n.Sw[:3, k], n.Sw[3:, k]
+            SO[:3, k] = sw
+            SO[3:, k] = sv + _cross(n.p, sw)
+        n.SO = SO
     for n in tree.order:
-        F = n.Ic * n.S
-        Mii = n.S.T * F
-        for a_, ia in enumerate(n.speed_idx):
-            for b_, ib in enumerate(n.speed_idx):
-                M[ia, ib] = Mii[a_, b_]
+        F = n.Ic * n.SO
         m = n
-        while m.parent is not None:
-            F = _motion_transform(m).T * F
-            m = m.parent
-            blk = F.T * m.S           # rows: n's speeds, columns: m's speeds
+        while m is not None:
+            blk = F.T * m.SO           # rows: n's speeds, columns: m's speeds
             for a_, ia in enumerate(n.speed_idx):
                 for b_, ib in enumerate(m.speed_idx):
                     M[ia, ib] = blk[a_, b_]
                     M[ib, ia] = blk[a_, b_]
+            m = m.parent
     return M, f, tree.q, tree.u, tree.kdes
 
 
-def _motion_transform(n):
-    """6x6 X with [w; v]_child = X [w; v]_parent (each at its mass centre)."""
-    X = sm.zeros(6, 6)
-    X[:3, :3] = n.E
-    X[3:, 3:] = n.E
-    X[3:, :3] = -n.E * _skew(n.r)
-    return X
+def _rot(k, th):
+    """Rotation by th about the unit axis k (components in the frame's axes)."""
+    K = _skew(k)
+    return sm.eye(3) + sm.sin(th) * K + (1 - sm.cos(th)) * (K * K)
+
+
+def _orientation(n, tree):
+    """n.R (body axes -> inertial axes) as A Rot(k, theta) B, sharing the
+    angle with the parent when the joint turns about the parent's axis."""
+    if n.parent is None:
+        A, k, th, B = sm.eye(3), None, sm.S.Zero, sm.eye(3)
+        if n.joint.parent.frame != tree.N:     # pragma: no cover - refused in _Tree
+            A = sm.Matrix(tree.N.dcm(n.joint.parent.frame))
+    else:
+        A, k, th, B = n.parent.rep
+    ET = n.E.T                                  # parent axes <- child axes
+    wq = n.S[:3, :]                             # w_rel (child axes) = wq u_j
+    qj = [x for x in n.joint.coordinates]
+    rep = None
+    if not any(e.has(*qj) for e in ET) if qj else True:
+        # no rotation in this joint: a constant ET
+        if all(e == 0 for e in wq):
+            rep = (A, k, th, B * ET)
+    elif len(qj) >= 1 and wq.shape[1] >= 1:
+        # one rotating coordinate about a constant axis?
+        rot = [x for x in qj if any(e.has(x) for e in ET)]
+        cols = [c for c in range(wq.shape[1]) if any(e != 0 for e in wq[:, c])]
+        if len(rot) == 1 and len(cols) == 1 and not any(e.has(_T) for e in wq[:, cols[0]]):
+            q = rot[0]
+            E0T = ET.xreplace({q: 0})
+            kp = E0T * wq[:, cols[0]]           # the axis in the parent's axes
+            if _same(ET, _rot(kp, q) * E0T, q):
+                if k is not None and _same_vec(B * kp, k):
+                    rep = (A, k, th + q, B * E0T)
+                else:
+                    Rp = A * (_rot(k, th) if k is not None else sm.eye(3)) * B
+                    rep = (Rp, kp, q, E0T)
+    if rep is None:
+        Rp = A * (_rot(k, th) if k is not None else sm.eye(3)) * B
+        rep = (Rp * ET, None, sm.S.Zero, sm.eye(3))
+    n.rep = rep
+    A, k, th, B = rep
+    n.R = A * (_rot(k, th) if k is not None else sm.eye(3)) * B
+
+
+def _same(X, Y, q):
+    """X == Y as functions of q (numerically at a few values; both are small
+    rotation matrices in q and constants)."""
+    import random
+    rnd = random.Random(7)
+    free = sorted((X.free_symbols | Y.free_symbols) - {_T}, key=str)
+    for _ in range(3):
+        vals = {s: rnd.uniform(0.2, 1.3) for s in free}
+        vals[q] = rnd.uniform(-2, 2)
+        d = (X - Y).xreplace({q: vals[q]}).xreplace(vals)
+        try:
+            if max(abs(complex(sm.N(e))) for e in d) > 1e-12:
+                return False
+        except TypeError:
+            return False
+    return True
+
+
+def _same_vec(a, b):
+    return all(sm.simplify(x - y) == 0 for x, y in zip(a, b))
