@@ -85,7 +85,7 @@ def _is_zero(e):
 class _Body:
     __slots__ = ("body", "joint", "parent", "children", "E", "r", "S", "rel_bias",
                  "speed_idx", "w", "v", "al", "a", "F", "N", "Ic", "depth", "Ftot", "Ntot",
-                 "rep", "R", "Sw", "rw", "p", "Iw", "SO")
+                 "rep", "R", "Sw", "rw", "Iw", "r_pp", "r_cc", "mt", "h", "J")
 
     def __init__(self, body, joint, parent):
         self.body, self.joint, self.parent = body, joint, parent
@@ -223,12 +223,18 @@ def equations_of_tree(system):
         j, child, parent = n.joint, n.body, n.joint.parent
         try:
             n.E = sm.Matrix(child.frame.dcm(parent.frame))
-            n.r = child.masscenter.pos_from(parent.masscenter).to_matrix(parent.frame)
+            # C_child - C_parent = r_pp (parent's axes) + r_cc (child's axes)
+            n.r_pp = j.child_point.pos_from(parent.masscenter).to_matrix(parent.frame)
+            n.r_cc = child.masscenter.pos_from(j.child_point).to_matrix(child.frame)
             w_rel = child.frame.ang_vel_in(parent.frame).to_matrix(child.frame)
         except ValueError as e:
             raise ModelError(f"joint {_name(j)!r}: sympy cannot relate body "
                              f"{_name(child)!r} to body {_name(parent)!r} ({e})") from None
-        v_rel = n.E * n.r.diff(_T)
+        if any(e.has(_T) for e in n.r_cc):
+            raise ModelError(f"joint {_name(j)!r}: its child point moves in body "
+                             f"{_name(child)!r}")
+        # d/dt in the parent frame of C_child - C_parent, in the child's axes
+        v_rel = n.E * n.r_pp.diff(_T) + _cross(w_rel, n.r_cc)
         rel = sm.Matrix.vstack(w_rel, v_rel).xreplace(tree.qdot)
         S = rel.jacobian(list(j.speeds)) if len(j.speeds) else sm.zeros(6, 0)
         resid = rel - S * _col(j.speeds)
@@ -355,14 +361,13 @@ def equations_of_tree(system):
         rel = n.Sw * _col(n.joint.speeds)
         w_rel, v_rel = rel[:3, :], rel[3:, :]
         if n.parent is None:
-            w_p = v_p = al_p = a_p = p_p = zero
+            w_p = v_p = al_p = a_p = zero
             Rp = sm.eye(3)
         else:
             w_p, v_p, al_p, a_p = n.parent.w, n.parent.v, n.parent.al, n.parent.a
-            Rp, p_p = n.parent.R, n.parent.p
-        r = Rp * n.r
+            Rp = n.parent.R
+        r = Rp * n.r_pp + R * n.r_cc
         n.rw = r
-        n.p = p_p + r
         n.w = w_p + w_rel
         n.v = v_p + _cross(w_p, r) + v_rel
         al = al_p + _cross(w_p, w_rel)
@@ -388,37 +393,38 @@ def equations_of_tree(system):
         for k, idx in enumerate(n.speed_idx):
             f[idx] = -tau[k]
 
-    # ---- CRBA with spatial inertias about the origin (plain sums over the
-    # subtree), each joint's column [w; v_O] = [s_w; s_v + p x s_w]
+    # ---- CRBA: each subtree's mass, first moment h and inertia J about the
+    # mass centre of its root body (inertial axes; shifted by the joint
+    # vectors, never by absolute positions); a joint's column F = Ic s goes up
+    # the tree as the force of the backward pass does
     M = sm.zeros(nu, nu)
     for n in reversed(tree.order):
-        b = n.body
-        pt = _skew(n.p)
-        Ic = sm.zeros(6, 6)
-        Ic[:3, :3] = n.Iw - b.mass * pt * pt
-        Ic[:3, 3:] = b.mass * pt
-        Ic[3:, :3] = -b.mass * pt
-        Ic[3:, 3:] = b.mass * sm.eye(3)
+        mt, h, J = n.body.mass, sm.zeros(3, 1), n.Iw
         for c in n.children:
-            Ic += c.Ic
-        n.Ic = Ic
-        nj = n.Sw.shape[1]
-        SO = sm.zeros(6, nj)
-        for k in range(nj):
-            sw, sv = n.Sw[:3, k], n.Sw[3:, k]
-            SO[:3, k] = sw
-            SO[3:, k] = sv + _cross(n.p, sw)
-        n.SO = SO
+            d = c.rw
+            dt_, ht = _skew(d), _skew(c.h)
+            mt += c.mt
+            h += c.h + c.mt * d
+            J += c.J - (ht * dt_ + dt_ * ht) - c.mt * dt_ * dt_
+        n.mt, n.h, n.J = mt, h, J
     for n in tree.order:
-        F = n.Ic * n.SO
+        nj = n.Sw.shape[1]
+        if not nj:
+            continue
+        ht = _skew(n.h)
+        sw, sv = n.Sw[:3, :], n.Sw[3:, :]
+        L = n.J * sw + ht * sv
+        P = n.mt * sv - ht * sw
         m = n
         while m is not None:
-            blk = F.T * m.SO           # rows: n's speeds, columns: m's speeds
-            for a_, ia in enumerate(n.speed_idx):
-                for b_, ib in enumerate(m.speed_idx):
+            if m is not n:
+                L = L + sm.Matrix.hstack(*[_cross(prev.rw, P[:, k]) for k in range(nj)])
+            blk = m.Sw.T * sm.Matrix.vstack(L, P)    # rows: m's speeds, columns: n's
+            for a_, ia in enumerate(m.speed_idx):
+                for b_, ib in enumerate(n.speed_idx):
                     M[ia, ib] = blk[a_, b_]
                     M[ib, ia] = blk[a_, b_]
-            m = m.parent
+            prev, m = m, m.parent
     return M, f, tree.q, tree.u, tree.kdes
 
 
