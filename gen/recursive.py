@@ -4,42 +4,49 @@ algorithms (issue 37), without ``KanesMethod.kanes_equations`` or
 
 ``Model.from_system(system, formulation="recursive")`` lands here. The tree is
 read from the System's joints: each joint gives its child body a parent body,
-and the inertial frame's body (the System's frame) is the root. Every body
-carries its own coordinates: the axes of its frame, the origin at its mass
-centre. Per joint the module forms, from sympy's own joint kinematics, a few
-small expressions:
+and the body whose frame is the System's frame is the root. Per joint, from
+sympy's own joint kinematics, a few small expressions:
 
 - ``E``: the direction cosines from the parent's axes to the child's
-  (``child.frame.dcm(parent.frame)``), and ``r``: the child's mass centre from
-  the parent's, in the parent's axes;
-- the joint's relative motion ``[w_rel; v_rel] = S u_j`` in the child's axes:
-  the child frame's angular velocity in the parent frame and the derivative in
-  the parent frame of ``r``, with ``S`` its Jacobian in the joint's speeds.
+  (``child.frame.dcm(parent.frame)``); the joint vector from the parent's mass
+  centre to the child's, as a part in the parent's axes (to the child point)
+  plus a constant part in the child's axes;
+- the joint's relative motion ``[w_rel; v_rel] = S u_j`` in the child's axes
+  (the child frame's angular velocity in the parent's, and the derivative in
+  the parent frame of the joint vector), ``S`` its Jacobian in the joint's
+  speeds, and the velocity-product part ``dS/dt u_j``.
 
-With those, the mass matrix comes from the composite rigid body algorithm
-(composite spatial inertias at the mass centres, ``M[i, j] = S_i^T X^T ...
-Ic_j S_j``) and the forcing from recursive Newton-Euler with ``u' = 0``
-(velocities and velocity-product accelerations outward, the body's
-``m a - F_ext`` and ``I alpha + w x I w - T_ext`` inward, projected on ``S``).
-So ``M u' = f`` are Kane's equations of the tree, the kinematics are the
-System's own ``kdes``, and the result goes to :meth:`gen.Model.from_matrices`
-as any model does: rhs, linearization, derivative kernels and every backend
-follow unchanged. Why CRBA + RNEA rather than the articulated body
-algorithm: the generated code keeps the canonical ``M u' = f`` form the rest
-of the pipeline (constraints, linearization, implicit solvers) takes, and the
-run-time factorization of ``M`` is the runtime's existing one; ABA would fold
-the solve into symbolic expressions with divisions the pipeline cannot see.
+The recursions run in the inertial frame's axes at each body's mass centre:
+each body's orientation is kept as ``A Rot(k, theta) B``, and a joint turning
+about its parent's axis adds its angle to ``theta``. A chain of parallel pins
+thus holds ``cos(q1 + ... + qk)``, not a product of k rotation matrices, and
+the expressions grow polynomially with the number of bodies where body-axes
+recursions (each level re-rotating its parent's vectors) grow exponentially as
+sympy trees. The mass matrix comes from the composite rigid body algorithm
+(each subtree's mass, first moment and inertia about its root's mass centre,
+shifted by joint vectors; a joint's column ``Ic s`` carried up the tree), the
+forcing from recursive Newton-Euler with ``u' = 0`` (velocities and
+velocity-product accelerations outward, each body's ``m a - F_ext`` and
+``I alpha + w x I w - T_ext`` inward, projected on ``S``). ``M u' = f`` are
+then Kane's equations of the tree; the kinematics are the System's own
+``kdes``, and the result goes to :meth:`gen.Model.from_matrices` as any model
+does, so rhs, linearization, derivative kernels and every backend follow.
 
-The expressions share their sub-expressions (each body's quantities are built
-once from its parent's); the pipeline's CSE recovers the sharing, so they are
-never expanded or simplified here.
+Why CRBA + RNEA rather than the articulated body algorithm: the model keeps the
+canonical ``M u' = f`` form the rest of the pipeline (linearization, implicit
+solvers, constraints) takes, with ``M`` factorized numerically by the runtime;
+ABA would put the solve into the symbolic expressions, with divisions the
+pipeline cannot see. Nothing is expanded or simplified: the pipeline's CSE
+recovers the shared sub-expressions.
 
 Taken: trees of ``PinJoint``, ``PrismaticJoint``, ``CylindricalJoint``,
 ``PlanarJoint``, ``SphericalJoint`` and ``WeldJoint`` between rigid bodies,
 with forces on points and torques on frames the tree knows (gravity from
-``apply_uniform_gravity``, loads, actuators). Not yet: loop closures and other
-constraints, auxiliary speeds, particles, joints whose motion depends
-explicitly on time; each is refused with a :class:`gen.ModelError` naming it.
+``apply_uniform_gravity``, loads, actuators). Refused with a
+:class:`gen.ModelError` naming what: loop closures and other constraints,
+auxiliary speeds, particles, other joint classes, explicitly time-dependent
+joints, bodies not joined to the System's frame, loads on unknown points or
+frames.
 """
 from __future__ import annotations
 
