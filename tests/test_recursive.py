@@ -269,3 +269,65 @@ def test_constraints_refused():
     system.add_holonomic_constraints(q0 - system.q[-1])
     with pytest.raises(gen.ModelError, match="holonomic constraint.*formulation='kane'"):
         gen.Model.from_system(system, constants=consts, formulation="recursive")
+
+
+# ---------------------------------------------------------------- Pinocchio
+def _pinocchio_model(system, consts):
+    """The same tree as a Pinocchio model: joint i's frame at its parent point,
+    with the parent body's axes at q = 0; the body's inertia and mass centre in
+    that frame (all numbers from the System at q = 0 and the constants)."""
+    pin = pytest.importorskip("pinocchio")
+    model = pin.Model()
+    ids = {}
+    qzero = {q: 0 for q in system.q}
+
+    def num(mat):
+        return np.array(sm.Matrix(mat).xreplace(qzero).xreplace(consts).evalf(), float)
+
+    for j in system.joints:
+        parent, child = j.parent, j.child
+        E0T = num(parent.frame.dcm(child.frame))                 # parent axes <- child
+        a = num(j.parent_point.pos_from(parent.masscenter).to_matrix(parent.frame)).ravel()
+        rcc = num(child.masscenter.pos_from(j.child_point).to_matrix(child.frame)).ravel()
+        axis = num(j.joint_axis.to_matrix(parent.frame)).ravel()
+        axis /= np.linalg.norm(axis)
+        if parent in ids:
+            pid, pE0T, prcc = ids[parent]
+            place = pin.SE3(pE0T, pE0T @ (prcc + a))
+        else:
+            pid, place = 0, pin.SE3(np.eye(3), a)
+        jm = (pin.JointModelRevoluteUnaligned(axis) if isinstance(j, me.PinJoint)
+              else pin.JointModelPrismaticUnaligned(axis))
+        jid = model.addJoint(pid, jm, place, j.name)
+        I = num(child.central_inertia.to_matrix(child.frame))
+        model.appendBodyToJoint(jid, pin.Inertia(float(child.mass.xreplace(consts)),
+                                                 E0T @ rcc, E0T @ I @ E0T.T), pin.SE3.Identity())
+        ids[child] = (jid, E0T, rcc)
+    model.gravity.linear = np.array([0.0, -consts[sm.Symbol("g")], 0.0])
+    return pin, model
+
+
+def test_pinocchio_aba_matches_rhs():
+    spec = [(-1, "pin", "y"), (0, "pin", "x"), (1, "prismatic", "xz"), (1, "pin", "z"),
+            (0, "prismatic", "z"), (4, "pin", "xz"), (3, "pin", "x")]
+    system, consts, _ = _tree(spec, loads=False, actuator=False)
+    pin, pmodel = _pinocchio_model(system, consts)
+    system, consts, _ = _tree(spec, loads=False, actuator=False)
+    model = gen.Model.from_system(system, constants=consts, name="rec_pin7",
+                                  formulation="recursive")
+    sim = gen.compile(model)
+    data = pmodel.createData()
+    n = model.nq
+    assert pmodel.nq == n
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        x = rng.uniform(-1.5, 1.5, 2 * n)
+        want = pin.aba(pmodel, data, x[:n], x[n:], np.zeros(n))
+        got = sim.rhs(0.0, x)[n:]
+        assert np.max(np.abs(got - want)) <= TOL * max(1.0, np.max(np.abs(want))), (got, want)
+        # M's columns from Pinocchio's RNEA: tau(q, 0, e_k) - tau(q, 0, 0)
+        z = np.zeros(n)
+        tau0 = pin.rnea(pmodel, data, x[:n], z, z).copy()
+        Mw = np.column_stack([pin.rnea(pmodel, data, x[:n], z, np.eye(n)[k]) - tau0
+                              for k in range(n)])
+        assert np.max(np.abs(sim.mass_matrix(x[:n]) - Mw)) <= TOL * np.max(np.abs(Mw))
