@@ -6,11 +6,13 @@ System, three ways in one run:
 - ``Model.from_system(system, formulation="recursive")`` (CRBA + RNEA over the
   joint tree) alone, and with ``gen.compile`` (generation + C compile, a fresh
   cache so nothing is reused);
-- with ``--pinocchio``, Pinocchio's ABA time per call next to the C rhs.
+  and the time of one ``sim.rhs`` call from Python.
 
-Prints the times, the ratios recursive / form_eoms and the growth exponents.
+Prints the times, the ratios recursive / form_eoms and the growth exponents
+(not yet: the Kane path's own build and Pinocchio's ABA timing, which issue 37
+also asks for; tests/test_recursive.py checks Pinocchio's values).
 
-    python bench/bench_recursive.py [--n 5 10 20] [--compile] [--pinocchio]
+    python bench/bench_recursive.py [--n 5 10 20] [--compile] [--no-form-eoms]
 """
 from __future__ import annotations
 

@@ -307,13 +307,29 @@ def _pinocchio_model(system, consts):
     return pin, model
 
 
-def test_pinocchio_aba_matches_rhs():
-    spec = [(-1, "pin", "y"), (0, "pin", "x"), (1, "prismatic", "xz"), (1, "pin", "z"),
-            (0, "prismatic", "z"), (4, "pin", "xz"), (3, "pin", "x")]
+def _humanoid():
+    """31 DOF: a sliding torso with five limbs of six pins, axes turning."""
+    axes = ["z", "x", "y", "xz", "y", "x"]
+    spec = [(-1, "prismatic", "y")]
+    for limb in range(5):
+        par = 0
+        for k in range(6):
+            spec.append((par, "pin", axes[(k + limb) % 6]))
+            par = len(spec) - 1
+    return spec
+
+
+@pytest.mark.parametrize("which", [
+    "tree7", pytest.param("humanoid31", marks=pytest.mark.slow)])
+def test_pinocchio_aba_matches_rhs(which):
+    spec = {"tree7": [(-1, "pin", "y"), (0, "pin", "x"), (1, "prismatic", "xz"),
+                      (1, "pin", "z"), (0, "prismatic", "z"), (4, "pin", "xz"),
+                      (3, "pin", "x")],
+            "humanoid31": _humanoid()}[which]
     system, consts, _ = _tree(spec, loads=False, actuator=False)
     pin, pmodel = _pinocchio_model(system, consts)
     system, consts, _ = _tree(spec, loads=False, actuator=False)
-    model = gen.Model.from_system(system, constants=consts, name="rec_pin7",
+    model = gen.Model.from_system(system, constants=consts, name=f"rec_{which}",
                                   formulation="recursive")
     sim = gen.compile(model)
     data = pmodel.createData()
