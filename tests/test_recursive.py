@@ -347,3 +347,12 @@ def test_pinocchio_aba_matches_rhs(which):
         Mw = np.column_stack([pin.rnea(pmodel, data, x[:n], z, np.eye(n)[k]) - tau0
                               for k in range(n)])
         assert np.max(np.abs(sim.mass_matrix(x[:n]) - Mw)) <= TOL * np.max(np.abs(Mw))
+
+
+def test_recursive_needs_a_system():
+    system, consts, inputs = _tree(CASES["pend1"])
+    system.form_eoms()
+    with pytest.raises(gen.ModelError, match="needs a sympy System, got KanesMethod"):
+        gen.Model.from_system(system.eom_method, formulation="recursive")
+    with pytest.raises(gen.ModelError, match="q_ind.*formulation='recursive'"):
+        gen.Model.from_system(system, formulation="recursive", q_ind=[])
