@@ -379,26 +379,28 @@ def equations_of_tree(system):
         n.v = v_p + _cross(w_p, r) + v_rel
         al = al_p + _cross(w_p, w_rel)
         a = a_p + _cross(al_p, r) + _cross(w_p, _cross(w_p, r)) \
-            + 2 * _cross(w_p, v_rel) + _cross(w_rel, v_rel)
+            + _cross(2 * w_p, v_rel) + _cross(w_rel, v_rel)
         if n.rel_bias is not None:
             al += R * n.rel_bias[:3, :]
             a += R * n.rel_bias[3:, :]
         n.al, n.a = al, a
         b = n.body
         n.Iw = R * b.central_inertia.to_matrix(b.frame) * R.T
-    # forces in: each body's m a - F and I al + w x I w - T, plus its children's
+    # forces in: each body's F - m a and T - I al - w x I w, plus its
+    # children's (formed with their signs: negating a large sum would make
+    # sympy distribute the -1 over every term)
     f = sm.zeros(nu, 1)
     for n in reversed(tree.order):
         b = n.body
-        Fi = b.mass * n.a - n.F
-        Ni = n.Iw * n.al + _cross(n.w, n.Iw * n.w) - n.N
+        Fi = n.F - b.mass * n.a
+        Ni = n.N + (-n.Iw) * n.al + _cross(n.Iw * n.w, n.w)
         for c in n.children:
             Fi += c.Ftot
             Ni += c.Ntot + _cross(c.rw, c.Ftot)
         n.Ftot, n.Ntot = Fi, Ni
         tau = n.Sw.T * sm.Matrix.vstack(Ni, Fi)
         for k, idx in enumerate(n.speed_idx):
-            f[idx] = -tau[k]
+            f[idx] = tau[k]
 
     # ---- CRBA: each subtree's mass, first moment h and inertia J about the
     # mass centre of its root body (inertial axes; shifted by the joint
@@ -409,10 +411,10 @@ def equations_of_tree(system):
         mt, h, J = n.body.mass, sm.zeros(3, 1), n.Iw
         for c in n.children:
             d = c.rw
-            dt_, ht = _skew(d), _skew(c.h)
+            dt_, ht, ndt = _skew(d), _skew(c.h), _skew(-d)
             mt += c.mt
             h += c.h + c.mt * d
-            J += c.J - (ht * dt_ + dt_ * ht) - c.mt * dt_ * dt_
+            J += c.J + (ht * ndt + ndt * ht) + c.mt * (dt_ * ndt)
         n.mt, n.h, n.J = mt, h, J
     for n in tree.order:
         nj = n.Sw.shape[1]
@@ -421,7 +423,7 @@ def equations_of_tree(system):
         ht = _skew(n.h)
         sw, sv = n.Sw[:3, :], n.Sw[3:, :]
         L = n.J * sw + ht * sv
-        P = n.mt * sv - ht * sw
+        P = n.mt * sv + sm.Matrix.hstack(*[_cross(sw[:, k], n.h) for k in range(nj)])
         m = n
         while m is not None:
             if m is not n:
