@@ -697,11 +697,12 @@ class Model:
 
     @classmethod
     def from_system(cls, obj, constants=None, inputs=None, name="model", energy=None,
-                    outputs=None, **partition):
+                    outputs=None, formulation="kane", **partition):
         """Build from whatever holds formed equations of motion.
 
         Dispatches to :meth:`from_kanes` or :meth:`from_lagrange` on the formed
-        method.
+        method; with ``formulation="recursive"``, forms the equations of a sympy
+        System's joint tree itself (:mod:`gen.recursive`).
 
         Parameters
         ----------
@@ -723,6 +724,13 @@ class Model:
             ``{name: expression}`` of quantities to measure (sensor readings,
             point positions) in the coordinates, speeds, inputs, constants and t
             (``sim.outputs``; ``linearize_outputs`` gives C and D).
+        formulation : {"kane", "recursive"}, optional
+            ``"kane"``: the equations the method formed (``form_eoms()`` first).
+            ``"recursive"``: a sympy System's joint tree, its equations formed
+            here (no ``form_eoms()`` needed, none called): the mass matrix by the
+            composite rigid body algorithm, the forcing by recursive
+            Newton-Euler, the System's kdes as the kinematics
+            (:mod:`gen.recursive`; open trees of rigid bodies and sympy's joints).
         **partition
             The further keywords of the builder: q_ind, q_dep, qd_ind, qd_dep for
             Lagrange models (a sympy System's own partition is the default), those
@@ -740,6 +748,18 @@ class Model:
             called (or whose equations were reset by a later change): eomgen never
             forms the equations itself.
         """
+        if formulation == "recursive":
+            if partition:
+                raise ModelError(
+                    f"unknown argument(s) {', '.join(sorted(partition))} for "
+                    "Model.from_system with formulation='recursive': accepted are none")
+            from .recursive import equations_of_tree
+            M, f, q, u, kdes = equations_of_tree(obj)
+            return cls.from_matrices(M, f, q, u, kdes, constants=constants, inputs=inputs,
+                                     name=name, energy=energy, outputs=outputs)
+        if formulation != "kane":
+            raise ModelError(f"formulation={formulation!r} for Model.from_system: "
+                             "accepted are 'kane' and 'recursive'")
         m, desc, kind, call = _unwrap(obj)
         needs = "Model.from_system needs a KanesMethod or LagrangesMethod"
         accepted = ("(accepted: a KanesMethod or LagrangesMethod, or a sympy System, "

@@ -1,0 +1,504 @@
+"""Equations of motion of a sympy ``System``'s joint tree by recursive
+algorithms (issue 37), without ``KanesMethod.kanes_equations`` or
+``System.form_eoms``.
+
+``Model.from_system(system, formulation="recursive")`` lands here. The tree is
+read from the System's joints: each joint gives its child body a parent body,
+and the body whose frame is the System's frame is the root. Per joint, from
+sympy's own joint kinematics, a few small expressions:
+
+- ``E``: the direction cosines from the parent's axes to the child's
+  (``child.frame.dcm(parent.frame)``); the joint vector from the parent's mass
+  centre to the child's, as a part in the parent's axes (to the child point)
+  plus a constant part in the child's axes;
+- the joint's relative motion ``[w_rel; v_rel] = S u_j`` in the child's axes
+  (the child frame's angular velocity in the parent's, and the derivative in
+  the parent frame of the joint vector), ``S`` its Jacobian in the joint's
+  speeds, and the velocity-product part ``dS/dt u_j``.
+
+The recursions run in the inertial frame's axes at each body's mass centre:
+each body's orientation is kept as ``A Rot(k, theta) B``, and a joint turning
+about its parent's axis adds its angle to ``theta``. A chain of parallel pins
+thus holds ``cos(q1 + ... + qk)``, not a product of k rotation matrices, and
+the expressions grow polynomially with the number of bodies where body-axes
+recursions (each level re-rotating its parent's vectors) grow exponentially as
+sympy trees. The mass matrix comes from the composite rigid body algorithm
+(each subtree's mass, first moment and inertia about its root's mass centre,
+shifted by joint vectors; a joint's column ``Ic s`` carried up the tree), the
+forcing from recursive Newton-Euler with ``u' = 0`` (velocities and
+velocity-product accelerations outward, each body's ``m a - F_ext`` and
+``I alpha + w x I w - T_ext`` inward, projected on ``S``). ``M u' = f`` are
+then Kane's equations of the tree; the kinematics are the System's own
+``kdes``, and the result goes to :meth:`gen.Model.from_matrices` as any model
+does, so rhs, linearization, derivative kernels and every backend follow.
+
+Why CRBA + RNEA rather than the articulated body algorithm: the model keeps the
+canonical ``M u' = f`` form the rest of the pipeline (linearization, implicit
+solvers, constraints) takes, with ``M`` factorized numerically by the runtime;
+ABA would put the solve into the symbolic expressions, with divisions the
+pipeline cannot see. Nothing is expanded or simplified: the pipeline's CSE
+recovers the shared sub-expressions.
+
+Taken: trees of ``PinJoint``, ``PrismaticJoint``, ``CylindricalJoint``,
+``PlanarJoint``, ``SphericalJoint`` and ``WeldJoint`` between rigid bodies,
+with forces on points and torques on frames the tree knows (gravity from
+``apply_uniform_gravity``, loads, actuators). Refused with a
+:class:`gen.ModelError` naming what: loop closures and other constraints,
+auxiliary speeds, particles, other joint classes, explicitly time-dependent
+joints, bodies not joined to the System's frame, loads on unknown points or
+frames.
+"""
+from __future__ import annotations
+
+import sympy as sm
+import sympy.physics.mechanics as me
+
+from .errors import ModelError
+
+__all__ = ["equations_of_tree", "SUPPORTED_JOINTS"]
+
+SUPPORTED_JOINTS = ("PinJoint", "PrismaticJoint", "CylindricalJoint", "PlanarJoint",
+                    "SphericalJoint", "WeldJoint")
+
+_T = me.dynamicsymbols._t
+
+
+def _name(obj):
+    return getattr(obj, "name", None) or str(obj)
+
+
+def _cross(a, b):
+    return sm.Matrix([a[1] * b[2] - a[2] * b[1],
+                      a[2] * b[0] - a[0] * b[2],
+                      a[0] * b[1] - a[1] * b[0]])
+
+
+def _col(xs):
+    xs = list(xs)
+    return sm.Matrix(xs) if xs else sm.zeros(0, 1)
+
+
+def _skew(a):
+    return sm.Matrix([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+
+
+def _is_zero(e):
+    e = sm.expand(e)
+    if e == 0:
+        return True
+    return sm.simplify(e) == 0
+
+
+class _Body:
+    __slots__ = ("body", "joint", "parent", "children", "E", "r", "S", "rel_bias",
+                 "speed_idx", "w", "v", "al", "a", "F", "N", "Ic", "depth", "Ftot", "Ntot",
+                 "rep", "R", "Sw", "rw", "Iw", "r_pp", "r_cc", "mt", "h", "J")
+
+    def __init__(self, body, joint, parent):
+        self.body, self.joint, self.parent = body, joint, parent
+        self.children = []
+
+
+class _Tree:
+    """The System's joint tree, checked, in an order parents first."""
+
+    def __init__(self, system):
+        if not isinstance(system, me.System):
+            raise ModelError(
+                f"formulation='recursive' needs a sympy System, got {type(system).__name__}")
+        self.system = system
+        self.N = system.frame
+        cons = []
+        if len(system.holonomic_constraints):
+            cons.append(f"{len(system.holonomic_constraints)} holonomic constraint(s)")
+        if len(system.nonholonomic_constraints):
+            cons.append(f"{len(system.nonholonomic_constraints)} nonholonomic constraint(s)")
+        if len(system.q_dep) or len(system.u_dep):
+            cons.append("dependent coordinates or speeds")
+        if len(system.u_aux):
+            cons.append(f"auxiliary speeds {list(system.u_aux)}")
+        if cons:
+            raise ModelError(
+                f"formulation='recursive' takes open joint trees only; the System has "
+                f"{', '.join(cons)}: use formulation='kane'")
+        self.q = list(system.q)
+        self.u = list(system.u)
+        child_of = {}
+        for j in system.joints:
+            kind = type(j).__name__
+            if kind not in SUPPORTED_JOINTS:
+                raise ModelError(
+                    f"joint {_name(j)!r} is a {kind}: formulation='recursive' takes "
+                    f"{', '.join(SUPPORTED_JOINTS)}")
+            for b in (j.parent, j.child):
+                if not isinstance(b, me.RigidBody):
+                    raise ModelError(
+                        f"body {_name(b)!r} of joint {_name(j)!r} is a {type(b).__name__}: "
+                        "formulation='recursive' takes rigid bodies")
+            if j.child in child_of:
+                raise ModelError(
+                    f"body {_name(j.child)!r} is the child of joints {_name(child_of[j.child])!r} "
+                    f"and {_name(j)!r}: a closed loop, which formulation='recursive' does not "
+                    "take (use formulation='kane')")
+            child_of[j.child] = j
+        # the root: the body (or bodies) whose frame is the System's frame
+        self.ground = set()
+        for j in system.joints:
+            if j.parent not in child_of:
+                if j.parent.frame != self.N:
+                    raise ModelError(
+                        f"body {_name(j.parent)!r} (parent of joint {_name(j)!r}) is not "
+                        f"connected to the tree: it is no joint's child and its frame "
+                        f"{j.parent.frame.name!r} is not the System's frame {self.N.name!r}")
+                self.ground.add(j.parent)
+        for b in system.bodies:
+            if b not in child_of and b not in self.ground and not (
+                    isinstance(b, me.RigidBody) and b.frame == self.N):
+                raise ModelError(
+                    f"body {_name(b)!r} is not connected to the tree: no joint has it as "
+                    "its child (formulation='recursive' needs every body joined, through "
+                    "joints, to the System's frame)")
+        # parents first
+        nodes, order = {}, []
+        pending = list(child_of.items())
+        while pending:
+            rest = []
+            for child, j in pending:
+                if j.parent in self.ground:
+                    parent = None
+                elif j.parent in nodes:
+                    parent = nodes[j.parent]
+                else:
+                    rest.append((child, j))
+                    continue
+                n = _Body(child, j, parent)
+                n.depth = 0 if parent is None else parent.depth + 1
+                if parent is not None:
+                    parent.children.append(n)
+                nodes[child] = n
+                order.append(n)
+            if len(rest) == len(pending):     # pragma: no cover - cycles are refused above
+                raise ModelError(f"joints {[_name(j) for _, j in rest]} do not form a tree")
+            pending = rest
+        self.nodes, self.order = nodes, order
+        # joint speeds -> positions in system.u
+        uidx = {s: i for i, s in enumerate(self.u)}
+        for n in order:
+            try:
+                n.speed_idx = [uidx[s] for s in n.joint.speeds]
+            except KeyError as e:
+                raise ModelError(f"speed {e.args[0]} of joint {_name(n.joint)!r} is not one "
+                                 "of the System's speeds") from None
+        self._qdot_map()
+
+    def _qdot_map(self):
+        """q' in q and u, from the System's kinematic equations (solved per
+        block of rows that share coordinates)."""
+        kd = sm.Matrix(self.system.kdes)
+        qd = [qi.diff(_T) for qi in self.q]
+        if kd.shape[0] != len(qd):
+            raise ModelError(f"the System has {kd.shape[0]} kinematic equation(s) for "
+                             f"{len(qd)} coordinate(s)")
+        self.kdes = kd
+        K = kd.jacobian(qd)
+        rest = kd.xreplace({x: 0 for x in qd})
+        if any(K[i, k] != 0 for i in range(len(qd)) for k in range(len(qd)) if i != k):
+            sol = K.LUsolve(-rest)
+        else:
+            if any(K[i, i] == 0 for i in range(len(qd))):
+                raise ModelError("the System's kinematic equations do not determine every q'")
+            sol = [-rest[i] / K[i, i] for i in range(len(qd))]
+        self.qdot = dict(zip(qd, sol))
+
+
+def equations_of_tree(system):
+    """M, f, q, u, kinematics of a System's joint tree (see the module docstring).
+
+    Returns
+    -------
+    (M, f, q, u, kdes) : sympy Matrix (nu, nu), Matrix (nu, 1), list, list, Matrix (nq, 1)
+        ``M u' = f`` in the System's speed order, and the System's kinematic
+        equations (``kdes = 0``).
+    """
+    tree = _Tree(system)
+    N = tree.N
+    nu = len(tree.u)
+    qset = set(tree.q)
+
+    # ---- per joint: E, r, S and the velocity-product part of d/dt [w_rel; v_rel]
+    for n in tree.order:
+        j, child, parent = n.joint, n.body, n.joint.parent
+        try:
+            n.E = sm.Matrix(child.frame.dcm(parent.frame))
+            # C_child - C_parent = r_pp (parent's axes) + r_cc (child's axes)
+            n.r_pp = j.child_point.pos_from(parent.masscenter).to_matrix(parent.frame)
+            n.r_cc = child.masscenter.pos_from(j.child_point).to_matrix(child.frame)
+            w_rel = child.frame.ang_vel_in(parent.frame).to_matrix(child.frame)
+        except ValueError as e:
+            raise ModelError(f"joint {_name(j)!r}: sympy cannot relate body "
+                             f"{_name(child)!r} to body {_name(parent)!r} ({e})") from None
+        if any(e.has(_T) for e in n.r_cc):
+            raise ModelError(f"joint {_name(j)!r}: its child point moves in body "
+                             f"{_name(child)!r}")
+        # d/dt in the parent frame of C_child - C_parent, in the child's axes
+        v_rel = n.E * n.r_pp.diff(_T) + _cross(w_rel, n.r_cc)
+        rel = sm.Matrix.vstack(w_rel, v_rel).xreplace(tree.qdot)
+        S = rel.jacobian(list(j.speeds)) if len(j.speeds) else sm.zeros(6, 0)
+        resid = rel - S * _col(j.speeds)
+        if not all(_is_zero(e) for e in resid):
+            raise ModelError(
+                f"joint {_name(j)!r}: the child's motion relative to the parent is not "
+                "linear and homogeneous in the joint's speeds (an explicitly time-"
+                "dependent joint): formulation='recursive' does not take it")
+        if any(e.has(*[s.diff(_T) for s in tree.u]) for e in S):
+            raise ModelError(f"joint {_name(j)!r}: the joint's motion holds speed derivatives")
+        qs = sorted((S.atoms(sm.Function) & qset), key=sm.default_sort_key)
+        if qs:
+            dq = sm.Matrix([tree.qdot[x.diff(_T)] for x in qs])
+            # (dS/dt) u_j: the part of d/dt [w_rel; v_rel] (child's axes) without u'
+            n.rel_bias = (S * _col(j.speeds)).jacobian(qs) * dq
+        else:
+            n.rel_bias = None
+        n.S = S
+
+    # ---- external loads, per body, in its axes at its mass centre
+    known_points, known_frames = {}, {}
+    for n in tree.order:
+        known_points[n.body.masscenter] = n.body
+        known_frames[n.body.frame] = n.body
+    ground_frames = {N} | {g.frame for g in tree.ground}
+    ground_points = {g.masscenter for g in tree.ground} | {system.fixed_point}
+    for j in system.joints:
+        for pt, fr, b in ((j.child_point, j.child_interframe, j.child),
+                          (j.parent_point, j.parent_interframe, j.parent)):
+            if b in tree.ground:
+                ground_points.add(pt)
+                ground_frames.add(fr)
+            else:
+                known_points.setdefault(pt, b)
+                known_frames.setdefault(fr, b)
+
+    def body_of_point(pt, what):
+        if pt in known_points:
+            return known_points[pt]
+        if pt in ground_points:
+            return None
+        for n in tree.order:
+            try:
+                rb = pt.pos_from(n.body.masscenter).to_matrix(n.body.frame)
+            except ValueError:
+                continue
+            if not any(e.has(_T) for e in rb):
+                known_points[pt] = n.body
+                return n.body
+        raise ModelError(
+            f"{what} acts on point {_name(pt)!r}, which the joint tree does not know: "
+            "not a body's mass centre, a joint's point, or a point fixed in a body")
+
+    def body_of_frame(fr, what):
+        if fr in known_frames:
+            return known_frames[fr]
+        if fr in ground_frames:
+            return None
+        for n in tree.order:
+            try:
+                d = fr.dcm(n.body.frame)
+            except ValueError:
+                continue
+            if not any(e.has(_T) for e in d):
+                known_frames[fr] = n.body
+                return n.body
+        raise ModelError(
+            f"{what} acts on frame {_name(fr)!r}, which the joint tree does not know: "
+            "not a body's frame, a joint's frame, or a frame fixed in a body")
+
+    # ---- each body's axes in the inertial frame's: R = A Rot(k, theta) B, the
+    # angles of consecutive joints about one axis summed (a chain of parallel
+    # pins keeps cos(q1 + ... + qn), not a product of n rotations)
+    for n in tree.order:
+        _orientation(n, tree)
+
+    def in_world(vec):
+        out = sm.zeros(3, 1)
+        for comp, frame in vec.args:
+            comp = sm.Matrix(comp)
+            if frame == N:
+                out += comp
+            elif frame in known_frames and frame not in ground_frames:
+                b = tree.nodes[known_frames[frame]]
+                if frame != b.body.frame:
+                    comp = me.Vector([(comp, frame)]).to_matrix(b.body.frame)
+                out += b.R * comp
+            else:
+                out += me.Vector([(comp, frame)]).to_matrix(N)
+        return out
+
+    for n in tree.order:
+        n.F, n.N = sm.zeros(3, 1), sm.zeros(3, 1)
+    loads = list(system.loads)
+    for act in system.actuators:
+        loads.extend(act.to_loads())
+    for ld in loads:
+        if isinstance(ld, me.Force):
+            b = body_of_point(ld.point, f"force {ld}")
+            if b is None:
+                continue
+            n = tree.nodes[b]
+            Fw = in_world(ld.vector)
+            n.F += Fw
+            if ld.point != b.masscenter:
+                rb = ld.point.pos_from(b.masscenter).to_matrix(b.frame)
+                n.N += _cross(n.R * rb, Fw)
+        elif isinstance(ld, me.Torque):
+            b = body_of_frame(ld.frame, f"torque {ld}")
+            if b is None:
+                continue
+            n = tree.nodes[b]
+            n.N += in_world(ld.vector)
+        else:      # pragma: no cover - sympy's loads are Force or Torque
+            raise ModelError(f"load {ld!r} is neither a Force nor a Torque")
+
+    # ---- RNEA with u' = 0, in the inertial frame's axes, at the mass centres:
+    # velocities and velocity-product accelerations out
+    zero = sm.zeros(3, 1)
+    for n in tree.order:
+        R = n.R
+        n.Sw = sm.Matrix.vstack(R * n.S[:3, :], R * n.S[3:, :]) if n.S.shape[1] \
+            else sm.zeros(6, 0)
+        rel = n.Sw * _col(n.joint.speeds)
+        w_rel, v_rel = rel[:3, :], rel[3:, :]
+        if n.parent is None:
+            w_p = v_p = al_p = a_p = zero
+            Rp = sm.eye(3)
+        else:
+            w_p, v_p, al_p, a_p = n.parent.w, n.parent.v, n.parent.al, n.parent.a
+            Rp = n.parent.R
+        r = Rp * n.r_pp + R * n.r_cc
+        n.rw = r
+        n.w = w_p + w_rel
+        n.v = v_p + _cross(w_p, r) + v_rel
+        al = al_p + _cross(w_p, w_rel)
+        a = a_p + _cross(al_p, r) + _cross(w_p, _cross(w_p, r)) \
+            + _cross(2 * w_p, v_rel) + _cross(w_rel, v_rel)
+        if n.rel_bias is not None:
+            al += R * n.rel_bias[:3, :]
+            a += R * n.rel_bias[3:, :]
+        n.al, n.a = al, a
+        b = n.body
+        n.Iw = R * b.central_inertia.to_matrix(b.frame) * R.T
+    # forces in: each body's F - m a and T - I al - w x I w, plus its
+    # children's (formed with their signs: negating a large sum would make
+    # sympy distribute the -1 over every term)
+    f = sm.zeros(nu, 1)
+    for n in reversed(tree.order):
+        b = n.body
+        Fi = n.F - b.mass * n.a
+        Ni = n.N + (-n.Iw) * n.al + _cross(n.Iw * n.w, n.w)
+        for c in n.children:
+            Fi += c.Ftot
+            Ni += c.Ntot + _cross(c.rw, c.Ftot)
+        n.Ftot, n.Ntot = Fi, Ni
+        tau = n.Sw.T * sm.Matrix.vstack(Ni, Fi)
+        for k, idx in enumerate(n.speed_idx):
+            f[idx] = tau[k]
+
+    # ---- CRBA: each subtree's mass, first moment h and inertia J about the
+    # mass centre of its root body (inertial axes; shifted by the joint
+    # vectors, never by absolute positions); a joint's column F = Ic s goes up
+    # the tree as the force of the backward pass does
+    M = sm.zeros(nu, nu)
+    for n in reversed(tree.order):
+        mt, h, J = n.body.mass, sm.zeros(3, 1), n.Iw
+        for c in n.children:
+            d = c.rw
+            dt_, ht, ndt = _skew(d), _skew(c.h), _skew(-d)
+            mt += c.mt
+            h += c.h + c.mt * d
+            J += c.J + (ht * ndt + ndt * ht) + c.mt * (dt_ * ndt)
+        n.mt, n.h, n.J = mt, h, J
+    for n in tree.order:
+        nj = n.Sw.shape[1]
+        if not nj:
+            continue
+        ht = _skew(n.h)
+        sw, sv = n.Sw[:3, :], n.Sw[3:, :]
+        L = n.J * sw + ht * sv
+        P = n.mt * sv + sm.Matrix.hstack(*[_cross(sw[:, k], n.h) for k in range(nj)])
+        m = n
+        while m is not None:
+            if m is not n:
+                L = L + sm.Matrix.hstack(*[_cross(prev.rw, P[:, k]) for k in range(nj)])
+            blk = m.Sw.T * sm.Matrix.vstack(L, P)    # rows: m's speeds, columns: n's
+            for a_, ia in enumerate(m.speed_idx):
+                for b_, ib in enumerate(n.speed_idx):
+                    M[ia, ib] = blk[a_, b_]
+                    M[ib, ia] = blk[a_, b_]
+            prev, m = m, m.parent
+    return M, f, tree.q, tree.u, tree.kdes
+
+
+def _rot(k, th):
+    """Rotation by th about the unit axis k (components in the frame's axes)."""
+    K = _skew(k)
+    return sm.eye(3) + sm.sin(th) * K + (1 - sm.cos(th)) * (K * K)
+
+
+def _orientation(n, tree):
+    """n.R (body axes -> inertial axes) as A Rot(k, theta) B, sharing the
+    angle with the parent when the joint turns about the parent's axis."""
+    if n.parent is None:
+        A, k, th, B = sm.eye(3), None, sm.S.Zero, sm.eye(3)
+        if n.joint.parent.frame != tree.N:     # pragma: no cover - refused in _Tree
+            A = sm.Matrix(tree.N.dcm(n.joint.parent.frame))
+    else:
+        A, k, th, B = n.parent.rep
+    ET = n.E.T                                  # parent axes <- child axes
+    wq = n.S[:3, :]                             # w_rel (child axes) = wq u_j
+    qj = [x for x in n.joint.coordinates]
+    rep = None
+    if not any(e.has(*qj) for e in ET) if qj else True:
+        # no rotation in this joint: a constant ET
+        if all(e == 0 for e in wq):
+            rep = (A, k, th, B * ET)
+    elif len(qj) >= 1 and wq.shape[1] >= 1:
+        # one rotating coordinate about a constant axis?
+        rot = [x for x in qj if any(e.has(x) for e in ET)]
+        cols = [c for c in range(wq.shape[1]) if any(e != 0 for e in wq[:, c])]
+        if len(rot) == 1 and len(cols) == 1 and not any(e.has(_T) for e in wq[:, cols[0]]):
+            q = rot[0]
+            E0T = ET.xreplace({q: 0})
+            kp = E0T * wq[:, cols[0]]           # the axis in the parent's axes
+            if _same(ET, _rot(kp, q) * E0T, q):
+                if k is not None and _same_vec(B * kp, k):
+                    rep = (A, k, th + q, B * E0T)
+                else:
+                    Rp = A * (_rot(k, th) if k is not None else sm.eye(3)) * B
+                    rep = (Rp, kp, q, E0T)
+    if rep is None:
+        Rp = A * (_rot(k, th) if k is not None else sm.eye(3)) * B
+        rep = (Rp * ET, None, sm.S.Zero, sm.eye(3))
+    n.rep = rep
+    A, k, th, B = rep
+    n.R = A * (_rot(k, th) if k is not None else sm.eye(3)) * B
+
+
+def _same(X, Y, q):
+    """X == Y as functions of q (numerically at a few values; both are small
+    rotation matrices in q and constants)."""
+    import random
+    rnd = random.Random(7)
+    free = sorted((X.free_symbols | Y.free_symbols) - {_T}, key=str)
+    for _ in range(3):
+        vals = {s: rnd.uniform(0.2, 1.3) for s in free}
+        vals[q] = rnd.uniform(-2, 2)
+        d = (X - Y).xreplace({q: vals[q]}).xreplace(vals)
+        try:
+            if max(abs(complex(sm.N(e))) for e in d) > 1e-12:
+                return False
+        except TypeError:
+            return False
+    return True
+
+
+def _same_vec(a, b):
+    return all(sm.simplify(x - y) == 0 for x, y in zip(a, b))

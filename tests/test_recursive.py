@@ -1,0 +1,358 @@
+"""Issue 37: Model.from_system(system, formulation="recursive") forms the
+equations of a sympy System's joint tree itself (CRBA + RNEA, gen.recursive).
+
+Reference: sympy's own System.form_eoms() (Kane) on an identical System built
+separately, its mass_matrix_full / forcing_full lambdified and solved with
+numpy at random states; the linearization from lambdified symbolic Jacobians
+of the same (A = M^-1 (dF/dx - dM/dx x')). Every comparison is to 1e-12."""
+import numpy as np
+import pytest
+import sympy as sm
+import sympy.physics.mechanics as me
+
+import gen
+
+T = me.dynamicsymbols._t
+TOL = 1e-12
+# the generic trees hold constants some cases do not use (a slider's inertia),
+# and sympy warns on its own velocity-path choice for the joint points
+pytestmark = [pytest.mark.filterwarnings("ignore::gen.UnusedConstantWarning"),
+              pytest.mark.filterwarnings("ignore::gen.UnusedInputWarning"),
+              pytest.mark.filterwarnings("ignore:\\s*Velocity of:UserWarning")]
+
+
+def _tree(spec, name="t", gravity=True, loads=True, actuator=True):
+    """A System of len(spec) rigid bodies: spec[i] = (parent index or -1 for
+    the ground, joint class name, axis name 'x'|'y'|'z'|'xz'). Every body has
+    a full inertia tensor, offset joint points, and (loads=True) a force at its
+    joint's child point, a torque on its frame; (actuator=True) a torque
+    actuator on the first joint driven by the input T0."""
+    ground = me.RigidBody("G")
+    N = ground.frame
+    system = me.System.from_newtonian(ground)
+    g = sm.Symbol("g")
+    consts = {g: 9.81}
+    rng = np.random.default_rng(len(spec) * 7 + 3)
+    bodies, inputs = [], []
+    for i, (par, kind, ax) in enumerate(spec):
+        m, l, d, c = sm.symbols(f"m{i} l{i} d{i} c{i}")
+        Ixx, Iyy, Izz, Ixy, Iyz, Izx = sm.symbols(f"Ixx{i} Iyy{i} Izz{i} Ixy{i} Iyz{i} Izx{i}")
+        B = me.ReferenceFrame(f"B{i}")
+        mc = me.Point(f"mc{i}")
+        body = me.RigidBody(f"b{i}", masscenter=mc, frame=B, mass=m,
+                            inertia=(me.inertia(B, Ixx, Iyy, Izz, Ixy, Iyz, Izx), mc))
+        a = rng.uniform(-0.3, 0.3, (3, 3))
+        Iv = a @ a.T + np.diag(rng.uniform(0.5, 1.5, 3))
+        consts.update({m: rng.uniform(0.5, 2.0), l: rng.uniform(0.5, 1.5),
+                       d: rng.uniform(-0.3, 0.3), c: rng.uniform(-1, 1),
+                       Ixx: Iv[0, 0], Iyy: Iv[1, 1], Izz: Iv[2, 2], Ixy: Iv[0, 1],
+                       Iyz: Iv[1, 2], Izx: Iv[2, 0]})
+        parent = ground if par < 0 else bodies[par]
+        P = parent.frame
+        axis = {"x": P.x, "y": P.y, "z": P.z, "xz": (P.x + P.z) / sm.sqrt(2)}[ax]
+        ppt = parent.masscenter.locatenew(f"P{i}", l * P.x + d * P.y)
+        cpt = body.masscenter.locatenew(f"C{i}", -l / 2 * B.x + d * B.z)
+        if kind == "pin":
+            q, u = me.dynamicsymbols(f"q{i} u{i}")
+            j = me.PinJoint(f"J{i}", parent, body, q, u, ppt, cpt, joint_axis=axis)
+        elif kind == "prismatic":
+            q, u = me.dynamicsymbols(f"q{i} u{i}")
+            j = me.PrismaticJoint(f"J{i}", parent, body, q, u, ppt, cpt, joint_axis=axis)
+        elif kind == "cylindrical":
+            q, u, q2, u2 = me.dynamicsymbols(f"q{i} u{i} qt{i} ut{i}")
+            j = me.CylindricalJoint(f"J{i}", parent, body, rotation_coordinate=q,
+                                    translation_coordinate=q2, rotation_speed=u,
+                                    translation_speed=u2, parent_point=ppt,
+                                    child_point=cpt, joint_axis=axis)
+        elif kind == "planar":
+            q, u = me.dynamicsymbols(f"q{i} u{i}")
+            qa, qb, ua, ub = me.dynamicsymbols(f"qa{i} qb{i} ua{i} ub{i}")
+            j = me.PlanarJoint(f"J{i}", parent, body, rotation_coordinate=q,
+                               planar_coordinates=[qa, qb], rotation_speed=u,
+                               planar_speeds=[ua, ub], parent_point=ppt, child_point=cpt)
+        elif kind == "spherical":
+            q, qb, qc = me.dynamicsymbols(f"q{i} qb{i} qc{i}")
+            u, ub, uc = me.dynamicsymbols(f"u{i} ub{i} uc{i}")
+            j = me.SphericalJoint(f"J{i}", parent, body, coordinates=[q, qb, qc],
+                                  speeds=[u, ub, uc], parent_point=ppt, child_point=cpt)
+        elif kind == "weld":
+            q = u = sm.S.Zero
+            j = me.WeldJoint(f"J{i}", parent, body, parent_point=ppt, child_point=cpt)
+        else:
+            raise AssertionError(kind)
+        system.add_joints(j)
+        bodies.append(body)
+        if loads:
+            system.add_loads(me.Force(j.child_point, c * N.x + c * u * B.y),
+                             me.Torque(B, c * q * B.z + c / 3 * N.y))
+    if gravity:
+        system.apply_uniform_gravity(-g * N.y)
+    if actuator:
+        r0 = me.dynamicsymbols("T0")
+        inputs.append(r0)
+        system.add_actuators(me.TorqueActuator(r0, bodies[0].frame.z, bodies[0], ground))
+    return system, consts, inputs
+
+
+CASES = {
+    "pend1": [(-1, "pin", "z")],
+    "pend3": [(-1, "pin", "z"), (0, "pin", "z"), (1, "pin", "z")],
+    "slider1": [(-1, "prismatic", "x")],
+    "cartpole": [(-1, "prismatic", "x"), (0, "pin", "z")],
+    "chain3d4": [(-1, "pin", "y"), (0, "pin", "x"), (1, "prismatic", "xz"), (2, "pin", "z")],
+    "tree5": [(-1, "pin", "z"), (0, "pin", "x"), (0, "prismatic", "y"), (1, "pin", "xz"),
+              (2, "pin", "y")],
+    "cylinder2": [(-1, "cylindrical", "z"), (0, "pin", "x")],
+    "planar2": [(-1, "planar", "x"), (0, "pin", "y")],
+    "spherical2": [(-1, "spherical", "x"), (0, "pin", "z")],
+    "weld3": [(-1, "pin", "z"), (0, "weld", "x"), (1, "prismatic", "y")],
+    "mixed5": [(-1, "spherical", "x"), (0, "cylindrical", "y"), (0, "weld", "z"),
+               (2, "planar", "x"), (1, "prismatic", "xz")],
+    "tree6": [(-1, "prismatic", "z"), (0, "pin", "y"), (1, "pin", "x"), (1, "pin", "z"),
+              (3, "prismatic", "x"), (0, "pin", "xz")],
+}
+
+
+class _Ref:
+    """sympy's form_eoms solution of the same System, evaluated with numpy."""
+
+    def __init__(self, spec, with_jac):
+        system, consts, inputs = _tree(spec)
+        system.form_eoms()
+        self.x = list(system.q) + list(system.u)
+        Mf, Ff = system.mass_matrix_full, system.forcing_full
+        self.p = list(consts)
+        self.pv = [consts[s] for s in self.p]
+        xs = sm.symbols(f"x:{len(self.x)}")
+        rs = sm.symbols(f"r:{len(inputs)}")
+        sub = dict(zip(self.x, xs)) | dict(zip(inputs, rs))
+        Mf, Ff = Mf.xreplace(sub), Ff.xreplace(sub)
+        args = (xs, rs, self.p)
+        self._M = sm.lambdify(args, Mf, "numpy")
+        self._F = sm.lambdify(args, Ff, "numpy")
+        if with_jac:
+            self._dF = sm.lambdify(args, Ff.jacobian(list(xs) + list(rs)), "numpy")
+            self._dM = [sm.lambdify(args, Mf.diff(s), "numpy") for s in xs]
+        self.nq = len(system.q)
+
+    def rhs(self, x, r):
+        return np.linalg.solve(self._M(x, r, self.pv), self._F(x, r, self.pv).ravel())
+
+    def mass(self, x):
+        n = self.nq
+        return np.asarray(self._M(x, [0.0], self.pv), float)[n:, n:]
+
+    def linear(self, x, r):
+        Mv = np.asarray(self._M(x, r, self.pv), float)
+        xd = np.linalg.solve(Mv, self._F(x, r, self.pv).ravel())
+        J = np.asarray(self._dF(x, r, self.pv), float)
+        nx = len(x)
+        for k in range(nx):
+            J[:, k] -= np.asarray(self._dM[k](x, r, self.pv), float) @ xd
+        AB = np.linalg.solve(Mv, J)
+        return AB[:, :nx], AB[:, nx:]
+
+
+def _compile(spec, name):
+    system, consts, inputs = _tree(spec)
+    model = gen.Model.from_system(system, constants=consts, inputs=inputs, name=name,
+                                  formulation="recursive")
+    return model, gen.compile(model)
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_rhs_and_mass_matrix_match_form_eoms(case):
+    spec = CASES[case]
+    model, sim = _compile(spec, f"rec_{case}")
+    ref = _Ref(spec, with_jac=model.nq <= 5)
+    nq = model.nq
+    assert model.nu == nq and nq == ref.nq
+    assert [str(s) for s in model.q_orig + model.u_orig] == [str(s) for s in ref.x]
+    rng = np.random.default_rng(1)
+    for _ in range(5):
+        x = rng.uniform(-1.5, 1.5, 2 * nq)
+        r = rng.uniform(-1, 1, 1)
+        want = ref.rhs(x, r)
+        got = sim.rhs(0.0, x, r=r)
+        assert np.max(np.abs(got - want)) <= TOL * max(1.0, np.max(np.abs(want))), (got, want)
+        Mw = ref.mass(x)
+        Mg = sim.mass_matrix(x[:nq])
+        assert np.max(np.abs(Mg - Mw)) <= TOL * max(1.0, np.max(np.abs(Mw)))
+        if nq <= 5:
+            A, B = sim.linearize(x, r=r)
+            Aw, Bw = ref.linear(x, r)
+            scale = max(1.0, np.max(np.abs(Aw)))
+            assert np.max(np.abs(A - Aw)) <= 1e-10 * scale, np.max(np.abs(A - Aw))
+            assert np.max(np.abs(B - Bw)) <= 1e-10 * scale
+
+
+def test_parameters_stay_run_time_constants():
+    spec = CASES["cartpole"]
+    model, sim = _compile(spec, "rec_cartpole")
+    ref = _Ref(spec, with_jac=False)
+    names = [str(s) for s in model.p_orig]
+    rng = np.random.default_rng(5)
+    pv = np.array(ref.pv) * rng.uniform(0.8, 1.2, len(ref.pv))
+    order = [names.index(str(s)) for s in ref.p]
+    p = np.empty(len(names))
+    p[order] = pv
+    ref.pv = list(pv)
+    x = rng.uniform(-1, 1, 4)
+    want = ref.rhs(x, [0.3])
+    got = sim.rhs(0.0, x, r=[0.3], p=p)
+    assert np.max(np.abs(got - want)) <= TOL * max(1.0, np.max(np.abs(want)))
+
+
+def test_kane_stays_default():
+    system, consts, inputs = _tree(CASES["pend1"])
+    with pytest.raises(gen.ModelError, match="form_eoms"):
+        gen.Model.from_system(system, constants=consts, inputs=inputs)
+    system.form_eoms()
+    m = gen.Model.from_system(system, constants=consts, inputs=inputs)
+    ref = gen.Model.from_system(system, constants=consts, inputs=inputs, formulation="kane")
+    assert m.fingerprint() == ref.fingerprint()
+    with pytest.raises(gen.ModelError, match="formulation='newton'"):
+        gen.Model.from_system(system, formulation="newton")
+
+
+def test_recursive_never_forms_equations(monkeypatch):
+    def boom(*a, **k):
+        raise AssertionError("called")
+    monkeypatch.setattr(me.KanesMethod, "kanes_equations", boom)
+    monkeypatch.setattr(me.System, "form_eoms", boom)
+    system, consts, inputs = _tree(CASES["tree5"])
+    model = gen.Model.from_system(system, constants=consts, inputs=inputs,
+                                  formulation="recursive")
+    assert model.nu == 5
+
+
+# ---------------------------------------------------------------- bad input
+def test_unsupported_joint_names_it():
+    class OddJoint(me.PinJoint):
+        pass
+    ground = me.RigidBody("G")
+    system = me.System.from_newtonian(ground)
+    b = me.RigidBody("b")
+    q, u = me.dynamicsymbols("q u")
+    system.add_joints(OddJoint("odd", ground, b, q, u))
+    with pytest.raises(gen.ModelError, match="joint 'odd' is a OddJoint"):
+        gen.Model.from_system(system, formulation="recursive")
+
+
+def test_body_not_connected_names_it():
+    system, consts, inputs = _tree(CASES["pend1"], actuator=False)
+    system.add_bodies(me.RigidBody("floater"))
+    with pytest.raises(gen.ModelError, match="body 'floater' is not connected"):
+        gen.Model.from_system(system, constants=consts, formulation="recursive")
+    # a joint hanging from a body that is nobody's child and not the ground
+    ground = me.RigidBody("G")
+    system = me.System.from_newtonian(ground)
+    a, b = me.RigidBody("a"), me.RigidBody("b")
+    q, u = me.dynamicsymbols("q u")
+    system.add_joints(me.PinJoint("J", a, b, q, u))
+    with pytest.raises(gen.ModelError, match="body 'a' .*not connected"):
+        gen.Model.from_system(system, formulation="recursive")
+
+
+def test_load_on_unknown_point_names_it():
+    system, consts, inputs = _tree(CASES["pend1"], actuator=False)
+    stray = me.Point("stray")
+    system.add_loads(me.Force(stray, system.frame.x))
+    with pytest.raises(gen.ModelError, match="point 'stray'"):
+        gen.Model.from_system(system, constants=consts, formulation="recursive")
+
+
+def test_constraints_refused():
+    system, consts, inputs = _tree(CASES["pend3"], actuator=False)
+    q0 = system.q[0]
+    system.add_coordinates(me.dynamicsymbols("qx"), independent=False)
+    system.add_holonomic_constraints(q0 - system.q[-1])
+    with pytest.raises(gen.ModelError, match="holonomic constraint.*formulation='kane'"):
+        gen.Model.from_system(system, constants=consts, formulation="recursive")
+
+
+# ---------------------------------------------------------------- Pinocchio
+def _pinocchio_model(system, consts):
+    """The same tree as a Pinocchio model: joint i's frame at its parent point,
+    with the parent body's axes at q = 0; the body's inertia and mass centre in
+    that frame (all numbers from the System at q = 0 and the constants)."""
+    pin = pytest.importorskip("pinocchio")
+    model = pin.Model()
+    ids = {}
+    qzero = {q: 0 for q in system.q}
+
+    def num(mat):
+        return np.array(sm.Matrix(mat).xreplace(qzero).xreplace(consts).evalf(), float)
+
+    for j in system.joints:
+        parent, child = j.parent, j.child
+        E0T = num(parent.frame.dcm(child.frame))                 # parent axes <- child
+        a = num(j.parent_point.pos_from(parent.masscenter).to_matrix(parent.frame)).ravel()
+        rcc = num(child.masscenter.pos_from(j.child_point).to_matrix(child.frame)).ravel()
+        axis = num(j.joint_axis.to_matrix(parent.frame)).ravel()
+        axis /= np.linalg.norm(axis)
+        if parent in ids:
+            pid, pE0T, prcc = ids[parent]
+            place = pin.SE3(pE0T, pE0T @ (prcc + a))
+        else:
+            pid, place = 0, pin.SE3(np.eye(3), a)
+        jm = (pin.JointModelRevoluteUnaligned(axis) if isinstance(j, me.PinJoint)
+              else pin.JointModelPrismaticUnaligned(axis))
+        jid = model.addJoint(pid, jm, place, j.name)
+        I = num(child.central_inertia.to_matrix(child.frame))
+        model.appendBodyToJoint(jid, pin.Inertia(float(child.mass.xreplace(consts)),
+                                                 E0T @ rcc, E0T @ I @ E0T.T), pin.SE3.Identity())
+        ids[child] = (jid, E0T, rcc)
+    model.gravity.linear = np.array([0.0, -consts[sm.Symbol("g")], 0.0])
+    return pin, model
+
+
+def _humanoid():
+    """31 DOF: a sliding torso with five limbs of six pins, axes turning."""
+    axes = ["z", "x", "y", "xz", "y", "x"]
+    spec = [(-1, "prismatic", "y")]
+    for limb in range(5):
+        par = 0
+        for k in range(6):
+            spec.append((par, "pin", axes[(k + limb) % 6]))
+            par = len(spec) - 1
+    return spec
+
+
+@pytest.mark.parametrize("which", [
+    "tree7", pytest.param("humanoid31", marks=pytest.mark.slow)])
+def test_pinocchio_aba_matches_rhs(which):
+    spec = {"tree7": [(-1, "pin", "y"), (0, "pin", "x"), (1, "prismatic", "xz"),
+                      (1, "pin", "z"), (0, "prismatic", "z"), (4, "pin", "xz"),
+                      (3, "pin", "x")],
+            "humanoid31": _humanoid()}[which]
+    system, consts, _ = _tree(spec, loads=False, actuator=False)
+    pin, pmodel = _pinocchio_model(system, consts)
+    system, consts, _ = _tree(spec, loads=False, actuator=False)
+    model = gen.Model.from_system(system, constants=consts, name=f"rec_{which}",
+                                  formulation="recursive")
+    sim = gen.compile(model)
+    data = pmodel.createData()
+    n = model.nq
+    assert pmodel.nq == n
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        x = rng.uniform(-1.5, 1.5, 2 * n)
+        want = pin.aba(pmodel, data, x[:n], x[n:], np.zeros(n))
+        got = sim.rhs(0.0, x)[n:]
+        assert np.max(np.abs(got - want)) <= TOL * max(1.0, np.max(np.abs(want))), (got, want)
+        # M's columns from Pinocchio's RNEA: tau(q, 0, e_k) - tau(q, 0, 0)
+        z = np.zeros(n)
+        tau0 = pin.rnea(pmodel, data, x[:n], z, z).copy()
+        Mw = np.column_stack([pin.rnea(pmodel, data, x[:n], z, np.eye(n)[k]) - tau0
+                              for k in range(n)])
+        assert np.max(np.abs(sim.mass_matrix(x[:n]) - Mw)) <= TOL * np.max(np.abs(Mw))
+
+
+def test_recursive_needs_a_system():
+    system, consts, inputs = _tree(CASES["pend1"])
+    system.form_eoms()
+    with pytest.raises(gen.ModelError, match="needs a sympy System, got KanesMethod"):
+        gen.Model.from_system(system.eom_method, formulation="recursive")
+    with pytest.raises(gen.ModelError, match="q_ind.*formulation='recursive'"):
+        gen.Model.from_system(system, formulation="recursive", q_ind=[])
