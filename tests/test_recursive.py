@@ -5,6 +5,8 @@ Reference: sympy's own System.form_eoms() (Kane) on an identical System built
 separately, its mass_matrix_full / forcing_full lambdified and solved with
 numpy at random states; the linearization from lambdified symbolic Jacobians
 of the same (A = M^-1 (dF/dx - dM/dx x')). Every comparison is to 1e-12."""
+import os
+
 import numpy as np
 import pytest
 import sympy as sm
@@ -160,7 +162,14 @@ def _compile(spec, name):
     return model, gen.compile(model)
 
 
-@pytest.mark.parametrize("case", sorted(CASES))
+# the larger trees (each > 8 s: sympy's form_eoms reference dominates) run in the
+# slow tier; pin, prismatic, cylindrical, planar and weld joints keep a case in the
+# fast one, the spherical joint is in the slow one
+SLOW_CASES = {"tree5", "spherical2", "chain3d4", "mixed5", "tree6"}
+
+
+@pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.slow) if c in SLOW_CASES
+                                  else c for c in sorted(CASES)])
 def test_rhs_and_mass_matrix_match_form_eoms(case):
     spec = CASES[case]
     model, sim = _compile(spec, f"rec_{case}")
@@ -276,7 +285,12 @@ def _pinocchio_model(system, consts):
     """The same tree as a Pinocchio model: joint i's frame at its parent point,
     with the parent body's axes at q = 0; the body's inertia and mass centre in
     that frame (all numbers from the System at q = 0 and the constants)."""
-    pin = pytest.importorskip("pinocchio")
+    try:
+        import pinocchio as pin
+    except ImportError:
+        if os.environ.get("CI") == "true":
+            pytest.fail("Pinocchio (pip install pin) is required under CI=true")
+        pytest.skip("Pinocchio not installed (pip install pin)")
     model = pin.Model()
     ids = {}
     qzero = {q: 0 for q in system.q}

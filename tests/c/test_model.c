@@ -500,11 +500,11 @@ static void auxiliary_tests(int accel)
     guards_intact(n, ni);
     CHECK_NEAR(R[0], -(3 * g0 - g1) / 5, TOL(1e-14, 1e-6));
     CHECK_NEAR(R[1], -(-g0 + 2 * g1) / 5, TOL(1e-14, 1e-6));
-    /* singular F */
+    /* singular F: the reactions cannot be solved for (ERR_SINGULAR_REACTIONS) */
     x[0] = 200;
     R[0] = 7;
     st = gen_rt_model_eval_auxiliary_forces(&m, 0, x, r, p, work, iwork, R);
-    CHECK_INT(st, GEN_RT_ERR_SINGULAR);
+    CHECK_INT(st, GEN_RT_ERR_SINGULAR_REACTIONS);
     CHECK(R[0] == 7);
 }
 
