@@ -41,7 +41,7 @@ import numpy as np
 
 from .abi import JACOBIAN_METHODS, METHODS, status_name
 from .errors import InputError
-from .interrupt import call
+from .interrupt import call, count as interrupt_count
 from .runs import finite_or_raise, plan_rows
 
 __all__ = ["Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult", "run_ensemble"]
@@ -389,7 +389,7 @@ def _snap_warn(times, t_rows, dt):
 
 
 # ------------------------------------------------------------------ a chunk
-def run_chunk(sim, job):
+def run_chunk(sim, job, since=None):
     """One chunk in C (the GIL released): job holds the chunk's x0, p, r
     (arrays of its runs, or one row for all), the shared settings and the
     reducers; returns {"status", "t_last", "x_last", "values"}."""
@@ -459,7 +459,8 @@ def run_chunk(sim, job):
         rds[i].n_rows, rds[i].rows = len(at), ptr(a_, "int[]")
         rds[i].out = ptr(out)
     e.n_reducers, e.reducers = len(reducers), rds
-    call(sim, opts, library.host.eomgen_ensemble_run, library.table, e)   # the C call of a chunk (Ctrl-C: gen/interrupt.py)
+    call(sim, opts, library.host.eomgen_ensemble_run, library.table, e,   # the C call of a chunk
+         since=since)                   # (Ctrl-C: gen/interrupt.py)
     if plan is not None and plan.error is not None:
         raise plan.error
     t_rows = job["t_rows"]
@@ -590,8 +591,10 @@ def _run_local(sim, jobs, workers, bar):
     from concurrent.futures import ThreadPoolExecutor
     lock = threading.Lock()
 
+    since = interrupt_count(sim)     # a Ctrl-C from here on stops every chunk, started or not
+
     def one(job):
-        res = run_chunk(sim, job)
+        res = run_chunk(sim, job, since=since)
         if bar is not None:
             with lock:
                 bar.update(job["n"])

@@ -41,7 +41,7 @@ import threading
 
 import _signal   # signal's C functions: getsignal without the enum wrapper (10 us)
 
-__all__ = ["call"]
+__all__ = ["call", "count"]
 
 
 _lock = threading.Lock()
@@ -78,13 +78,23 @@ def _armed(lib, ffi=None):
     return owner, owner.eomgen_interrupt_arm()
 
 
-def call(sim, opts, fn, *args):
+def count(sim):
+    """The number of SIGINTs the process's relay has seen (0 where there is
+    none yet): a baseline for :func:`call`'s ``since``."""
+    lib, ffi = sim.library.host, sim.library.ffi
+    owner = _owner[0] if _owner is not None else lib
+    return int(owner.eomgen_interrupt_count())
+
+
+def call(sim, opts, fn, *args, since=None):
     """``fn(*args)``, a long C call of ``sim``'s host module, cancellable by
     Ctrl-C: ``opts`` (a ``sim_options`` struct, or None for a batch loop,
     which watches the relay itself) gets the call's cancellation flag. A
     SIGINT during the call stops the C work and raises ``KeyboardInterrupt``
     (Python's handler raises it in the main thread; in another thread this
-    function does)."""
+    function does). since: a :func:`count` taken when the work began (an
+    ensemble's chunks on threads): a SIGINT that came after it, before this
+    call was armed, cancels the call at once, as one during it does."""
     lib, ffi = sim.library.host, sim.library.ffi
     owner, slot = lib, -1
     try:
@@ -96,6 +106,8 @@ def call(sim, opts, fn, *args):
             if owner is not lib:     # the owner's int, as this module's pointer
                 flag = ffi.cast("int *", int(_owner[1].cast("uintptr_t", flag)))
             opts.cancel = flag
+            if since is not None and int(owner.eomgen_interrupt_count()) != since:
+                flag[0] = 1      # interrupted before this call was armed
         result = fn(*args)
     finally:
         hit = owner.eomgen_interrupt_release(slot) if slot >= 0 else 0

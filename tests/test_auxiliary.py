@@ -584,6 +584,7 @@ def test_sympy_test_aux_with_declared_forces():
     assert np.max(np.abs(sim.auxiliary_forces(0.0, x, r=w))) < 1e-12 * max(1.0, np.max(np.abs(w)))
 
 
+@pytest.mark.slow
 def test_sympy_test_aux_dep_with_declared_forces():
     # sympy's test_kane2.test_aux_dep: dependent coordinate and speeds, three
     # auxiliary speeds, the contact force symbols declared inputs

@@ -330,6 +330,7 @@ def test_opti_swing_up_equals_pure_sx(cart_model, cart_sim):
           f"pure SX {ref[2]}, {1e3 * ref[3] / ref[2]:.1f} ms/iteration")
 
 
+@pytest.mark.slow
 def test_sanitizers_every_entry_point(cart_model, tmp_path):
     """Every function of the library, called through CasADi's convention
     from C (the work sizes it reports, NULL inputs as zeros, NULL outputs
@@ -415,6 +416,7 @@ def test_sanitizers_every_entry_point(cart_model, tmp_path):
                                   _v(F["step"](x, 0.7, p, 0.3, 0.02)))
 
 
+@pytest.mark.slow
 def test_sources_build_standalone(cart_model, tmp_path):
     """The library's src/ folder (the guide's file list: every .c but the
     derivative stand-ins, the headers, <name>_casadi.h declaring the

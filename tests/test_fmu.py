@@ -328,6 +328,7 @@ def test_bad_arguments(tmp_path, monkeypatch):
     assert not (tmp_path / "c.fmu").exists()
 
 
+@pytest.mark.slow
 def test_reproducible(tmp_path, monkeypatch):
     """The same model gives the same bytes (no timestamps, sorted entries,
     fixed zip dates, no build path in the binary), also when the binary is

@@ -111,7 +111,12 @@ def _run_child(call, setup=""):
     return sent, out, err, proc.returncode
 
 
-@pytest.mark.parametrize("which", sorted(LONG))
+# the fast tier: a simulate and a threaded ensemble; the other calls in the slow one
+FAST = ("simulate", "ensemble_threads")
+
+
+@pytest.mark.parametrize("which", [w if w in FAST else pytest.param(w, marks=pytest.mark.slow)
+                                   for w in sorted(LONG)])
 def test_sigint_stops_a_long_call_within_a_second(which):
     sent, out, err, rc = _run_child(LONG[which], SETUP.get(which, ""))
     assert rc == 0, (out, err)

@@ -163,9 +163,9 @@ def _compile(spec, name):
 
 
 # the larger trees (each > 8 s: sympy's form_eoms reference dominates) run in the
-# slow tier; pin, prismatic, cylindrical, planar and weld joints keep a case in the
-# fast one, the spherical joint is in the slow one
-SLOW_CASES = {"tree5", "spherical2", "chain3d4", "mixed5", "tree6"}
+# slow tier; pin, prismatic and weld joints keep a case in the fast one, the
+# cylindrical, planar and spherical joints are in the slow one
+SLOW_CASES = {"tree5", "spherical2", "chain3d4", "mixed5", "tree6", "planar2", "cylinder2"}
 
 
 @pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.slow) if c in SLOW_CASES
@@ -334,7 +334,8 @@ def _humanoid():
 
 
 @pytest.mark.parametrize("which", [
-    "tree7", pytest.param("humanoid31", marks=pytest.mark.slow)])
+    pytest.param("tree7", marks=pytest.mark.slow),
+    pytest.param("humanoid31", marks=pytest.mark.slow)])
 def test_pinocchio_aba_matches_rhs(which):
     spec = {"tree7": [(-1, "pin", "y"), (0, "pin", "x"), (1, "prismatic", "xz"),
                       (1, "pin", "z"), (0, "prismatic", "z"), (4, "pin", "xz"),
