@@ -183,6 +183,18 @@ def user_stacklevel():
     return level
 
 
+def _warn_unused(cls, model_name, kind, names, what):
+    """Warn (cls) that the model's constants or inputs `names` appear in no
+    expression; `what` lists where they were looked for and what follows."""
+    if not names:
+        return
+    import warnings
+    many = len(names) > 1
+    warnings.warn(cls(f"model '{model_name}': {kind}{'s' if many else ''} {', '.join(names)} "
+                      f"appear{'' if many else 's'} in no expression of the model {what}"),
+                  stacklevel=user_stacklevel())
+
+
 _user_stacklevel = user_stacklevel
 
 
@@ -981,30 +993,16 @@ class Model:
                 used |= e.free_symbols
         if E_ is not None:
             used |= E_.free_symbols
-        unused = [str(c) for c, d in zip(constants, P) if d not in used]
-        if unused:
-            import warnings
-
-            from .errors import UnusedConstantWarning
-            warnings.warn(UnusedConstantWarning(
-                f"model '{name}': constant{'s' if len(unused) > 1 else ''} "
-                f"{', '.join(unused)} appear{'' if len(unused) > 1 else 's'} in no "
-                "expression of the model (mass matrix, forcing, kinematic equations, "
-                "constraints, energy); kept as parameter(s) without effect"),
-                stacklevel=_user_stacklevel())
-
+        from .errors import UnusedConstantWarning, UnusedInputWarning
+        _warn_unused(UnusedConstantWarning, name, "constant",
+                     [str(c) for c, d in zip(constants, P) if d not in used],
+                     "(mass matrix, forcing, kinematic equations, constraints, energy); kept as "
+                     "parameter(s) without effect")
         # ---- inputs that no equation uses: a warning naming them ---------
-        unused_r = [str(r_) for r_, d in zip(inputs, R) if d not in used]
-        if unused_r:
-            import warnings
-
-            from .errors import UnusedInputWarning
-            warnings.warn(UnusedInputWarning(
-                f"model '{name}': input{'s' if len(unused_r) > 1 else ''} "
-                f"{', '.join(unused_r)} appear{'' if len(unused_r) > 1 else 's'} in no "
-                "expression of the model (forcing, outputs, ...): kept as input(s) without "
-                "effect (a misspelt or stale entry of inputs=[...]?)"),
-                stacklevel=_user_stacklevel())
+        _warn_unused(UnusedInputWarning, name, "input",
+                     [str(r_) for r_, d in zip(inputs, R) if d not in used],
+                     "(forcing, outputs, ...): kept as input(s) without effect (a misspelt or "
+                     "stale entry of inputs=[...]?)")
 
         # ---- structure checks -------------------------------------------
         if M_.shape != (nu, nu):

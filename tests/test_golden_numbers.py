@@ -131,29 +131,12 @@ def _outputs(fn, result, keep_rows):
     return [_fpart("out", result)]
 
 
-# the recorded stats (the Solution's stats has more keys: n_steps, ...)
-STATS = ("n_accepted", "n_jac", "n_out", "n_rejected", "n_rhs")
+# a recorded call in today's API: the recorder's own translation (tests/golden/make_golden.py)
+STATS = make_golden.STATS
 
 
 def call_recorded(sim, fn, args, kwargs):
-    """A recorded call in today's API: the records name step_rk4 (now
-    step(method="rk4")) and simulate's former return_multipliers= and
-    return_stats= flags (now attributes of the gen.Solution), kept as the
-    tuple they recorded: (t, X[, lam][, stats])."""
-    kwargs = dict(kwargs)
-    if fn == "step_rk4":
-        return sim.step(*args, method="rk4", **kwargs)
-    if fn == "simulate":
-        lam = kwargs.pop("return_multipliers", False)
-        stats = kwargs.pop("return_stats", False)
-        sol = sim.simulate(*args, **kwargs)
-        out = [sol.t, sol.x]
-        if lam:
-            out.append(sol.lam)
-        if stats:
-            out.append({k: sol.stats[k] for k in STATS})
-        return tuple(out)
-    return getattr(sim, fn)(*args, **kwargs)
+    return make_golden.replay(sim, fn, args, kwargs)
 
 
 def _describe(rec):
