@@ -555,6 +555,11 @@ int gen_rt_model_simulate(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_r
  *   controller with controller != NULL, called last with r holding the
  *              above; it may overwrite r (a nonzero return stops the run with
  *              GEN_RT_ERR_CONTROLLER).
+ *   schedule   with n_gain > 0, K, x_op and r (when not NULL) hold n_gain
+ *              rows (nr x ns, nx and nr values each): row k is used from
+ *              t_gain + k dt_gain on (row 0 before, the last row after the
+ *              end), a time-varying feedback such as a trajectory tracker's
+ *              (gen/tracking.py). Row changes are step boundaries.
  *   period     0: r is evaluated at every right-hand-side evaluation (a
  *              continuous controller); > 0: r is evaluated at t0 + k period
  *              (from the state there) and held until the next sample (a
@@ -564,8 +569,8 @@ int gen_rt_model_simulate(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_r
 /* the inputs at (t, x) from in (sampling aside: the base at t, feedback,
  * controller); work: ns reals. A bad description is GEN_RT_ERR_BAD_ARG
  * (unsorted table, unknown hold, negative period) or _NONFINITE_INPUT. */
-int gen_rt_model_eval_input(const gen_rt_model *m, const gen_rt_input *in, gen_rt_real t,
-                            const gen_rt_real *x, gen_rt_real *r);
+int gen_rt_model_eval_input(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                            const gen_rt_input *in, gen_rt_real *r);
 /* simulate with inputs from in; r_out (nr per row, may be NULL) gets the
  * inputs in effect from each output time on */
 int gen_rt_model_simulate_input(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t0,

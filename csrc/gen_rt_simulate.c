@@ -68,12 +68,35 @@ static int table_row(int n, const gen_rt_real *T, gen_rt_real t)
     return lo;
 }
 
-/* base, feedback and controller at t (a ZOH table at t_zoh) */
+/* a time within a relative rounding of a sample or knot counts as it */
+static gen_rt_real time_tol(gen_rt_real t)
+{
+    gen_rt_real a = t < 0 ? -t : t;
+    return 64 * GEN_RT_EPS * (a > 1 ? a : 1);
+}
+
+/* the gain schedule's row at t: the last k with t_gain + k dt_gain <= t
+ * (within rounding), 0 before t_gain, n_gain - 1 after the end */
+static int gain_row(const gen_rt_input *in, gen_rt_real t)
+{
+    gen_rt_real s = (t - in->t_gain) / in->dt_gain;
+    long k;
+    if (in->n_gain <= 1 || !(s > 0)) return 0;
+    if (s >= (gen_rt_real)(in->n_gain - 1)) return in->n_gain - 1;
+    k = (long)s;
+    if (in->t_gain + (gen_rt_real)(k + 1) * in->dt_gain <= t + time_tol(t)) ++k;
+    return (int)(k < in->n_gain - 1 ? k : in->n_gain - 1);
+}
+
+/* base, feedback and controller at t (a ZOH table and the gain schedule's
+ * row at t_zoh) */
 static int input_at(const gen_rt_model *m, const gen_rt_input *in, gen_rt_real t,
                     gen_rt_real t_zoh, const gen_rt_real *x, gen_rt_real *r)
 {
     int nr = m->nr, nq = m->nq, niq = m->nq - m->mc, niu = m->nu - m->mv, ns = niq + niu;
-    int i, j, k;
+    int i, j, k, g = in->n_gain > 0 ? gain_row(in, t_zoh) : 0;
+    const gen_rt_real *K = in->K ? in->K + (long)g * nr * ns : NULL;
+    const gen_rt_real *x_op = in->x_op ? in->x_op + (long)g * (nq + m->nu) : NULL;
     if (in->n_table > 0) {
         const gen_rt_real *T = in->t_table, *R = in->r_table;
         int n = in->n_table;
@@ -88,14 +111,15 @@ static int input_at(const gen_rt_model *m, const gen_rt_input *in, gen_rt_real t
             for (i = 0; i < nr; ++i) r[i] = R[(long)k * nr + i];
         }
     } else {
-        for (i = 0; i < nr; ++i) r[i] = in->r ? in->r[i] : 0;
+        const gen_rt_real *r0 = in->r ? in->r + (long)g * nr : NULL;
+        for (i = 0; i < nr; ++i) r[i] = r0 ? r0[i] : 0;
     }
-    if (in->K) {
+    if (K) {
         for (i = 0; i < nr; ++i) {
             gen_rt_real s = 0;
             for (j = 0; j < ns; ++j) {
                 int idx = j < niq ? m->q_ind[j] : nq + m->u_ind[j - niq];
-                s += in->K[(long)i * ns + j] * (x[idx] - (in->x_op ? in->x_op[idx] : 0));
+                s += K[(long)i * ns + j] * (x[idx] - (x_op ? x_op[idx] : 0));
             }
             r[i] -= s;
         }
@@ -111,23 +135,27 @@ static int input_check(const gen_rt_model *m, const gen_rt_input *in)
     if (!in) return GEN_RT_ERR_NULL;
     if (in->n_table < 0 || (in->hold != GEN_RT_HOLD_ZOH && in->hold != GEN_RT_HOLD_LINEAR))
         return GEN_RT_ERR_BAD_ARG;
+    int rows = in->n_gain > 0 ? in->n_gain : 1;
     if (!finite_n(1, &in->period) || in->period < 0) return GEN_RT_ERR_BAD_ARG;
+    if (in->n_gain < 0 || (in->n_gain > 0 && !(finite_n(1, &in->t_gain)
+                                               && finite_n(1, &in->dt_gain) && in->dt_gain > 0)))
+        return GEN_RT_ERR_BAD_ARG;
     if (in->n_table > 0) {
         if (!in->t_table || (nr > 0 && !in->r_table)) return GEN_RT_ERR_NULL;
         if (!finite_n(in->n_table, in->t_table) || !finite_n(in->n_table * nr, in->r_table))
             return GEN_RT_ERR_NONFINITE_INPUT;
         for (i = 1; i < in->n_table; ++i)
             if (!(in->t_table[i] > in->t_table[i - 1])) return GEN_RT_ERR_BAD_ARG;
-    } else if (in->r && !finite_n(nr, in->r)) {
+    } else if (in->r && !finite_n(rows * nr, in->r)) {
         return GEN_RT_ERR_NONFINITE_INPUT;
     }
-    if (in->K && !finite_n(nr * ns, in->K)) return GEN_RT_ERR_NONFINITE_INPUT;
-    if (in->x_op && !finite_n(NX_(m), in->x_op)) return GEN_RT_ERR_NONFINITE_INPUT;
+    if (in->K && !finite_n(rows * nr * ns, in->K)) return GEN_RT_ERR_NONFINITE_INPUT;
+    if (in->x_op && !finite_n(rows * NX_(m), in->x_op)) return GEN_RT_ERR_NONFINITE_INPUT;
     return GEN_RT_OK;
 }
 
-int gen_rt_model_eval_input(const gen_rt_model *m, const gen_rt_input *in, gen_rt_real t,
-                            const gen_rt_real *x, gen_rt_real *r)
+int gen_rt_model_eval_input(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                            const gen_rt_input *in, gen_rt_real *r)
 {
     int st = input_check(m, in);
     if (st) return st;
@@ -169,13 +197,6 @@ int gen_rt_model_step_rk4(const gen_rt_model *m, gen_rt_real t, gen_rt_real h,
     return GEN_RT_OK;
 }
 
-/* a time within a relative rounding of a sample or knot counts as it */
-static gen_rt_real time_tol(gen_rt_real t)
-{
-    gen_rt_real a = t < 0 ? -t : t;
-    return 64 * GEN_RT_EPS * (a > 1 ? a : 1);
-}
-
 /* is t a sample time t0 + k period? */
 static int is_sample(const model_ctx *c, gen_rt_real t)
 {
@@ -195,6 +216,11 @@ static gen_rt_real next_break(const model_ctx *c, gen_rt_real t, gen_rt_real t1)
         gen_rt_real ts = c->t0 + (gen_rt_real)k * in->period;
         if (ts <= t + tol) ts = c->t0 + (gen_rt_real)(k + 1) * in->period;
         if (ts < tb - time_tol(tb)) tb = ts;
+    }
+    if (in->n_gain > 1) {
+        int k = gain_row(in, t + tol) + 1;
+        gen_rt_real tk = in->t_gain + (gen_rt_real)k * in->dt_gain;
+        if (k < in->n_gain && tk > t + tol && tk < tb - time_tol(tb)) tb = tk;
     }
     if (in->n_table > 0) {
         int k = table_row(in->n_table, in->t_table, t + tol);
@@ -492,11 +518,13 @@ static int step_(engine *e, gen_rt_real t, gen_rt_real t_stop)
         e->s->n_jac += 1;
         if (c->in && !(c->in->period > 0) && c->in->K && nr) {
             int niq = m->nq - m->mc, ns = niq + m->nu - m->mv, a, b, j;
+            const gen_rt_real *K = c->in->K
+                + (c->in->n_gain > 0 ? (long)gain_row(c->in, c->t_seg) * nr * ns : 0);
             for (j = 0; j < ns; ++j) {
                 int col = j < niq ? m->q_ind[j] : m->nq + m->u_ind[j - niq];
                 for (a = 0; a < nx; ++a) {
                     gen_rt_real sum = 0;
-                    for (b = 0; b < nr; ++b) sum += Jr[a * nr + b] * c->in->K[(long)b * ns + j];
+                    for (b = 0; b < nr; ++b) sum += Jr[a * nr + b] * K[(long)b * ns + j];
                     J[a * nx + col] -= sum;
                 }
             }

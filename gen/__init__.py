@@ -23,13 +23,14 @@ from .pipeline import compile  # noqa: E402,A001
 from .symbolic import linearize_symbolic  # noqa: E402
 from .verify import VerifyReport, verify  # noqa: E402
 from .control import LinearFeedback  # noqa: E402
+from .tracking import TrajectoryTracker  # noqa: E402
 from .fmu import export_fmu  # noqa: E402
 from .ensemble import At, EnsembleResult, Final, Max, Mean, Min, Sampler  # noqa: E402
 
 __all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "EomgenError",
            "ModelError", "BuildError", "InputError", "MissingDependencyError",
            "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "UnusedInputWarning", "MasslessSpeedWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
-           "export_fmu", "Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult",
+           "TrajectoryTracker", "export_fmu", "Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult",
            "__version__"]
 
 

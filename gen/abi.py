@@ -173,6 +173,12 @@ STRUCTS = (
         Field("ctx", "void*", "passed to the controller", 0),
         Field("period", "real", "0: r evaluated at every stage; > 0: sampled at t0 + k period "
               "and held", 0.0),
+        # issue 34 (trajectory tracking): a time-varying gain, zero-filled: none
+        Field("n_gain", "int", "> 0: a gain schedule of n_gain rows: K is n_gain x NR x NS, "
+              "x_op n_gain x NX and r (when not NULL) n_gain x NR, row k used from t_gain + k "
+              "dt_gain on (row 0 before, the last row after)", 0),
+        Field("t_gain", "real", "schedule: the time of row 0", 0.0),
+        Field("dt_gain", "real", "schedule: the time between rows (> 0)", 0.0),
     )),
     Struct("events", "Events", "Events of simulate_events: crossings of a level by a state or "
            "an output, located on the dense output; the log of those found. Zero-fill it and "
@@ -373,6 +379,10 @@ FUNCTIONS = (
              "dx_ind (NS x NS) with the dependent entries of x following the constraints to "
              "first order, Fr = dx1_ind/dr (NS x NR).",
              work="STEP_SENS", iwork=True),
+    Function("eval_input", _params("t:scalar, x:in:NX, in:struct::input, r:out:NR"),
+             "The inputs at (t, x) from in without sampling (the base at t, the feedback of "
+             "the gain or of the schedule's row at t, the controller): one step of a digital "
+             "controller, called at its sample times; NR values."),
     Function("eval_outputs", _params("t:scalar, x:in:NX, r:in?:NR=r, p:in?:NP=p, y:out:NY"),
              "The outputs y(q, u, r, t), NY (the model's outputs={...}); NY == 0: nothing "
              "written."),

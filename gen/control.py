@@ -10,7 +10,9 @@
   interval), called from C through a cffi callback;
 
 and for controller a :class:`LinearFeedback`, evaluated inside the
-generated C at every stage (period None) or sampled (period Ts).
+generated C at every stage (period None) or sampled (period Ts), with one
+gain or a schedule of gains (a time-varying LQR such as
+:class:`gen.TrajectoryTracker`'s).
 
 All of them become one ``<p>_input`` description for the C function
 ``<p>_simulate_input`` (README, "Closed loops").
@@ -23,8 +25,6 @@ import numpy as np
 
 from .abi import hold_code
 from .errors import InputError
-
-__all__ = ["LinearFeedback", "InputPlan", "plan_inputs"]
 
 __all__ = ["LinearFeedback", "InputPlan", "plan_inputs"]
 
@@ -46,11 +46,23 @@ class LinearFeedback:
     period : float, optional
         None evaluates the law at every stage (a continuous controller);
         Ts > 0 samples it at t0 + k Ts and holds it (a digital one).
+    t_gain, dt_gain : float, optional
+        A gain schedule: K of shape (n, nr, ns), with x_op (n, nx) or
+        (n, ns) and r_op (n, nr) (or one row for all), row k used from
+        ``t_gain + k dt_gain`` on (row 0 before, the last row after the
+        end); dt_gain defaults to the period. With one gain they are unused.
     """
     K: object
     x_op: object = None
     r_op: object = None
     period: float | None = None
+    t_gain: float = 0.0
+    dt_gain: float | None = None
+
+    @property
+    def n_gain(self):
+        """The rows of the gain schedule (0: one gain)."""
+        return int(np.shape(self.K)[0]) if np.ndim(self.K) == 3 else 0
 
     def arrays(self, sim):
         """The gain and operating point as float arrays, checked against a model.
@@ -75,39 +87,82 @@ class LinearFeedback:
         K = np.asarray(self.K, dtype=float)
         if K.ndim == 1 and sim.nr == 1:
             K = K[None, :]
-        if K.shape != (sim.nr, sim.ns):
+        n = K.shape[0] if K.ndim == 3 else 0       # a schedule of n gains
+        lead = (n,) if n else ()
+        if K.shape[-2:] != (sim.nr, sim.ns) or K.ndim not in (2, 3) or (K.ndim == 3 and n < 1):
             raise InputError(f"LinearFeedback: K must have shape (nr, ns) = ({sim.nr}, {sim.ns}) "
                              f"(inputs {sim.input_names} by the independent state "
-                             f"{sim.independent_state_names}), got {K.shape}")
+                             f"{sim.independent_state_names}), or (n, nr, ns) for a schedule "
+                             f"of n gains, got {K.shape}")
         if self.x_op is None:
-            x_op = np.zeros(sim.nx)
+            x_op = np.zeros(lead + (sim.nx,))
         else:
-            x = np.asarray(self.x_op, dtype=float).ravel()
-            if x.shape == (sim.nx,):
-                x_op = x
-            elif x.shape == (sim.ns,):
-                x_op = np.zeros(sim.nx)
+            x = np.asarray(self.x_op, dtype=float)
+            x = x.reshape(-1) if not n else (x if x.ndim == 2 else np.broadcast_to(x, (n, x.size)))
+            if x.shape == lead + (sim.nx,):
+                x_op = np.array(x)
+            elif x.shape == lead + (sim.ns,):
+                x_op = np.zeros(lead + (sim.nx,))
                 idx = list(sim.q_ind) + [sim.nq + i for i in sim.u_ind]
-                x_op[idx] = x
+                x_op[..., idx] = x
             else:
                 raise InputError(f"LinearFeedback: x_op must have nx = {sim.nx} (the state "
-                                 f"{sim.state_names}) or ns = {sim.ns} values, got {x.shape}")
-        r_op = (np.zeros(sim.nr) if self.r_op is None
-                else np.asarray(self.r_op, dtype=float).ravel())
-        if r_op.shape != (sim.nr,):
+                                 f"{sim.state_names}) or ns = {sim.ns} values"
+                                 + (f" in each of the schedule's {n} rows" if n else "")
+                                 + f", got {x.shape}")
+        if self.r_op is None:
+            r_op = np.zeros(lead + (sim.nr,))
+        else:
+            r_op = np.asarray(self.r_op, dtype=float)
+            if not n:
+                r_op = r_op.reshape(-1)
+            elif r_op.ndim <= 1 and r_op.size == sim.nr:      # one row for all
+                r_op = np.tile(r_op.reshape(1, -1), (n, 1))
+            elif r_op.ndim == 1 and sim.nr == 1:               # n values of one input
+                r_op = r_op[:, None]
+        if r_op.shape != lead + (sim.nr,):
             raise InputError(f"LinearFeedback: r_op must have nr = {sim.nr} values "
-                             f"({sim.input_names}), got {r_op.shape}")
+                             f"({sim.input_names})"
+                             + (f" in each of the schedule's {n} rows" if n else "")
+                             + f", got {r_op.shape}")
         for name, a in (("K", K), ("x_op", x_op), ("r_op", r_op)):
             if not np.all(np.isfinite(a)):
                 raise InputError(f"LinearFeedback: {name} holds NaN or infinity")
         if self.period is not None and not (np.isfinite(self.period) and self.period > 0):
             raise InputError(f"LinearFeedback: period must be None (continuous) or a positive "
                              f"number, got {self.period!r}")
+        if n:
+            step = self.dt_gain if self.dt_gain is not None else self.period
+            if step is None or not (np.isfinite(step) and step > 0):
+                raise InputError(f"LinearFeedback: a schedule of {n} gains needs dt_gain > 0 "
+                                 f"(or a period), got dt_gain = {self.dt_gain!r}")
+            if not np.isfinite(self.t_gain):
+                raise InputError(f"LinearFeedback: t_gain must be finite, got {self.t_gain!r}")
         return K, x_op, r_op
 
+    def row(self, t):
+        """The schedule's row in effect at time t (0 for one gain): the last
+        k with t_gain + k dt_gain <= t, within rounding (the C runtime's rule)."""
+        n = self.n_gain
+        if n <= 1:
+            return 0
+        step = self.dt_gain if self.dt_gain is not None else self.period
+        s = (t - self.t_gain) / step
+        if not s > 0:
+            return 0
+        if s >= n - 1:
+            return n - 1
+        k = int(s)
+        if self.t_gain + (k + 1) * step <= t + 64 * np.finfo(float).eps * max(abs(t), 1.0):
+            k += 1
+        return min(k, n - 1)
+
     def __call__(self, sim, t, x):
-        """The law in numpy (for checks): r at the full state x."""
+        """The law in numpy (for checks): r at time t and the full state x."""
         K, x_op, r_op = self.arrays(sim)
+        if K.ndim == 3:
+            k = self.row(t)
+            K, x_op, r_op = K[k], x_op[k], r_op[k]
         idx = list(sim.q_ind) + [sim.nq + i for i in sim.u_ind]
         x = np.asarray(x, dtype=float)
         return r_op - K @ (x[idx] - x_op[idx])
@@ -185,6 +240,11 @@ def plan_inputs(sim, r, controller, dt, method, input_period, input_hold):
         s.x_op = plan.array(x_op)
         s.r = plan.array(r_op)
         s.period = 0.0 if controller.period is None else float(controller.period)
+        if K.ndim == 3:
+            s.n_gain = K.shape[0]
+            s.t_gain = float(controller.t_gain)
+            s.dt_gain = float(controller.dt_gain if controller.dt_gain is not None
+                              else controller.period)
         if input_period is not None:
             raise InputError("the LinearFeedback has its own period; input_period is for a "
                              "callable r(t, x)")

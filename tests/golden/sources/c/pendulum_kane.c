@@ -51,6 +51,9 @@ typedef char pendulum_kane_abi_matches_runtime[(
     offsetof(pendulum_kane_input, controller) == offsetof(gen_rt_input, controller) &&
     offsetof(pendulum_kane_input, ctx) == offsetof(gen_rt_input, ctx) &&
     offsetof(pendulum_kane_input, period) == offsetof(gen_rt_input, period) &&
+    offsetof(pendulum_kane_input, n_gain) == offsetof(gen_rt_input, n_gain) &&
+    offsetof(pendulum_kane_input, t_gain) == offsetof(gen_rt_input, t_gain) &&
+    offsetof(pendulum_kane_input, dt_gain) == offsetof(gen_rt_input, dt_gain) &&
     sizeof(pendulum_kane_events) == sizeof(gen_rt_events) &&
     offsetof(pendulum_kane_events, n) == offsetof(gen_rt_events, n) &&
     offsetof(pendulum_kane_events, which) == offsetof(gen_rt_events, which) &&
@@ -476,6 +479,9 @@ int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_rea
     in_rt.controller = in->controller;
     in_rt.ctx = in->ctx;
     in_rt.period = in->period;
+    in_rt.n_gain = in->n_gain;
+    in_rt.t_gain = in->t_gain;
+    in_rt.dt_gain = in->dt_gain;
     if (!opts) { pendulum_kane_sim_options_default(&opts_default); opts = &opts_default; }
     opts_rt.method = opts->method;
     opts_rt.project = opts->project;
@@ -542,6 +548,9 @@ int pendulum_kane_simulate_events(const pendulum_kane_real *x0, pendulum_kane_re
     in_rt.controller = in->controller;
     in_rt.ctx = in->ctx;
     in_rt.period = in->period;
+    in_rt.n_gain = in->n_gain;
+    in_rt.t_gain = in->t_gain;
+    in_rt.dt_gain = in->dt_gain;
     ev_rt.n = ev->n;
     ev_rt.which = ev->which;
     ev_rt.direction = ev->direction;
@@ -630,6 +639,32 @@ int pendulum_kane_step_sensitivity(pendulum_kane_real t, pendulum_kane_real h, c
     PENDULUM_KANE_CHECK_IN(x, 4);
     PENDULUM_KANE_CHECK_OUT(Fx);
     return gen_rt_model_step_sensitivity(&pendulum_kane_model, t, h, r, p, work, iwork, x, Fx, Fr);
+}
+
+int pendulum_kane_eval_input(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_input *in, pendulum_kane_real *r)
+{
+    gen_rt_input in_rt = { 0 };
+    pendulum_kane_sim_options opts_default;
+    int st;
+    PENDULUM_KANE_CHECK_REAL(t);
+    PENDULUM_KANE_CHECK_IN(x, 4);
+    PENDULUM_KANE_CHECK_OUT(in);
+    in_rt.r = in->r;
+    in_rt.n_table = in->n_table;
+    in_rt.t_table = in->t_table;
+    in_rt.r_table = in->r_table;
+    in_rt.hold = in->hold;
+    in_rt.K = in->K;
+    in_rt.x_op = in->x_op;
+    in_rt.controller = in->controller;
+    in_rt.ctx = in->ctx;
+    in_rt.period = in->period;
+    in_rt.n_gain = in->n_gain;
+    in_rt.t_gain = in->t_gain;
+    in_rt.dt_gain = in->dt_gain;
+    st = gen_rt_model_eval_input(&pendulum_kane_model, t, x, &in_rt, r);
+    (void)opts_default;
+    return st;
 }
 
 int pendulum_kane_eval_outputs(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *y)

@@ -113,6 +113,9 @@ typedef struct {
     pendulum_kane_controller controller; /* called last with r holding the above; may overwrite r; nonzero return: ERR_CONTROLLER (NULL: none) */
     void *ctx; /* passed to the controller */
     pendulum_kane_real period; /* 0: r evaluated at every stage; > 0: sampled at t0 + k period and held */
+    int n_gain; /* > 0: a gain schedule of n_gain rows: K is n_gain x NR x NS, x_op n_gain x NX and r (when not NULL) n_gain x NR, row k used from t_gain + k dt_gain on (row 0 before, the last row after) */
+    pendulum_kane_real t_gain; /* schedule: the time of row 0 */
+    pendulum_kane_real dt_gain; /* schedule: the time between rows (> 0) */
 } pendulum_kane_input;
 
 /* Events of simulate_events: crossings of a level by a state or an output, located on the dense output; the log of those found. Zero-fill it and set what you use. */
@@ -213,6 +216,9 @@ int pendulum_kane_jacobian(pendulum_kane_real t, const pendulum_kane_real *x, co
 
 /* One classic RK4 step of size h without projection (x updated; unchanged on failure) and its exact derivatives by the variational equations: Fx = dx1_ind/dx_ind (NS x NS) with the dependent entries of x following the constraints to first order, Fr = dx1_ind/dr (NS x NR). */
 int pendulum_kane_step_sensitivity(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *x, pendulum_kane_real *Fx, pendulum_kane_real *Fr);
+
+/* The inputs at (t, x) from in without sampling (the base at t, the feedback of the gain or of the schedule's row at t, the controller): one step of a digital controller, called at its sample times; NR values. */
+int pendulum_kane_eval_input(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_input *in, pendulum_kane_real *r);
 
 /* The outputs y(q, u, r, t), NY (the model's outputs={...}); NY == 0: nothing written. */
 int pendulum_kane_eval_outputs(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *y);

@@ -11,7 +11,7 @@
  * every model through the same compiled module this way. The functions
  * that take a struct appear with void pointers (a trampoline below casts
  * them back), so the table's types are the same for every model; the
- * layout is tagged by abi (eomgen-abi-069f36156893f09a). Not needed by a program
+ * layout is tagged by abi (eomgen-abi-ec381dab51f0056d). Not needed by a program
  * that links the model and calls pendulum_kane.h directly.
  */
 #include <stddef.h>
@@ -53,6 +53,7 @@ typedef struct {
     int (*linearize)(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B);
     int (*jacobian)(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *Jx, pendulum_kane_real *Jr);
     int (*step_sensitivity)(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *x, pendulum_kane_real *Fx, pendulum_kane_real *Fr);
+    int (*eval_input)(pendulum_kane_real t, const pendulum_kane_real *x, const void *in, pendulum_kane_real *r);
     int (*eval_outputs)(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *y);
     int (*linearize_outputs)(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B, pendulum_kane_real *C, pendulum_kane_real *D);
     int (*linearize_discrete)(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real dt, pendulum_kane_real *Ad, pendulum_kane_real *Bd);
@@ -83,10 +84,15 @@ static int pendulum_kane_api_simulate_events(const pendulum_kane_real *x0, pendu
     return pendulum_kane_simulate_events(x0, t0, t_end, dt, (const pendulum_kane_input *)in, (const pendulum_kane_events *)ev, p, (const pendulum_kane_sim_options *)opts, capacity, t_out, x_out, lam_out, r_out, (pendulum_kane_sim_stats *)stats);
 }
 
+static int pendulum_kane_api_eval_input(pendulum_kane_real t, const pendulum_kane_real *x, const void *in, pendulum_kane_real *r)
+{
+    return pendulum_kane_eval_input(t, x, (const pendulum_kane_input *)in, r);
+}
+
 PENDULUM_KANE_API_EXPORT extern const pendulum_kane_api_table pendulum_kane_api;
 
 PENDULUM_KANE_API_EXPORT const pendulum_kane_api_table pendulum_kane_api = {
-    "eomgen-abi-069f36156893f09a", "pendulum_kane", (int)sizeof(pendulum_kane_real),
+    "eomgen-abi-ec381dab51f0056d", "pendulum_kane", (int)sizeof(pendulum_kane_real),
     PENDULUM_KANE_NQ, PENDULUM_KANE_NU, PENDULUM_KANE_NX, PENDULUM_KANE_NR, PENDULUM_KANE_NP, PENDULUM_KANE_MC, PENDULUM_KANE_MV, PENDULUM_KANE_NS, PENDULUM_KANE_NA, PENDULUM_KANE_NY,
     sizeof(pendulum_kane_sim_options), sizeof(pendulum_kane_input), sizeof(pendulum_kane_events), sizeof(pendulum_kane_sim_stats),
     pendulum_kane_status_message,
@@ -113,6 +119,7 @@ PENDULUM_KANE_API_EXPORT const pendulum_kane_api_table pendulum_kane_api = {
     pendulum_kane_linearize,
     pendulum_kane_jacobian,
     pendulum_kane_step_sensitivity,
+    pendulum_kane_api_eval_input,
     pendulum_kane_eval_outputs,
     pendulum_kane_linearize_outputs,
     pendulum_kane_linearize_discrete

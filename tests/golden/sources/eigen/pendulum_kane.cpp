@@ -43,6 +43,7 @@ template int simulate_events<double>(const State<double> &x0, detail::Real<doubl
 template int linearize<double>(const State<double> &x_op, const Inputs<double> &r_op, const Params<double> &p, detail::Real<double> t, StateMatrix<double> &A, InputMatrix<double> &B) noexcept;
 template int jacobian<double>(detail::Real<double> t, const State<double> &x, const Inputs<double> &r, const Params<double> &p, Mat<double, NX, NX> &Jx, Mat<double, NX, NR> &Jr) noexcept;
 template int step_sensitivity<double>(detail::Real<double> t, detail::Real<double> h, const Inputs<double> &r, const Params<double> &p, State<double> &x, StateMatrix<double> &Fx, InputMatrix<double> &Fr) noexcept;
+template int eval_input<double>(detail::Real<double> t, const State<double> &x, const Input<double> &in, Inputs<double> &r) noexcept;
 template int eval_outputs<double>(detail::Real<double> t, const State<double> &x, const Inputs<double> &r, const Params<double> &p, Outputs<double> &y) noexcept;
 template int linearize_outputs<double>(const State<double> &x_op, const Inputs<double> &r_op, const Params<double> &p, detail::Real<double> t, StateMatrix<double> &A, InputMatrix<double> &B, OutputMatrix<double> &C, FeedthroughMatrix<double> &D) noexcept;
 template int linearize_discrete<double>(const State<double> &x_op, const Inputs<double> &r_op, const Params<double> &p, detail::Real<double> t, detail::Real<double> dt, StateMatrix<double> &Ad, InputMatrix<double> &Bd) noexcept;
@@ -76,6 +77,7 @@ template int simulate_events<float>(const State<float> &x0, detail::Real<float> 
 template int linearize<float>(const State<float> &x_op, const Inputs<float> &r_op, const Params<float> &p, detail::Real<float> t, StateMatrix<float> &A, InputMatrix<float> &B) noexcept;
 template int jacobian<float>(detail::Real<float> t, const State<float> &x, const Inputs<float> &r, const Params<float> &p, Mat<float, NX, NX> &Jx, Mat<float, NX, NR> &Jr) noexcept;
 template int step_sensitivity<float>(detail::Real<float> t, detail::Real<float> h, const Inputs<float> &r, const Params<float> &p, State<float> &x, StateMatrix<float> &Fx, InputMatrix<float> &Fr) noexcept;
+template int eval_input<float>(detail::Real<float> t, const State<float> &x, const Input<float> &in, Inputs<float> &r) noexcept;
 template int eval_outputs<float>(detail::Real<float> t, const State<float> &x, const Inputs<float> &r, const Params<float> &p, Outputs<float> &y) noexcept;
 template int linearize_outputs<float>(const State<float> &x_op, const Inputs<float> &r_op, const Params<float> &p, detail::Real<float> t, StateMatrix<float> &A, InputMatrix<float> &B, OutputMatrix<float> &C, FeedthroughMatrix<float> &D) noexcept;
 template int linearize_discrete<float>(const State<float> &x_op, const Inputs<float> &r_op, const Params<float> &p, detail::Real<float> t, detail::Real<float> dt, StateMatrix<float> &Ad, InputMatrix<float> &Bd) noexcept;

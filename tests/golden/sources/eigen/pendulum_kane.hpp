@@ -143,6 +143,7 @@ template <> struct Api<double> {
     static constexpr auto &linearize = ::pendulum_kane_linearize;
     static constexpr auto &jacobian = ::pendulum_kane_jacobian;
     static constexpr auto &step_sensitivity = ::pendulum_kane_step_sensitivity;
+    static constexpr auto &eval_input = ::pendulum_kane_eval_input;
     static constexpr auto &eval_outputs = ::pendulum_kane_eval_outputs;
     static constexpr auto &linearize_outputs = ::pendulum_kane_linearize_outputs;
     static constexpr auto &linearize_discrete = ::pendulum_kane_linearize_discrete;
@@ -177,6 +178,7 @@ template <> struct Api<float> {
     static constexpr auto &linearize = ::pendulum_kane_s_linearize;
     static constexpr auto &jacobian = ::pendulum_kane_s_jacobian;
     static constexpr auto &step_sensitivity = ::pendulum_kane_s_step_sensitivity;
+    static constexpr auto &eval_input = ::pendulum_kane_s_eval_input;
     static constexpr auto &eval_outputs = ::pendulum_kane_s_eval_outputs;
     static constexpr auto &linearize_outputs = ::pendulum_kane_s_linearize_outputs;
     static constexpr auto &linearize_discrete = ::pendulum_kane_s_linearize_discrete;
@@ -237,6 +239,11 @@ struct SimOptions : detail::Api<S>::sim_options {
  *   void * ctx: passed to the controller
  *   S period: 0: r evaluated at every stage; > 0: sampled at t0 + k period and
  *       held
+ *   int n_gain: > 0: a gain schedule of n_gain rows: K is n_gain x NR x NS, x_op
+ *       n_gain x NX and r (when not NULL) n_gain x NR, row k used from
+ *       t_gain + k dt_gain on (row 0 before, the last row after)
+ *   S t_gain: schedule: the time of row 0
+ *   S dt_gain: schedule: the time between rows (> 0)
  */
 template <typename S>
 struct Input : detail::Api<S>::input {
@@ -469,6 +476,15 @@ template <typename S>
 inline int step_sensitivity(detail::Real<S> t, detail::Real<S> h, const Inputs<S> &r, const Params<S> &p, State<S> &x, StateMatrix<S> &Fx, InputMatrix<S> &Fr) noexcept
 {
     return detail::Api<S>::step_sensitivity(t, h, r.data(), p.data(), x.data(), Fx.data(), Fr.data());
+}
+
+/* The inputs at (t, x) from in without sampling (the base at t, the feedback
+ * of the gain or of the schedule's row at t, the controller): one step of a
+ * digital controller, called at its sample times; NR values. */
+template <typename S>
+inline int eval_input(detail::Real<S> t, const State<S> &x, const Input<S> &in, Inputs<S> &r) noexcept
+{
+    return detail::Api<S>::eval_input(t, x.data(), &in, r.data());
 }
 
 /* The outputs y(q, u, r, t), NY (the model's outputs={...}); NY == 0: nothing

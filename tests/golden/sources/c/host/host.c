@@ -28,6 +28,9 @@ typedef struct {
     eomgen_controller controller;
     void *ctx;
     eomgen_real period;
+    int n_gain;
+    eomgen_real t_gain;
+    eomgen_real dt_gain;
 } eomgen_input;
 typedef struct {
     int n;
@@ -82,6 +85,7 @@ typedef struct {
     int (*linearize)(const eomgen_real *x_op, const eomgen_real *r_op, const eomgen_real *p, eomgen_real t, eomgen_real *A, eomgen_real *B);
     int (*jacobian)(eomgen_real t, const eomgen_real *x, const eomgen_real *r, const eomgen_real *p, eomgen_real *Jx, eomgen_real *Jr);
     int (*step_sensitivity)(eomgen_real t, eomgen_real h, const eomgen_real *r, const eomgen_real *p, eomgen_real *x, eomgen_real *Fx, eomgen_real *Fr);
+    int (*eval_input)(eomgen_real t, const eomgen_real *x, const void *in, eomgen_real *r);
     int (*eval_outputs)(eomgen_real t, const eomgen_real *x, const eomgen_real *r, const eomgen_real *p, eomgen_real *y);
     int (*linearize_outputs)(const eomgen_real *x_op, const eomgen_real *r_op, const eomgen_real *p, eomgen_real t, eomgen_real *A, eomgen_real *B, eomgen_real *C, eomgen_real *D);
     int (*linearize_discrete)(const eomgen_real *x_op, const eomgen_real *r_op, const eomgen_real *p, eomgen_real t, eomgen_real dt, eomgen_real *Ad, eomgen_real *Bd);
@@ -110,6 +114,7 @@ int eomgen_simulate_events(const eomgen_api *api, const eomgen_real *x0, eomgen_
 int eomgen_linearize(const eomgen_api *api, const eomgen_real *x_op, const eomgen_real *r_op, const eomgen_real *p, eomgen_real t, eomgen_real *A, eomgen_real *B);
 int eomgen_jacobian(const eomgen_api *api, eomgen_real t, const eomgen_real *x, const eomgen_real *r, const eomgen_real *p, eomgen_real *Jx, eomgen_real *Jr);
 int eomgen_step_sensitivity(const eomgen_api *api, eomgen_real t, eomgen_real h, const eomgen_real *r, const eomgen_real *p, eomgen_real *x, eomgen_real *Fx, eomgen_real *Fr);
+int eomgen_eval_input(const eomgen_api *api, eomgen_real t, const eomgen_real *x, const eomgen_input *in, eomgen_real *r);
 int eomgen_eval_outputs(const eomgen_api *api, eomgen_real t, const eomgen_real *x, const eomgen_real *r, const eomgen_real *p, eomgen_real *y);
 int eomgen_linearize_outputs(const eomgen_api *api, const eomgen_real *x_op, const eomgen_real *r_op, const eomgen_real *p, eomgen_real t, eomgen_real *A, eomgen_real *B, eomgen_real *C, eomgen_real *D);
 int eomgen_linearize_discrete(const eomgen_api *api, const eomgen_real *x_op, const eomgen_real *r_op, const eomgen_real *p, eomgen_real t, eomgen_real dt, eomgen_real *Ad, eomgen_real *Bd);
@@ -242,6 +247,11 @@ int eomgen_jacobian(const eomgen_api *api, eomgen_real t, const eomgen_real *x, 
 int eomgen_step_sensitivity(const eomgen_api *api, eomgen_real t, eomgen_real h, const eomgen_real *r, const eomgen_real *p, eomgen_real *x, eomgen_real *Fx, eomgen_real *Fr)
 {
     return api->step_sensitivity(t, h, r, p, x, Fx, Fr);
+}
+
+int eomgen_eval_input(const eomgen_api *api, eomgen_real t, const eomgen_real *x, const eomgen_input *in, eomgen_real *r)
+{
+    return api->eval_input(t, x, in, r);
 }
 
 int eomgen_eval_outputs(const eomgen_api *api, eomgen_real t, const eomgen_real *x, const eomgen_real *r, const eomgen_real *p, eomgen_real *y)
