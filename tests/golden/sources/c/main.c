@@ -12,6 +12,16 @@
 #include <string.h>
 #include "pendulum_kane.h"
 #include "gen_rt_main.h"
+#ifdef PENDULUM_KANE_TRACKER
+/* built with a trajectory tracker (gen.TrajectoryTracker.to_c, then
+ * -DPENDULUM_KANE_TRACKER=<its name>, or cmake -DPENDULUM_KANE_TRACKER=<its name>): every run is
+ * closed by it, from its const tables (--gain, --x-op and --period unused) */
+#define PENDULUM_KANE_TRK_STR2_(x) #x
+#define PENDULUM_KANE_TRK_STR_(x) PENDULUM_KANE_TRK_STR2_(x)
+#define PENDULUM_KANE_TRK_CAT2_(a, b) a##b
+#define PENDULUM_KANE_TRK_CAT_(a, b) PENDULUM_KANE_TRK_CAT2_(a, b)
+#include PENDULUM_KANE_TRK_STR_(PENDULUM_KANE_TRACKER.h)
+#endif
 
 static const char *const state_names[PENDULUM_KANE_NX] = { "q2", "q1", "u2", "u1" };
 static const char *const param_names[PENDULUM_KANE_NP] = { "L", "m", "g" };
@@ -71,6 +81,9 @@ static int simulate(const gen_rt_main_run *run, const void *x0, void *t_out, voi
     in.r_table = run->r_table;
     in.K = run->K;
     in.x_op = run->x_op;
+#ifdef PENDULUM_KANE_TRACKER
+    PENDULUM_KANE_TRK_CAT_(PENDULUM_KANE_TRACKER, _input)(&in);
+#endif
     memset(&s, 0, sizeof s);
     if (run->n_events > 0) {
         memset(&ev, 0, sizeof ev);
