@@ -680,7 +680,7 @@ static int run(const gen_rt_main_model *m, const gen_rt_main_args *a, gen_rt_mai
     void *work = reals(m, (long)(m->mc + m->na + m->ny) + 3);
     gen_rt_main_stats stats;
     int failed = 0, st = 0, i;
-    int varying = m->nr > 0 && (a->input_csv || a->gain_file);
+    int varying = m->nr > 0 && (a->input_csv || a->gain_file || m->tracker);
     rn->rows = rows;
     memset(&stats, 0, sizeof stats);
     stats.x_last = reals(m, m->nx);
@@ -812,7 +812,7 @@ int gen_rt_main(const gen_rt_main_model *m, int argc, char **argv)
             code = 1;
         }
         if (!code) {
-            write_header(m, out, m->nr > 0 && (a.input_csv || a.gain_file));
+            write_header(m, out, m->nr > 0 && (a.input_csv || a.gain_file || m->tracker));
             code = run(m, &a, &rn, rows, out, ev_out);
         }
         if (out != stdout && fclose(out) != 0 && !code) {

@@ -85,6 +85,8 @@ typedef struct {
     int (*eval_auxiliary)(double t, const void *x, const void *r, const void *p, void *fa);
     int (*eval_outputs)(double t, const void *x, const void *r, const void *p, void *y);
     const char *(*status_message)(int status);
+    int tracker;                        /* 1: built with a trajectory tracker (its
+                                           inputs vary: their columns are written) */
 } gen_rt_main_model;
 
 /* The command line, parsed. The arrays hold the model's scalar type and

@@ -273,10 +273,23 @@ def _terminal_cost(A, B, Q, R):
     return np.array(Q), "Q"
 
 
+def finite_or_raise(name, a, labels=None):
+    """InputError naming the first NaN or infinite entry: ``x[3, 1] = nan
+    (node 3, theta)``."""
+    a = np.asarray(a)
+    if a.size and not np.all(np.isfinite(a)):
+        idx = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
+        where = ", ".join(map(str, idx))
+        what = ([f"node {idx[0]}"] if a.ndim == 2 and labels is not None else []) + \
+            ([labels[idx[-1]]] if labels is not None else [])
+        label = f" ({', '.join(what)})" if what else ""
+        raise InputError(f"TrajectoryTracker: {name}[{where}] = {float(a[idx])!r}{label}: every "
+                         f"entry of {name} must be finite", name, None, float(a[idx]))
+
+
 def _check(sim, t, x, r, Q, R, period):
     """The arguments as float arrays; InputError naming the argument, the
     expected shape in the model's names, and the value otherwise."""
-    from .runs import finite_or_raise
     nx, nr, ns = sim.nx, sim.nr, sim.ns
     t = np.asarray(t, dtype=float)
     if t.ndim != 1 or len(t) < 2:
@@ -288,7 +301,7 @@ def _check(sim, t, x, r, Q, R, period):
     if len(bad):
         i = int(bad[0])
         raise InputError(f"TrajectoryTracker: t must be strictly increasing, but t[{i + 1}] = "
-                         f"{t[i + 1]!r} <= t[{i}] = {t[i]!r}", "t", i + 1, float(t[i + 1]))
+                         f"{float(t[i + 1])!r} <= t[{i}] = {float(t[i])!r}", "t", i + 1, float(t[i + 1]))
     x = np.asarray(x, dtype=float)
     if x.ndim == 1 and nx == 1:
         x = x[:, None]
@@ -331,17 +344,17 @@ def _check(sim, t, x, r, Q, R, period):
         if asym > 1e-12 * max(1.0, np.max(np.abs(W))):
             i, j = np.unravel_index(np.argmax(np.abs(W - W.T)), W.shape)
             raise InputError(f"TrajectoryTracker: {name} must be symmetric, but {name}[{i}, {j}] "
-                             f"= {W[i, j]!r} ({labels[i]}, {labels[j]}) != {name}[{j}, {i}] = "
-                             f"{W[j, i]!r}", name, None, None)
+                             f"= {float(W[i, j])!r} ({labels[i]}, {labels[j]}) != {name}[{j}, {i}] = "
+                             f"{float(W[j, i])!r}", name, None, None)
     eq = np.linalg.eigvalsh(Q)
     if eq[0] < -1e-12 * max(1.0, eq[-1]):
         raise InputError(f"TrajectoryTracker: Q must be positive semidefinite; its smallest "
-                         f"eigenvalue is {eq[0]!r}", "Q", None, float(eq[0]))
+                         f"eigenvalue is {float(eq[0])!r}", "Q", None, float(eq[0]))
     er = np.linalg.eigvalsh(R)
     if not er[0] > 1e-12 * max(1.0, er[-1]):
         raise InputError(f"TrajectoryTracker: R must be positive definite (a weight on every "
                          f"input {_names(sim.input_names)}); its smallest eigenvalue is "
-                         f"{er[0]!r}", "R", None, float(er[0]))
+                         f"{float(er[0])!r}", "R", None, float(er[0]))
     try:
         period = float(period)
     except (TypeError, ValueError):
@@ -353,5 +366,5 @@ def _check(sim, t, x, r, Q, R, period):
                          f"{period!r}", "period", None, period)
     if period > span * (1 + 1e-12):
         raise InputError(f"TrajectoryTracker: period = {period!r} is longer than the "
-                         f"trajectory (t[-1] - t[0] = {span!r})", "period", None, period)
+                         f"trajectory (t[-1] - t[0] = {float(span)!r})", "period", None, period)
     return t, x, r, Q, R, period
