@@ -141,8 +141,20 @@ class LinearFeedback:
         return K, x_op, r_op
 
     def row(self, t):
-        """The schedule's row in effect at time t (0 for one gain): the last
-        k with t_gain + k dt_gain <= t, within rounding (the C runtime's rule)."""
+        """The schedule's row in effect at a time.
+
+        Parameters
+        ----------
+        t : float
+            The time.
+
+        Returns
+        -------
+        int
+            The last k with ``t_gain + k dt_gain <= t``, within rounding (the
+            C runtime's rule); 0 before t_gain and for one gain, the last
+            row after the schedule's end.
+        """
         n = self.n_gain
         if n <= 1:
             return 0

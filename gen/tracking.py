@@ -141,6 +141,11 @@ class TrajectoryTracker(LinearFeedback):
         on the nodes with the slopes ``sim.rhs(t_i, x_i, r=r_i)``, inputs
         linear; the nodes' own values at the nodes, the ends held outside.
 
+        Parameters
+        ----------
+        ts : array_like
+            The times.
+
         Returns
         -------
         x : numpy.ndarray, shape (len(ts), nx)
@@ -173,9 +178,20 @@ class TrajectoryTracker(LinearFeedback):
 
     # ------------------------------------------------------------ C source
     def footprint(self, real=None):
-        """Bytes of the const tables in flash (K, x_ref, r_ref) for the scalar
-        type ``real`` ("double" or "float"; None: the model's); they take no
-        RAM (the tracker's state is the caller's input struct)."""
+        """The size of the tracker's const tables.
+
+        Parameters
+        ----------
+        real : {"double", "float"}, optional
+            The scalar type (None: the model's).
+
+        Returns
+        -------
+        dict
+            ``rows``; bytes of ``K``, ``x_ref``, ``r_ref`` and their sum
+            ``flash``; ``ram`` 0 (the tables are const; the controller's
+            state is the caller's input struct).
+        """
         real = real or self.sim.real
         size = 8 if real == "double" else 4
         n = self.n_gain
@@ -184,8 +200,26 @@ class TrajectoryTracker(LinearFeedback):
                 "flash": (k + xr + rr) * size, "ram": 0}
 
     def sources(self, name="tracker", real=None):
-        """{file name: text} of the tracker's C source and header (see
-        :meth:`to_c`)."""
+        """The tracker's C source and header, as text (see :meth:`to_c`).
+
+        Parameters
+        ----------
+        name : str, optional
+            The C prefix of the tracker's symbols and files.
+        real : {"double", "float"}, optional
+            The scalar type (None: the model's).
+
+        Returns
+        -------
+        dict
+            ``{"<name>.h": text, "<name>.c": text}``.
+
+        Raises
+        ------
+        gen.InputError
+            On a name that is not a C identifier, a C keyword, or the model's
+            own; on an unknown real.
+        """
         from . import __version__
         from .names import validate_name
         from .render import _fmt_real, template_env
