@@ -136,6 +136,12 @@ class TrajectoryTracker(LinearFeedback):
     __eq__ = object.__eq__
     __hash__ = object.__hash__
 
+    def __reduce__(self):
+        # pickled (an ensemble's workers) as its law: the LinearFeedback of its
+        # tables, without the Simulator it was built from
+        return (LinearFeedback, (self.K, self.x_op, self.r_op, self.period, self.t_gain,
+                                 self.dt_gain))
+
     def reference(self, ts):
         """The reference at times ts: states by the cubic Hermite interpolant
         on the nodes with the slopes ``sim.rhs(t_i, x_i, r=r_i)``, inputs

@@ -153,6 +153,21 @@ def test_tracks_the_swing_up_from_a_perturbed_start(sim, swing):
     assert np.max(np.abs(open_loop.x[-1] - x[-1])) > 0.1
 
 
+def test_ensemble_runs_the_tracker_and_it_pickles_as_its_law(sim, swing):
+    import pickle
+    t, x, r, tr = swing
+    X0 = np.array([x[0] + [0.0, d, 0.0, 0.0] for d in (-0.05, 0.02, 0.05)])
+    res = sim.ensemble(X0, 8.0, 1e-3, controller=tr, reduce="final")
+    for i, x0 in enumerate(X0):
+        one = sim.simulate(x0, 8.0, 1e-3, controller=tr)
+        assert np.max(np.abs(res.values["final"][i] - one.x[-1])) < 1e-13
+    law = pickle.loads(pickle.dumps(tr))
+    assert type(law) is gen.LinearFeedback and law.n_gain == tr.n_gain == 801
+    a = sim.simulate(X0[0], 2.0, 1e-3, controller=law)
+    b = sim.simulate(X0[0], 2.0, 1e-3, controller=tr)
+    assert np.array_equal(a.x, b.x)
+
+
 def test_schedule_rows_change_at_their_times(sim):
     """A LinearFeedback schedule evaluated continuously (period None): row k
     from t_gain + k dt_gain on, the rows' changes are step boundaries; the
@@ -257,13 +272,10 @@ def test_standalone_binary_runs_the_tracker_from_const_tables(sim, swing, tmp_pa
     subprocess.run([cc, *STRICT, "-O2", "-c", "-I", str(src), str(src / "swingup.c"), "-o",
                     str(obj)], check=True)
     if shutil.which("size"):
-        sizes = subprocess.run(["size", "-A", str(obj)], capture_output=True, text=True,
-                               check=True).stdout
-        sec = {ln.split()[0]: int(ln.split()[1]) for ln in sizes.splitlines()[2:]
-               if len(ln.split()) >= 2 and ln.split()[1].isdigit()}
-        assert sec.get(".data", 0) == 0 and sec.get(".bss", 0) == 0, sec
-        assert sum(v for k, v in sec.items() if k.startswith(".rodata")) \
-            >= tr.footprint("double")["flash"]
+        from gen.footprint import section_sizes
+        sec = section_sizes(obj)
+        assert sec["data"] == 0 and sec["bss"] == 0, sec
+        assert sec["rodata"] >= tr.footprint("double")["flash"], sec
     x0 = x[0] + np.array([0.0, 0.05, 0.0, 0.0])
     out = subprocess.run([str(exe), "--t-end", "8", "--dt", "1e-3", "--x0",
                           f"theta={float(x0[1])!r}"], capture_output=True, text=True, check=True).stdout
@@ -274,6 +286,19 @@ def test_standalone_binary_runs_the_tracker_from_const_tables(sim, swing, tmp_pa
     assert data.shape[0] == len(sol.t)
     assert np.max(np.abs(data[:, 1:5] - sol.x)) < 1e-12
     assert np.max(np.abs(data[:, 7] - sol.r[:, 0])) < 1e-12
+    # the generated CMake project's option builds the same program
+    if shutil.which("cmake"):
+        b = tmp_path / "build"
+        for cmd in (["cmake", "-S", str(src), "-B", str(b), "-DCART_POLE_TRACKER=swingup"],
+                    ["cmake", "--build", str(b), "--target", "cart_pole_sim"]):
+            p = subprocess.run(cmd, capture_output=True, text=True)
+            assert p.returncode == 0, p.stdout + p.stderr
+        out2 = subprocess.run([str(b / "cart_pole_sim"), "--t-end", "8", "--dt", "1e-3",
+                               "--x0", f"theta={float(x0[1])!r}"], capture_output=True,
+                              text=True, check=True).stdout
+        data2 = np.array([[float(v) for v in ln.split(",")]
+                          for ln in out2.strip().splitlines()[1:]])
+        assert np.max(np.abs(data2[:, 1:5] - sol.x)) < 1e-12
 
 
 def _build_driver(model, tr, out, real, cc, extra=()):
@@ -346,8 +371,8 @@ def test_float_cortex_build_agrees_with_double_under_qemu(sim, swing, tmp_path):
         subprocess.run(["arm-none-eabi-gcc", "-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16",
                         "-mfloat-abi=hard", "-Os", *STRICT, "-c", "-I", str(src),
                         str(src / "swingup.c"), "-o", str(obj)], check=True)
-        import gen.footprint as fp
-        sec = fp.section_sizes(obj, "arm-none-eabi-")
+        from gen.footprint import section_sizes
+        sec = section_sizes(obj, "arm-none-eabi-")
         assert sec["data"] == 0 and sec["bss"] == 0, sec
         assert sec["rodata"] >= fp_float["flash"], sec
         print(f"\ntracker (801 rows) on the Cortex-M4F, float: tables {fp_float['flash']} B "
