@@ -53,24 +53,44 @@ def riccati(Ad, Bd, Pf):
 
 
 # ------------------------------------------------------------- the gains
-def test_constant_reference_converges_to_dlqr(sim):
-    """(a) At upright, held: the recursion's gains converge to the discrete
-    LQR's (python-control and scipy on an expm discretization)."""
-    import control
+def upright_dlqr(sim):
+    """Ad, Bd by scipy's expm of sim.linearize's continuous (A, B) at upright,
+    and scipy's discrete LQR gain and cost."""
     A, B = sim.linearize(np.zeros(4))
     E = expm(np.block([[A, B], [np.zeros((1, 5))]]) * PERIOD)
     Ad, Bd = E[:4, :4], E[:4, 4:]
-    K_ctrl, _, _ = control.dlqr(Ad, Bd, Q, R)
     P = solve_discrete_are(Ad, Bd, Q, R)
-    K_scipy = np.linalg.solve(R + Bd.T @ P @ Bd, Bd.T @ P @ Ad)
+    return Ad, Bd, np.linalg.solve(R + Bd.T @ P @ Bd, Bd.T @ P @ Ad), P
+
+
+def upright_tracker(sim):
     t = np.linspace(0.0, 6.0, 7)
-    tr = gen.TrajectoryTracker(sim, t, np.zeros((7, 4)), np.zeros((7, 1)), Q, R, PERIOD)
+    return gen.TrajectoryTracker(sim, t, np.zeros((7, 4)), np.zeros((7, 1)), Q, R, PERIOD)
+
+
+def test_constant_reference_converges_to_dlqr(sim):
+    """(a) At upright, held: the recursion's gains are the discrete LQR's
+    (scipy's solve_discrete_are on an expm discretization) to 1e-8."""
+    Ad, Bd, K, P = upright_dlqr(sim)
+    tr = upright_tracker(sim)
     assert tr.K.shape == (601, 1, 4) and tr.terminal == "dare"
-    assert np.max(np.abs(K_ctrl - K_scipy)) < 1e-9
+    for k in (0, 100, 600):
+        assert np.max(np.abs(tr.K[k] - K)) < 1e-8 * np.max(np.abs(K)), k
+    assert np.max(np.abs(tr.P[-1] - P)) < 1e-8 * np.max(np.abs(P))
+    assert np.max(np.abs(tr.Ad[0] - Ad)) < 1e-12 and np.max(np.abs(tr.Bd[0] - Bd)) < 1e-12
+
+
+@pytest.mark.slow
+def test_constant_reference_converges_to_python_control_dlqr(sim):
+    """(a) The same against python-control's dlqr (its import alone takes
+    seconds: the slow tier)."""
+    import control
+    Ad, Bd, K, _ = upright_dlqr(sim)
+    K_ctrl, _, _ = control.dlqr(Ad, Bd, Q, R)
+    assert np.max(np.abs(K_ctrl - K)) < 1e-9 * np.max(np.abs(K))
+    tr = upright_tracker(sim)
     for k in (0, 100, 600):
         assert np.max(np.abs(tr.K[k] - K_ctrl)) < 1e-8 * np.max(np.abs(K_ctrl)), k
-    # a terminal cost of Q: the gains start elsewhere and still converge
-    assert np.max(np.abs(tr.P[-1] - P)) < 1e-8 * np.max(np.abs(P))
 
 
 @pytest.mark.parametrize("period", [PERIOD, 0.025])
