@@ -593,6 +593,37 @@ static void controller_tests(int accel)
                                          iwork, t_out, x_out, NULL, NULL, &s);
         CHECK_INT(st, GEN_RT_ERR_BAD_ARG);
     }
+    /* a gain schedule: row k (K, x_op, r) from t_gain + k dt_gain on, row 0
+     * before, the last after; continuous, the rows' starts are step ends */
+    {
+        const gen_rt_real K[6] = {1, 2, 3, 4, 5, 6}, xo[6] = {1, 0, 0, 1, 2, 0};
+        const gen_rt_real rb[3] = {10, 20, 30};
+        const gen_rt_real ts[6] = {-1, 0.25, 0.5, 0.7499, 0.75, 9};
+        const int rows[6] = {0, 0, 1, 1, 2, 2};
+        gen_rt_real xe[2] = {GEN_RT_C(0.5), GEN_RT_C(-0.25)}, r1[1];
+        memset(&in, 0, sizeof in);
+        in.K = K; in.x_op = xo; in.r = rb;
+        in.n_gain = 3; in.t_gain = GEN_RT_C(0.25); in.dt_gain = GEN_RT_C(0.25);
+        for (k = 0; k < 6; ++k) {
+            int g = rows[k];
+            st = gen_rt_model_eval_input(&m, ts[k], xe, &in, r1);
+            CHECK_INT(st, GEN_RT_OK);
+            CHECK_NEAR(r1[0], rb[g] - K[2 * g] * (xe[0] - xo[2 * g])
+                       - K[2 * g + 1] * (xe[1] - xo[2 * g + 1]), TOL(1e-15, 1e-6));
+        }
+        st = gen_rt_model_simulate_input(&m, x0, 0, 1, GEN_RT_C(0.01), &in, p, &o, 101, work,
+                                         iwork, t_out, x_out, NULL, r_out, &s);
+        CHECK_INT(st, GEN_RT_OK);
+        for (k = 0; k <= 100; k += 25) {         /* rows at 0, 0.25, 0.5, 0.75, 1 */
+            int g = k < 50 ? 0 : (k < 75 ? 1 : 2);
+            CHECK_NEAR(r_out[k], rb[g] - K[2 * g] * (x_out[2 * k] - xo[2 * g])
+                       - K[2 * g + 1] * (x_out[2 * k + 1] - xo[2 * g + 1]), TOL(1e-13, 1e-5));
+        }
+        in.dt_gain = 0;                          /* a schedule needs dt_gain > 0 */
+        CHECK_INT(gen_rt_model_eval_input(&m, 0, xe, &in, r1), GEN_RT_ERR_BAD_ARG);
+        in.dt_gain = GEN_RT_C(0.25); in.n_gain = -1;
+        CHECK_INT(gen_rt_model_eval_input(&m, 0, xe, &in, r1), GEN_RT_ERR_BAD_ARG);
+    }
 }
 
 int main(void)
