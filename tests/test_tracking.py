@@ -218,6 +218,16 @@ def test_schedule_rows_change_at_their_times(sim):
     assert np.max(np.abs(ref.y.T - sol.x)) < 1e-8
 
 
+@pytest.mark.slow
+def test_example_runs_and_writes_the_c_sources(tmp_path, capsys):
+    sol = cpt.main(["--c-out", str(tmp_path / "cart_pole")])
+    out = capsys.readouterr().out
+    assert "800 samples every 0.01" in out and "28836 bytes of flash in float" in out
+    assert abs(sol.x[-1, 1] - 2 * np.pi) < 1e-2
+    assert (tmp_path / "cart_pole" / "swingup.c").is_file()
+    assert (tmp_path / "cart_pole" / "cart_pole.h").is_file()
+
+
 # ------------------------------------------------------------ bad input
 def test_bad_input_is_named(sim):
     t = np.linspace(0, 1, 11)
@@ -266,7 +276,8 @@ def _cc():
     return cc
 
 
-STRICT = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-Wdouble-promotion", "-Wvla"]
+STRICT = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-Wdouble-promotion", "-Wvla",
+          "-Wshadow"]
 
 
 @pytest.mark.slow
