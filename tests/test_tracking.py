@@ -219,6 +219,21 @@ def test_schedule_rows_change_at_their_times(sim):
 
 
 @pytest.mark.slow
+@pytest.mark.eigen
+def test_eigen_backend_runs_the_tracker_too(sim, swing):
+    """The C++/Eigen face over the same runtime: the same tracked run."""
+    from conftest import require_eigen
+    require_eigen()
+    t, x, r, tr = swing
+    sim_e = gen.compile(cp.model(), backend="eigen")
+    x0 = x[0] + np.array([0.0, 0.05, 0.0, 0.0])
+    for method, dt in (("rk4", 1e-3), ("dopri5", 0.05)):
+        a = sim.simulate(x0, 8.0, dt, method=method, controller=tr)
+        b = sim_e.simulate(x0, 8.0, dt, method=method, controller=tr)
+        assert np.max(np.abs(a.x - b.x)) < 1e-10 and np.max(np.abs(a.r - b.r)) < 1e-9, method
+
+
+@pytest.mark.slow
 def test_example_runs_and_writes_the_c_sources(tmp_path, capsys):
     sol = cpt.main(["--c-out", str(tmp_path / "cart_pole")])
     out = capsys.readouterr().out
