@@ -144,8 +144,10 @@ class TrajectoryTracker(LinearFeedback):
 
     def reference(self, ts):
         """The reference at times ts: states by the cubic Hermite interpolant
-        on the nodes with the slopes ``sim.rhs(t_i, x_i, r=r_i)``, inputs
-        linear; the nodes' own values at the nodes, the ends held outside.
+        on the nodes with the slopes ``sim.rhs(t_i, x_i, r=r_i)`` (the
+        dependent coordinates and speeds then solved from the independent
+        ones, on a constrained model), inputs linear; the nodes' own values
+        at the nodes, the ends held outside.
 
         Parameters
         ----------
@@ -180,6 +182,9 @@ class TrajectoryTracker(LinearFeedback):
                 h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
                 xs[j] = h00 * x[i] + h10 * h * f[i] + h01 * x[i + 1] + h11 * h * f[i + 1]
                 rs[j] = (1 - s) * r[i] + s * r[i + 1]
+                if sim.mc or sim.mv:
+                    # the dependent entries back on the constraints
+                    xs[j] = sim.consistent_state(xs[j], p=self.p, t=float(tj))
         return xs, rs
 
     # ------------------------------------------------------------ C source
