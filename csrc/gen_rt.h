@@ -560,6 +560,9 @@ int gen_rt_model_simulate(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_r
  *              t_gain + k dt_gain on (row 0 before, the last row after the
  *              end), a time-varying feedback such as a trajectory tracker's
  *              (gen/tracking.py). Row changes are step boundaries.
+ *   bounds     with r_min / r_max (nr each, NULL: none; infinite entries
+ *              allowed), base and feedback clipped to [r_min, r_max]
+ *              before the controller is called.
  *   period     0: r is evaluated at every right-hand-side evaluation (a
  *              continuous controller); > 0: r is evaluated at t0 + k period
  *              (from the state there) and held until the next sample (a
@@ -567,8 +570,10 @@ int gen_rt_model_simulate(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_r
 /* (gen_rt_input, gen_rt_controller_fn and GEN_RT_HOLD_*: gen_rt_abi.h) */
 
 /* the inputs at (t, x) from in (sampling aside: the base at t, feedback,
- * controller); work: ns reals. A bad description is GEN_RT_ERR_BAD_ARG
- * (unsorted table, unknown hold, negative period) or _NONFINITE_INPUT. */
+ * the schedule's row at t, bounds, controller): one step of a digital
+ * controller. A bad description is GEN_RT_ERR_BAD_ARG (unsorted table,
+ * unknown hold, negative period, a schedule without dt_gain > 0, r_min >
+ * r_max) or _NONFINITE_INPUT. */
 int gen_rt_model_eval_input(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
                             const gen_rt_input *in, gen_rt_real *r);
 /* simulate with inputs from in; r_out (nr per row, may be NULL) gets the

@@ -124,6 +124,10 @@ static int input_at(const gen_rt_model *m, const gen_rt_input *in, gen_rt_real t
             r[i] -= s;
         }
     }
+    for (i = 0; i < nr; ++i) {
+        if (in->r_min && r[i] < in->r_min[i]) r[i] = in->r_min[i];
+        if (in->r_max && r[i] > in->r_max[i]) r[i] = in->r_max[i];
+    }
     if (in->controller && in->controller(in->ctx, t, x, r)) return GEN_RT_ERR_CONTROLLER;
     if (!finite_n(nr, r)) return GEN_RT_ERR_NONFINITE_INPUT;
     return GEN_RT_OK;
@@ -148,6 +152,11 @@ static int input_check(const gen_rt_model *m, const gen_rt_input *in)
             if (!(in->t_table[i] > in->t_table[i - 1])) return GEN_RT_ERR_BAD_ARG;
     } else if (in->r && !finite_n(rows * nr, in->r)) {
         return GEN_RT_ERR_NONFINITE_INPUT;
+    }
+    for (i = 0; i < nr; ++i) {     /* bounds: infinite allowed, NaN or lo > hi not */
+        gen_rt_real lo = in->r_min ? in->r_min[i] : 0, hi = in->r_max ? in->r_max[i] : 0;
+        if (lo != lo || hi != hi) return GEN_RT_ERR_NONFINITE_INPUT;
+        if (in->r_min && in->r_max && lo > hi) return GEN_RT_ERR_BAD_ARG;
     }
     if (in->K && !finite_n(rows * nr * ns, in->K)) return GEN_RT_ERR_NONFINITE_INPUT;
     if (in->x_op && !finite_n(rows * NX_(m), in->x_op)) return GEN_RT_ERR_NONFINITE_INPUT;
@@ -524,7 +533,13 @@ static int step_(engine *e, gen_rt_real t, gen_rt_real t_stop)
                 int col = j < niq ? m->q_ind[j] : m->nq + m->u_ind[j - niq];
                 for (a = 0; a < nx; ++a) {
                     gen_rt_real sum = 0;
-                    for (b = 0; b < nr; ++b) sum += Jr[a * nr + b] * K[(long)b * ns + j];
+                    for (b = 0; b < nr; ++b) {
+                        /* an input held at a bound does not follow the state */
+                        if ((c->in->r_min && r[b] <= c->in->r_min[b])
+                            || (c->in->r_max && r[b] >= c->in->r_max[b]))
+                            continue;
+                        sum += Jr[a * nr + b] * K[(long)b * ns + j];
+                    }
                     J[a * nx + col] -= sum;
                 }
             }

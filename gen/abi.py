@@ -179,6 +179,9 @@ STRUCTS = (
               "dt_gain on (row 0 before, the last row after)", 0),
         Field("t_gain", "real", "schedule: the time of row 0", 0.0),
         Field("dt_gain", "real", "schedule: the time between rows (> 0)", 0.0),
+        Field("r_min", "creal*", "NR lower bounds the inputs are clipped to after the "
+              "feedback (NULL: none; -inf: unbounded)", 0),
+        Field("r_max", "creal*", "NR upper bounds, likewise (NULL: none; inf: unbounded)", 0),
     )),
     Struct("events", "Events", "Events of simulate_events: crossings of a level by a state or "
            "an output, located on the dense output; the log of those found. Zero-fill it and "

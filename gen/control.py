@@ -51,6 +51,9 @@ class LinearFeedback:
         (n, ns) and r_op (n, nr) (or one row for all), row k used from
         ``t_gain + k dt_gain`` on (row 0 before, the last row after the
         end); dt_gain defaults to the period. With one gain they are unused.
+    r_min, r_max : array_like, shape (nr,), optional
+        Bounds the law's inputs are clipped to (None: none; -inf / inf
+        entries: unbounded), in C after the feedback.
     """
     K: object
     x_op: object = None
@@ -58,6 +61,8 @@ class LinearFeedback:
     period: float | None = None
     t_gain: float = 0.0
     dt_gain: float | None = None
+    r_min: object = None
+    r_max: object = None
 
     @property
     def n_gain(self):
@@ -140,6 +145,47 @@ class LinearFeedback:
                 raise InputError(f"LinearFeedback: t_gain must be finite, got {self.t_gain!r}")
         return K, x_op, r_op
 
+    def bounds(self, sim):
+        """The input bounds as float arrays, checked against a model.
+
+        Parameters
+        ----------
+        sim : gen.bindings.Simulator
+            The model the feedback closes.
+
+        Returns
+        -------
+        r_min, r_max : numpy.ndarray or None
+            Shape (nr,) each; None where not given.
+
+        Raises
+        ------
+        gen.InputError
+            On a wrong shape, a NaN, or r_min > r_max.
+        """
+        out = []
+        for name, v in (("r_min", self.r_min), ("r_max", self.r_max)):
+            if v is None:
+                out.append(None)
+                continue
+            a = np.asarray(v, dtype=float).reshape(-1)
+            if a.shape != (sim.nr,):
+                raise InputError(f"LinearFeedback: {name} must have nr = {sim.nr} values "
+                                 f"({sim.input_names}), got shape {np.shape(v)}", name,
+                                 None, None)
+            if np.any(np.isnan(a)):
+                i = int(np.argmax(np.isnan(a)))
+                raise InputError(f"LinearFeedback: {name}[{i}] = nan ({sim.input_names[i]})",
+                                 name, i, float(a[i]))
+            out.append(a)
+        lo, hi = out
+        if lo is not None and hi is not None and np.any(lo > hi):
+            i = int(np.argmax(lo > hi))
+            raise InputError(f"LinearFeedback: r_min[{i}] = {float(lo[i])!r} > r_max[{i}] = "
+                             f"{float(hi[i])!r} ({sim.input_names[i]})", "r_min", i,
+                             float(lo[i]))
+        return lo, hi
+
     def row(self, t):
         """The schedule's row in effect at a time.
 
@@ -177,7 +223,13 @@ class LinearFeedback:
             K, x_op, r_op = K[k], x_op[k], r_op[k]
         idx = list(sim.q_ind) + [sim.nq + i for i in sim.u_ind]
         x = np.asarray(x, dtype=float)
-        return r_op - K @ (x[idx] - x_op[idx])
+        r = r_op - K @ (x[idx] - x_op[idx])
+        lo, hi = self.bounds(sim)
+        if lo is not None:
+            r = np.maximum(r, lo)
+        if hi is not None:
+            r = np.minimum(r, hi)
+        return r
 
 
 class InputPlan:
@@ -252,6 +304,11 @@ def plan_inputs(sim, r, controller, dt, method, input_period, input_hold):
         s.x_op = plan.array(x_op)
         s.r = plan.array(r_op)
         s.period = 0.0 if controller.period is None else float(controller.period)
+        lo, hi = controller.bounds(sim)
+        if lo is not None:
+            s.r_min = plan.array(lo)
+        if hi is not None:
+            s.r_max = plan.array(hi)
         if K.ndim == 3:
             s.n_gain = K.shape[0]
             s.t_gain = float(controller.t_gain)

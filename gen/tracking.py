@@ -76,6 +76,10 @@ class TrajectoryTracker(LinearFeedback):
         The controller's sample period (> 0, at most the trajectory's length).
     p : array_like or dict, optional
         The constants of the linearizations (None: the model's defaults).
+    r_min, r_max : array_like, shape (nr,), optional
+        Bounds the tracker's inputs are clipped to (an actuator's limits;
+        None: none, -inf / inf entries: unbounded). The gains do not know
+        them: a reference that rides a bound leaves the tracker no margin.
 
     Attributes
     ----------
@@ -94,7 +98,7 @@ class TrajectoryTracker(LinearFeedback):
         ``"dare"`` or ``"Q"``: where the terminal cost came from.
     """
 
-    def __init__(self, sim, t, x, r, Q, R, period, p=None):
+    def __init__(self, sim, t, x, r, Q, R, period, p=None, *, r_min=None, r_max=None):
         t, x, r, Q, R, period = _check(sim, t, x, r, Q, R, period)
         self.sim = sim
         self.p = p
@@ -126,7 +130,8 @@ class TrajectoryTracker(LinearFeedback):
         self.Ad, self.Bd, self.P = Ad, Bd, P
         LinearFeedback.__init__(self, K=K, x_op=np.vstack([xs, x[-1]]),
                                 r_op=np.vstack([rs, r[-1]]), period=period,
-                                t_gain=float(t[0]), dt_gain=period)
+                                t_gain=float(t[0]), dt_gain=period, r_min=r_min, r_max=r_max)
+        self.bounds(sim)
 
     def __repr__(self):
         return (f"<gen.TrajectoryTracker of '{self.sim.name}': {len(self.t_samples)} samples "
@@ -140,7 +145,7 @@ class TrajectoryTracker(LinearFeedback):
         # pickled (an ensemble's workers) as its law: the LinearFeedback of its
         # tables, without the Simulator it was built from
         return (LinearFeedback, (self.K, self.x_op, self.r_op, self.period, self.t_gain,
-                                 self.dt_gain))
+                                 self.dt_gain, self.r_min, self.r_max))
 
     def reference(self, ts):
         """The reference at times ts: states by the cubic Hermite interpolant
@@ -207,8 +212,9 @@ class TrajectoryTracker(LinearFeedback):
         size = 8 if real == "double" else 4
         n = self.n_gain
         k, xr, rr = (n * self.sim.nr * self.sim.ns, n * self.sim.nx, n * self.sim.nr)
+        nb = self.sim.nr * ((self.r_min is not None) + (self.r_max is not None))
         return {"rows": n, "K": k * size, "x_ref": xr * size, "r_ref": rr * size,
-                "flash": (k + xr + rr) * size, "ram": 0}
+                "bounds": nb * size, "flash": (k + xr + rr + nb) * size, "ram": 0}
 
     def sources(self, name="tracker", real=None):
         """The tracker's C source and header, as text (see :meth:`to_c`).
@@ -246,9 +252,14 @@ class TrajectoryTracker(LinearFeedback):
             raise InputError(f"the tracker's name {name!r} is the model's: its files would "
                              "replace the model's", "name", None, name)
         K, x_op, r_op = self.arrays(self.sim)
+        lo, hi = self.bounds(self.sim)
+        huge = "HUGE_VALF" if real == "float" else "HUGE_VAL"
+
+        def lit(v):
+            return _fmt_real(v, real) if np.isfinite(v) else ("-" if v < 0 else "") + huge
 
         def rows(a, per):
-            flat = [_fmt_real(v, real) for v in np.asarray(a, dtype=float).ravel()]
+            flat = [lit(v) for v in np.asarray(a, dtype=float).ravel()]
             return [", ".join(flat[i:i + per]) for i in range(0, len(flat), per)]
 
         ctx = {"name": name, "N": name.upper(), "p": self.sim.name, "P": self.sim.name.upper(),
@@ -259,7 +270,9 @@ class TrajectoryTracker(LinearFeedback):
                "terminal": self.terminal, "ind_names": list(self.sim.independent_state_names),
                "K_rows": rows(K, self.sim.ns), "x_rows": rows(x_op, self.sim.nx),
                "r_rows": rows(r_op, max(self.sim.nr, 1)),
-               "nr": self.sim.nr, "footprint": self.footprint(real)}
+               "nr": self.sim.nr, "footprint": self.footprint(real),
+               "r_min": None if lo is None else rows(lo, self.sim.nr)[0],
+               "r_max": None if hi is None else rows(hi, self.sim.nr)[0]}
         env = template_env()
         return {f"{name}.h": env.get_template("c/tracker.h.j2").render(**ctx),
                 f"{name}.c": env.get_template("c/tracker.c.j2").render(**ctx)}

@@ -143,6 +143,41 @@ def test_closed_loop_in_c_equals_the_law_in_python(sim, swing, dt, method):
             assert abs(a.r[i, 0] - tr(sim, a.t[i], a.x[i])[0]) < 1e-12 * (1 + abs(a.r[i, 0]))
 
 
+def test_input_bounds_clip_the_law_in_c(sim, swing, tmp_path):
+    """r_min / r_max: the law clipped in C equals np.clip of the law in
+    Python; the bounds are reached; the C source keeps them (an infinite
+    one as HUGE_VAL) and compiles strict."""
+    t, x, r, _ = swing
+    tr = gen.TrajectoryTracker(sim, t, x, r, Q, R, PERIOD, r_min=[-12.0], r_max=[15.0])
+    x0 = x[0] + np.array([0.0, 0.05, 0.0, 0.0])
+    a = sim.simulate(x0, 8.0, PERIOD / 2, controller=tr)
+    law = python_law(tr)
+    b = sim.simulate(x0, 8.0, PERIOD / 2, r=lambda t, x: np.clip(law(t, x), -12.0, 15.0),
+                     input_period=PERIOD)
+    assert np.max(np.abs(a.x - b.x)) < 1e-10 and np.max(np.abs(a.r - b.r)) < 1e-10
+    assert a.r.min() == -12.0 and a.r.max() == 15.0
+    # a continuous law with bounds under RODAS4 (the Jacobian leaves out a
+    # saturated input) and DOPRI5 agree
+    A, B = sim.linearize(np.zeros(4))
+    fb = gen.LinearFeedback(cp.lqr(A, B, cp.Q_LQR, cp.R_LQR), r_min=[-2.0], r_max=[2.0])
+    xs = np.array([0.0, 0.3, 0.0, 0.0])
+    d = sim.simulate(xs, 3.0, 0.1, method="dopri5", rtol=1e-11, atol=1e-12, controller=fb)
+    ro = sim.simulate(xs, 3.0, 0.1, method="rodas4", rtol=1e-9, atol=1e-11, controller=fb)
+    assert d.r.min() == -2.0 and np.max(np.abs(d.x - ro.x)) < 1e-6
+    # the C source
+    tr2 = gen.TrajectoryTracker(sim, t[:101], x[:101], r[:101], Q, R, PERIOD,
+                                r_min=[-np.inf], r_max=[15.0])
+    src = tr2.sources("bounded")
+    assert "bounded_r_min[CART_POLE_NR] = { -HUGE_VAL };" in src["bounded.c"]
+    assert "bounded_r_max[CART_POLE_NR] = { 15.0 };" in src["bounded.c"]
+    assert tr2.footprint("double")["bounds"] == 16
+    gen.generate(cp.model(), tmp_path)
+    tr2.to_c(tmp_path, name="bounded", real="double")
+    p = subprocess.run([_cc(), *STRICT, "-c", "-I", str(tmp_path), str(tmp_path / "bounded.c"),
+                        "-o", str(tmp_path / "bounded.o")], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+
+
 def test_started_on_the_reference_it_reproduces_it(sim, swing):
     """A reference that is a sampled run of the model, tracked at its own
     samples from its own start: the feedback is zero and the run is the
@@ -300,6 +335,10 @@ def test_bad_input_is_named(sim):
     bad(r"x\[3, 1\] = nan \(node 3, theta\)", x=np.where(np.arange(44).reshape(11, 4) == 13, np.nan, 0))
     with pytest.raises(ValueError):             # an InputError is a ValueError
         gen.TrajectoryTracker(sim, t, x, r, Q, R, float("nan"))
+    with pytest.raises(gen.InputError, match=r"r_min\[0\] = 2.0 > r_max\[0\] = 1.0 \(F\)"):
+        gen.TrajectoryTracker(sim, t, x, r, Q, R, 0.1, r_min=[2.0], r_max=[1.0])
+    with pytest.raises(gen.InputError, match=r"r_max must have nr = 1 values"):
+        gen.TrajectoryTracker(sim, t, x, r, Q, R, 0.1, r_max=[1.0, 2.0])
     tr = gen.TrajectoryTracker(sim, t, x, r, Q, R, 0.1)
     with pytest.raises(gen.InputError, match="tracker name 'int'"):
         tr.sources(name="int")

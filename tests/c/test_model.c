@@ -619,6 +619,15 @@ static void controller_tests(int accel)
             CHECK_NEAR(r_out[k], rb[g] - K[2 * g] * (x_out[2 * k] - xo[2 * g])
                        - K[2 * g + 1] * (x_out[2 * k + 1] - xo[2 * g + 1]), TOL(1e-13, 1e-5));
         }
+        {                                        /* bounds clip the law */
+            const gen_rt_real lo[1] = {-1}, hi[1] = {GEN_RT_C(2.5)}, bad[1] = {-2};
+            in.r_min = lo; in.r_max = hi;
+            CHECK_INT(gen_rt_model_eval_input(&m, GEN_RT_C(0.3), xe, &in, r1), GEN_RT_OK);
+            CHECK_NEAR(r1[0], 2.5, 0);           /* 20 - 3 * (0.5 - 0) - 4 * (-0.25 - 1) */
+            in.r_max = bad;                      /* r_min > r_max */
+            CHECK_INT(gen_rt_model_eval_input(&m, GEN_RT_C(0.3), xe, &in, r1), GEN_RT_ERR_BAD_ARG);
+            in.r_min = NULL; in.r_max = NULL;
+        }
         in.dt_gain = 0;                          /* a schedule needs dt_gain > 0 */
         CHECK_INT(gen_rt_model_eval_input(&m, 0, xe, &in, r1), GEN_RT_ERR_BAD_ARG);
         in.dt_gain = GEN_RT_C(0.25); in.n_gain = -1;

@@ -128,7 +128,10 @@ static const gen_rt_main_model model = {
     .options_default = options_default, .consistent_state = consistent_state,
     .linearize = linearize, .simulate_rows = simulate_rows, .simulate = simulate,
     .eval_constraints = eval_constraints, .eval_energy = eval_energy,
-    .status_message = pendulum_kane_status_message
+    .status_message = pendulum_kane_status_message,
+#ifdef PENDULUM_KANE_TRACKER
+    .tracker = 1
+#endif
 };
 
 int main(int argc, char **argv)

@@ -54,6 +54,8 @@ typedef char pendulum_kane_abi_matches_runtime[(
     offsetof(pendulum_kane_input, n_gain) == offsetof(gen_rt_input, n_gain) &&
     offsetof(pendulum_kane_input, t_gain) == offsetof(gen_rt_input, t_gain) &&
     offsetof(pendulum_kane_input, dt_gain) == offsetof(gen_rt_input, dt_gain) &&
+    offsetof(pendulum_kane_input, r_min) == offsetof(gen_rt_input, r_min) &&
+    offsetof(pendulum_kane_input, r_max) == offsetof(gen_rt_input, r_max) &&
     sizeof(pendulum_kane_events) == sizeof(gen_rt_events) &&
     offsetof(pendulum_kane_events, n) == offsetof(gen_rt_events, n) &&
     offsetof(pendulum_kane_events, which) == offsetof(gen_rt_events, which) &&
@@ -482,6 +484,8 @@ int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_rea
     in_rt.n_gain = in->n_gain;
     in_rt.t_gain = in->t_gain;
     in_rt.dt_gain = in->dt_gain;
+    in_rt.r_min = in->r_min;
+    in_rt.r_max = in->r_max;
     if (!opts) { pendulum_kane_sim_options_default(&opts_default); opts = &opts_default; }
     opts_rt.method = opts->method;
     opts_rt.project = opts->project;
@@ -551,6 +555,8 @@ int pendulum_kane_simulate_events(const pendulum_kane_real *x0, pendulum_kane_re
     in_rt.n_gain = in->n_gain;
     in_rt.t_gain = in->t_gain;
     in_rt.dt_gain = in->dt_gain;
+    in_rt.r_min = in->r_min;
+    in_rt.r_max = in->r_max;
     ev_rt.n = ev->n;
     ev_rt.which = ev->which;
     ev_rt.direction = ev->direction;
@@ -662,6 +668,8 @@ int pendulum_kane_eval_input(pendulum_kane_real t, const pendulum_kane_real *x, 
     in_rt.n_gain = in->n_gain;
     in_rt.t_gain = in->t_gain;
     in_rt.dt_gain = in->dt_gain;
+    in_rt.r_min = in->r_min;
+    in_rt.r_max = in->r_max;
     st = gen_rt_model_eval_input(&pendulum_kane_model, t, x, &in_rt, r);
     (void)opts_default;
     return st;

@@ -116,6 +116,8 @@ typedef struct {
     int n_gain; /* > 0: a gain schedule of n_gain rows: K is n_gain x NR x NS, x_op n_gain x NX and r (when not NULL) n_gain x NR, row k used from t_gain + k dt_gain on (row 0 before, the last row after) */
     pendulum_kane_real t_gain; /* schedule: the time of row 0 */
     pendulum_kane_real dt_gain; /* schedule: the time between rows (> 0) */
+    const pendulum_kane_real *r_min; /* NR lower bounds the inputs are clipped to after the feedback (NULL: none; -inf: unbounded) */
+    const pendulum_kane_real *r_max; /* NR upper bounds, likewise (NULL: none; inf: unbounded) */
 } pendulum_kane_input;
 
 /* Events of simulate_events: crossings of a level by a state or an output, located on the dense output; the log of those found. Zero-fill it and set what you use. */

@@ -244,6 +244,9 @@ struct SimOptions : detail::Api<S>::sim_options {
  *       t_gain + k dt_gain on (row 0 before, the last row after)
  *   S t_gain: schedule: the time of row 0
  *   S dt_gain: schedule: the time between rows (> 0)
+ *   const S * r_min: NR lower bounds the inputs are clipped to after the feedback
+ *       (NULL: none; -inf: unbounded)
+ *   const S * r_max: NR upper bounds, likewise (NULL: none; inf: unbounded)
  */
 template <typename S>
 struct Input : detail::Api<S>::input {

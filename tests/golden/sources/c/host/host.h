@@ -29,6 +29,8 @@ typedef struct {
     int n_gain;
     eomgen_real t_gain;
     eomgen_real dt_gain;
+    const eomgen_real *r_min;
+    const eomgen_real *r_max;
 } eomgen_input;
 typedef struct {
     int n;
