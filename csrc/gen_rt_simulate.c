@@ -135,11 +135,11 @@ static int input_at(const gen_rt_model *m, const gen_rt_input *in, gen_rt_real t
 
 static int input_check(const gen_rt_model *m, const gen_rt_input *in)
 {
-    int i, nr = m->nr, ns = m->nq - m->mc + m->nu - m->mv;
+    int i, nr = m->nr, ns = m->nq - m->mc + m->nu - m->mv, rows;
     if (!in) return GEN_RT_ERR_NULL;
     if (in->n_table < 0 || (in->hold != GEN_RT_HOLD_ZOH && in->hold != GEN_RT_HOLD_LINEAR))
         return GEN_RT_ERR_BAD_ARG;
-    int rows = in->n_gain > 0 ? in->n_gain : 1;
+    rows = in->n_gain > 0 ? in->n_gain : 1;    /* a schedule's rows */
     if (!finite_n(1, &in->period) || in->period < 0) return GEN_RT_ERR_BAD_ARG;
     if (in->n_gain < 0 || (in->n_gain > 0 && !(finite_n(1, &in->t_gain)
                                                && finite_n(1, &in->dt_gain) && in->dt_gain > 0)))
