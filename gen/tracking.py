@@ -100,6 +100,7 @@ class TrajectoryTracker(LinearFeedback):
 
     def __init__(self, sim, t, x, r, Q, R, period, p=None, *, r_min=None, r_max=None):
         t, x, r, Q, R, period = _check(sim, t, x, r, Q, R, period)
+        LinearFeedback(np.zeros((sim.nr, sim.ns)), r_min=r_min, r_max=r_max).bounds(sim)
         self.sim = sim
         self.p = p
         self.t_ref, self.x_ref, self.r_ref = t, x, r
@@ -131,7 +132,6 @@ class TrajectoryTracker(LinearFeedback):
         LinearFeedback.__init__(self, K=K, x_op=np.vstack([xs, x[-1]]),
                                 r_op=np.vstack([rs, r[-1]]), period=period,
                                 t_gain=float(t[0]), dt_gain=period, r_min=r_min, r_max=r_max)
-        self.bounds(sim)
 
     def __repr__(self):
         return (f"<gen.TrajectoryTracker of '{self.sim.name}': {len(self.t_samples)} samples "
