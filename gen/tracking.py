@@ -359,7 +359,8 @@ def _check(sim, t, x, r, Q, R, period):
     if len(bad):
         i = int(bad[0])
         raise InputError(f"TrajectoryTracker: t must be strictly increasing, but t[{i + 1}] = "
-                         f"{float(t[i + 1])!r} <= t[{i}] = {float(t[i])!r}", "t", i + 1, float(t[i + 1]))
+                         f"{float(t[i + 1])!r} <= t[{i}] = {float(t[i])!r}", "t", i + 1,
+                         float(t[i + 1]))
     x = np.asarray(x, dtype=float)
     if x.ndim == 1 and nx == 1:
         x = x[:, None]
@@ -401,9 +402,9 @@ def _check(sim, t, x, r, Q, R, period):
         asym = np.max(np.abs(W - W.T))
         if asym > 1e-12 * max(1.0, np.max(np.abs(W))):
             i, j = np.unravel_index(np.argmax(np.abs(W - W.T)), W.shape)
-            raise InputError(f"TrajectoryTracker: {name} must be symmetric, but {name}[{i}, {j}] "
-                             f"= {float(W[i, j])!r} ({labels[i]}, {labels[j]}) != {name}[{j}, {i}] = "
-                             f"{float(W[j, i])!r}", name, None, None)
+            raise InputError(f"TrajectoryTracker: {name} must be symmetric, but "
+                             f"{name}[{i}, {j}] = {float(W[i, j])!r} ({labels[i]}, {labels[j]}) "
+                             f"!= {name}[{j}, {i}] = {float(W[j, i])!r}", name, None, None)
     eq = np.linalg.eigvalsh(Q)
     if eq[0] < -1e-12 * max(1.0, eq[-1]):
         raise InputError(f"TrajectoryTracker: Q must be positive semidefinite; its smallest "

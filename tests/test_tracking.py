@@ -223,7 +223,7 @@ def test_ensemble_runs_the_tracker_and_it_pickles_as_its_law(sim, swing):
     assert np.array_equal(a.x, b.x)
 
 
-def test_constrained_model_the_sleigh(tmp_path):
+def test_constrained_model_the_sleigh():
     """A nonholonomic model (examples/chaplygin_sleigh.py: u_y dependent):
     the reference between the nodes satisfies the constraint, and the
     tracker brings a heading 0.05 rad off back onto the reference."""
@@ -332,7 +332,8 @@ def test_bad_input_is_named(sim):
     bad(r"Q must be positive semidefinite; its smallest eigenvalue is -1.0",
         Q=np.diag([1.0, -1.0, 1.0, 1.0]))
     bad(r"R must be positive definite .*smallest eigenvalue is 0.0", R=np.zeros((1, 1)))
-    bad(r"x\[3, 1\] = nan \(node 3, theta\)", x=np.where(np.arange(44).reshape(11, 4) == 13, np.nan, 0))
+    bad(r"x\[3, 1\] = nan \(node 3, theta\)",
+        x=np.where(np.arange(44).reshape(11, 4) == 13, np.nan, 0))
     with pytest.raises(ValueError):             # an InputError is a ValueError
         gen.TrajectoryTracker(sim, t, x, r, Q, R, float("nan"))
     with pytest.raises(gen.InputError, match=r"r_min\[0\] = 2.0 > r_max\[0\] = 1.0 \(F\)"):
@@ -387,7 +388,8 @@ def test_standalone_binary_runs_the_tracker_from_const_tables(sim, swing, tmp_pa
         assert sec["rodata"] >= tr.footprint("double")["flash"], sec
     x0 = x[0] + np.array([0.0, 0.05, 0.0, 0.0])
     out = subprocess.run([str(exe), "--t-end", "8", "--dt", "1e-3", "--x0",
-                          f"theta={float(x0[1])!r}"], capture_output=True, text=True, check=True).stdout
+                          f"theta={float(x0[1])!r}"], capture_output=True, text=True,
+                         check=True).stdout
     lines = out.strip().splitlines()
     assert lines[0].split(",") == ["t", "x", "theta", "v", "omega", "tip_x", "tip_y", "F"]
     data = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
