@@ -18,6 +18,17 @@ class Event(NamedTuple):
     x: np.ndarray
 
 
+class JumpEvent(Event):
+    """A hybrid event (an impact, a reset or a contact's lift-off,
+    ``hybrid={...}``): also ``x_after``, the state after the jump. Unpacks
+    as ``name, t, x = event`` like every Event."""
+
+    def __new__(cls, name, t, x, x_after):
+        self = super().__new__(cls, name, t, x)
+        self.x_after = x_after
+        return self
+
+
 class Solution:
     """The result of :meth:`gen.bindings.Simulator.simulate`.
 
