@@ -206,8 +206,10 @@ def attach_hybrid(model, hybrid):
             xmap = list(model.q) + list(model.u)
             for k, v in d.map.items():
                 if k not in states_user:
+                    from .model import _sym_name
                     raise ModelError(
-                        f"model '{model.name}': the map of reset {name!r} sets {k}, which is "
+                        f"model '{model.name}': the map of reset {name!r} sets "
+                        f"{_sym_name(k) if isinstance(k, sm.Basic) else k}, which is "
                         f"not a state; the states are {_user_names(model)}")
                 ve = v.xreplace(sub)
                 _check_known(model, name, f"map[{k}]", v, ve, Q | U | P | {model.t})
