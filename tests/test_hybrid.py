@@ -228,3 +228,129 @@ def test_bad_input_names_symbols():
     mod = gen.Model.from_kanes(km, constants=c, hybrid={"floor": gen.Impact(y, 0.5)})
     assert [d.name for d in mod.hybrid] == ["floor"]
     assert mod.hybrid[0].expr == mod.q[0]
+
+
+# ------------------------------------------------------------ simplest walker
+GAMMA, BETA = 0.009, 1e-6
+
+
+def _walker_lagrangian():
+    """Garcia, Chatterjee, Ruina and Coleman (1998): a hip mass M and a foot
+    mass m = BETA M on massless legs of length l, on a slope GAMMA (g = l = 1);
+    theta the stance leg's angle from the slope normal, phi the angle between
+    the legs."""
+    th, ph = me.dynamicsymbols("theta phi")
+    Mh, mf, g, l, gam = sm.symbols("M_h m_f g l gamma")
+    t = me.dynamicsymbols._t
+    hip = sm.Matrix([-l * sm.sin(th), l * sm.cos(th)])
+    foot = hip + sm.Matrix([l * sm.sin(th - ph), -l * sm.cos(th - ph)])
+    ag = sm.Matrix([g * sm.sin(gam), -g * sm.cos(gam)])
+    vh, vf = hip.diff(t), foot.diff(t)
+    T = (Mh * vh.dot(vh) + mf * vf.dot(vf)) / 2
+    V = -(Mh * ag.dot(hip) + mf * ag.dot(foot))
+    consts = {Mh: 1.0, mf: BETA, g: 1.0, l: 1.0, gam: GAMMA}
+    return T - V, th, ph, consts
+
+
+def _walker_model():
+    Lag, th, ph, consts = _walker_lagrangian()
+    thd, phd = th.diff(), ph.diff()
+    lm = me.LagrangesMethod(Lag, [th, ph])
+    lm.form_lagranges_equations()
+    c2 = sm.cos(2 * th)
+    # heel strike: the swing foot reaches the slope (phi = 2 theta, moving
+    # up through it: the mid-stance scuffing crosses downwards), Garcia's map
+    # in the limit of a small foot mass
+    strike = gen.Reset(ph - 2 * th, {th: -th, ph: -2 * th, thd: c2 * thd,
+                                     phd: c2 * (1 - c2) * thd}, direction=1)
+    return gen.Model.from_lagrange(lm, constants=consts, name="hyb_walker",
+                                   hybrid={"heelstrike": strike})
+
+
+def _newton(stride, z0, h=1e-7, iters=8):
+    z = np.array(z0, dtype=float)
+    for _ in range(iters):
+        S = stride(z)
+        J = np.column_stack([(stride(z + dz) - stride(z - dz)) / (2 * h)
+                             for dz in np.eye(2) * h])
+        step = np.linalg.solve(J - np.eye(2), S - z)
+        z = z - step
+        if np.max(np.abs(step)) < 1e-13:
+            break
+    J = np.column_stack([(stride(z + dz) - stride(z - dz)) / (2 * h) for dz in np.eye(2) * h])
+    return z, J
+
+
+def _start(z):
+    a, ad = z
+    return np.array([a, 2 * a, ad, (1 - np.cos(2 * a)) * ad])
+
+
+def _scipy_stride_map():
+    """The same model integrated by SciPy: M and f of the Euler-Lagrange
+    equations lambdified here, DOP853 with an event at the heel strike."""
+    from scipy.integrate import solve_ivp
+    Lag, th, ph, consts = _walker_lagrangian()
+    t = me.dynamicsymbols._t
+    q = [th, ph]
+    qd = [s.diff(t) for s in q]
+    qdd = [s.diff(t) for s in qd]
+    eqs = sm.Matrix([Lag.diff(v).diff(t) - Lag.diff(s) for s, v in zip(q, qd)]).xreplace(consts)
+    Mm = eqs.jacobian(qdd)
+    F = -eqs.xreplace({a: 0 for a in qdd})
+    X = sm.symbols("x0:4")
+    sub = dict(zip(q + qd, X))
+    Mf = sm.lambdify([X], Mm.xreplace(sub), "numpy")
+    Ff = sm.lambdify([X], F.xreplace(sub), "numpy")
+
+    def rhs(_t, x):
+        acc = np.linalg.solve(np.array(Mf(x), dtype=float), np.array(Ff(x), dtype=float).ravel())
+        return np.concatenate([x[2:], acc])
+
+    def strike(_t, x):
+        return x[1] - 2 * x[0]
+    strike.direction = 1
+    strike.terminal = True
+
+    def stride(z):
+        # the first half second apart: SciPy would take phi - 2 theta = 0
+        # at the start for a crossing
+        s0 = solve_ivp(rhs, (0, 0.5), _start(z), method="DOP853", rtol=1e-13, atol=1e-13)
+        s = solve_ivp(rhs, (0.5, 4.5), s0.y[:, -1], method="DOP853", rtol=1e-13, atol=1e-13,
+                      events=strike)
+        x = s.y_events[0][0]
+        c2 = np.cos(2 * x[0])
+        return np.array([-x[0], c2 * x[2]])
+    return stride
+
+
+@pytest.mark.slow
+def test_simplest_walker_fixed_point():
+    sim = gen.compile(_walker_model())
+
+    def stride(z):
+        sol = sim.simulate(_start(z), 4.5, 4.5, method="dopri5", rtol=1e-12, atol=1e-12)
+        ev = [e for e in sol.events if e.name == "heelstrike"][0]
+        return np.array([ev.x_after[0], ev.x_after[2]])
+
+    z, J = _newton(stride, [0.2, -0.2])
+    # Garcia et al. 1998, gamma = 0.009: theta = 0.2003, theta' = -0.1998
+    assert abs(z[0] - 0.2003) < 1e-4 and abs(z[1] + 0.1998) < 1e-4
+    # a stable gait: the stride map's eigenvalues inside the unit circle
+    assert np.max(np.abs(np.linalg.eigvals(J))) < 1
+    # the same model by SciPy
+    z_ref, _ = _newton(_scipy_stride_map(), [0.2, -0.2])
+    assert np.max(np.abs(z - z_ref)) < 1e-8
+
+
+@pytest.mark.slow
+def test_inconsistent_reset_is_an_error():
+    """A reset whose map leaves the pendulum's circle stops the run with
+    ERR_INCONSISTENT_RESET, naming the reset."""
+    q1, q2 = me.dynamicsymbols("q1:3")
+    m = _pendulum(0.5, "hyb_pend_bad")
+    from gen.hybrid import attach_hybrid
+    attach_hybrid(m, {"kick": gen.Reset(q2 + sm.Rational(1, 5), {q1: 2 * q1})})
+    sim = gen.compile(m)
+    with pytest.raises(gen.SolverError, match=r"reset\(s\) kick.*ERR_INCONSISTENT_RESET"):
+        sim.simulate([np.cos(0.8), np.sin(0.8), 0.0, 0.0], 1.5, 0.01, method="dopri5")
