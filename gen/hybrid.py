@@ -273,15 +273,19 @@ def hybrid_kernels(model):
     return out
 
 
+def _accel_work(n, m):
+    return (n + m) * (n + m + 1) + 2 * n * n + 4 * n + 1
+
+
 def hybrid_work_len(nq, nu, mv, nh):
-    """Reals of the hybrid work (csrc/gen_rt_hybrid.c GEN_RT_HYBRID_WORK)."""
-    nx = nq + nu
-    m = mv + nh
-    accel = (nu + m) * (nu + m + 1) + 2 * nu * nu + 4 * nu + 1
-    return (nu * nu + nu + m * nu + m + nq * nq + nq + nh * nu + 3 * nh + accel
-            + 4 * nx + 2 * nh + (mv + nh) + 16)
+    """Reals of the engine's hybrid scratch: GEN_RT_HYBRID_WORK of
+    csrc/gen_rt.h (tests/test_hybrid.py checks the two agree)."""
+    core = (nu * nu + 2 * nu + 3 * (mv + nh) + (mv + nh) * nu + nq * nq + nq + nh * nu + 2 * nh
+            + _accel_work(nu, mv + nh))
+    fn = max(core + 2 * nh + nq + nu + 1, nh * (nq + nu) + nq + nu + 1)
+    return fn + 5 * nh + 2 * (nq + nu) + 8
 
 
 def hybrid_iwork_len(nq, nu, mv, nh):
-    """Ints of the hybrid work (GEN_RT_HYBRID_IWORK)."""
-    return nq + nu + mv + nh + 1 + 3 * nh + 4
+    """Ints of the engine's hybrid scratch: GEN_RT_HYBRID_IWORK."""
+    return nq + (nu + mv + nh + 1) + 2 * nh + 4

@@ -341,7 +341,7 @@ def _hybrid_context(m, real):
     decls = getattr(m, "hybrid", None) or []
     if not decls:
         return None
-    from .hybrid import KIND_RESET
+    from .hybrid import KIND_RESET, hybrid_iwork_len, hybrid_work_len
     resets = [i for i, d in enumerate(decls) if d.kind == KIND_RESET]
     return {
         "n": len(decls),
@@ -353,6 +353,9 @@ def _hybrid_context(m, real):
         # the row block of each declaration in hybrid_reset's output (-1: none)
         "reset_index": [resets.index(i) if i in resets else -1 for i in range(len(decls))],
         "has_reset": bool(resets),
+        # the engine's scratch (GEN_RT_HYBRID_WORK / _IWORK of gen_rt.h)
+        "work": hybrid_work_len(m.nq, m.nu, m.mv, len(decls)),
+        "iwork": hybrid_iwork_len(m.nq, m.nu, m.mv, len(decls)),
     }
 
 
