@@ -395,3 +395,42 @@ def test_binary_matches_python(which, tmp_path):
     X = np.loadtxt(out, delimiter=",", skiprows=1, ndmin=2)
     assert np.array_equal(X[:, 0], sol.t)
     assert np.array_equal(X[:, 1:1 + nx], sol.x)
+
+
+def test_hybrid_work_sizes_match_runtime(tmp_path):
+    """gen.hybrid's work lengths are the runtime's GEN_RT_HYBRID_WORK and
+    GEN_RT_HYBRID_IWORK macros (Python allocates what C uses)."""
+    import subprocess
+    from pathlib import Path
+    from gen.backends import c_compiler
+    from gen.hybrid import hybrid_iwork_len, hybrid_work_len
+    csrc = Path(gen.__file__).resolve().parent.parent / "csrc"
+    sizes = [(1, 1, 0, 1), (3, 3, 0, 2), (2, 2, 1, 1), (2, 2, 1, 3), (7, 6, 2, 4)]
+    body = "".join(f'    printf("%d %d\\n", (int)GEN_RT_HYBRID_WORK({a}, {b}, {c}, {d}), '
+                   f'(int)GEN_RT_HYBRID_IWORK({a}, {b}, {c}, {d}));\n' for a, b, c, d in sizes)
+    src = tmp_path / "w.c"
+    src.write_text('#include <stdio.h>\n#include "gen_rt.h"\nint main(void)\n{\n' + body +
+                   "    return 0;\n}\n")
+    exe = tmp_path / "w"
+    subprocess.run([c_compiler(), "-std=c99", f"-I{csrc}", str(src), "-o", str(exe)], check=True)
+    got = [tuple(map(int, line.split())) for line in
+           subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout.split("\n")
+           if line]
+    assert got == [(hybrid_work_len(*s), hybrid_iwork_len(*s)) for s in sizes]
+
+
+# ------------------------------------------------- compliant contact (RODAS4)
+@pytest.mark.slow
+def test_compliant_contact_rests_without_stalling():
+    """The documented alternative: a Hunt-Crossley force (Piecewise, Max)
+    integrated by RODAS4 settles at the static penetration (m g / k)^(2/3),
+    and a 100x longer rest takes a bounded number of further steps."""
+    import bouncing_ball
+    sim = gen.compile(bouncing_ball.compliant_model(k=1e5, alpha=1.5))
+    steps = {}
+    for t_end in (10.0, 1000.0):
+        sol = sim.simulate([1.0, 0.0], t_end, t_end, method="rodas4", rtol=1e-6, atol=1e-9)
+        steps[t_end] = sol.stats["n_steps"]
+        assert sol.x[-1, 0] == pytest.approx(-(G / 1e5) ** (2 / 3), rel=1e-5)
+        assert abs(sol.x[-1, 1]) < 1e-8
+    assert steps[1000.0] - steps[10.0] <= 30
