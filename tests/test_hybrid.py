@@ -434,3 +434,42 @@ def test_compliant_contact_rests_without_stalling():
         assert sol.x[-1, 0] == pytest.approx(-(G / 1e5) ** (2 / 3), rel=1e-5)
         assert abs(sol.x[-1, 1]) < 1e-8
     assert steps[1000.0] - steps[10.0] <= 30
+
+
+# ---------------------------------------------------- float Cortex-M build
+@pytest.mark.slow
+@pytest.mark.embedded
+def test_cortex_m_float_footprint():
+    """The ball and the walker cross-built for a Cortex-M4F in float (the
+    embedded subset: no heap, no stdio, no globals): simulate_events, the
+    hybrid engine included, links and reports its flash and worst-case stack."""
+    import bouncing_ball
+    import simplest_walker
+    import gen.footprint as fp
+    from conftest import require_tool
+    require_tool("cmake")
+    require_tool("arm-none-eabi-gcc")
+    reps = fp.report_many([(bouncing_ball.model(), "float"), (simplest_walker.model(), "float")],
+                          target="cortex-m4f", workers=2)
+    print("\n" + fp.format_table(reps))
+    for rep in reps:
+        assert rep["flash"]["data"] == 0 and rep["flash"]["bss"] == 0
+        assert rep["flash"]["flash"] > 1000
+        f = rep["functions"][rep["model"] + "_simulate_events"]
+        assert 0 < f["frame"] <= f["stack"] <= rep["max_stack"]
+        assert not any(n in rep["libc"] for n in ("malloc", "free", "printf", "calloc"))
+        # no double arithmetic in a float build
+        assert not any(n.startswith("__aeabi_d") for n in rep["libc"]), rep["libc"]
+        print(f"{rep['model']} [float, cortex-m4f]: flash {rep['flash']['flash']} B, "
+              f"simulate_events stack {f['stack']} B")
+
+
+@pytest.mark.slow
+def test_float_build_bounces():
+    """The same engine in float: the bounce times within float's tolerance."""
+    sim = gen.compile(_ball(name="hyb_ball_f"), real="float")
+    sol = sim.simulate([1.0, 0.0], 3.0, 0.01, method="dopri5", rtol=1e-5, atol=1e-6)
+    t1, v1 = np.sqrt(2 / G), np.sqrt(2 * G)
+    t_exact = t1 + np.concatenate([[0.0], np.cumsum(2 * v1 * 0.8 ** np.arange(1, 4) / G)])
+    t_found = np.array([ev.t for ev in sol.events[:4]])
+    assert np.max(np.abs(t_found - t_exact)) < 1e-4
