@@ -706,6 +706,19 @@ int gen_rt_hybrid_impulse(const gen_rt_model *m, gen_rt_real t, const gen_rt_rea
 int gen_rt_hybrid_reset(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *p, int k,
                         gen_rt_real proj_tol, int proj_max_iter, gen_rt_real *pwork,
                         gen_rt_real *work, gen_rt_real *x);
+/* The jump of declaration k at (t, x), as the engine and the FMU make it:
+ * a held contact's lift-off (*what = GEN_RT_HYBRID_LIFTOFF), a reset
+ * (GEN_RT_HYBRID_RESET + 1; projected when pwork, the projection's work,
+ * is not NULL) or an impact (GEN_RT_HYBRID_IMPACT + 1) with every gap
+ * closing at the same time and the contacts held, which the Zeno rule
+ * (e = 0, or slower than rest_speed) holds from then on (active, nh flags).
+ * *what = 0: a gap that is not closing (grazing), x unchanged. rows (nh
+ * ints) and scratch (3 nh reals) are the caller's. */
+#define GEN_RT_HYBRID_LIFTOFF 3
+int gen_rt_hybrid_jump(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *r,
+                       const gen_rt_real *p, int k, gen_rt_real proj_tol, int proj_max_iter,
+                       gen_rt_real *pwork, int *active, int *rows, gen_rt_real *scratch,
+                       gen_rt_real *work, int *iwork, gen_rt_real *x, int *what);
 
 #ifdef __cplusplus
 }

@@ -193,9 +193,79 @@ int gen_rt_hybrid_reset(const gen_rt_model *m, gen_rt_real t, const gen_rt_real 
     }
     if (!(res <= GEN_RT_HYBRID_RESET_TOL * scale)) return GEN_RT_ERR_INCONSISTENT_RESET;
     copy_n(nx, xr, x);
-    if (mc || mv) {
+    if ((mc || mv) && pwork) {
         st = gen_rt_model_project(m, t, p, proj_tol, proj_max_iter, pwork, x);
         if (st) return GEN_RT_ERR_INCONSISTENT_RESET;
     }
+    return GEN_RT_OK;
+}
+
+static gen_rt_real abs_(gen_rt_real a) { return a < 0 ? -a : a; }
+
+int gen_rt_hybrid_jump(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *r,
+                       const gen_rt_real *p, int k, gen_rt_real proj_tol, int proj_max_iter,
+                       gen_rt_real *pwork, int *active, int *rows, gen_rt_real *scratch,
+                       gen_rt_real *work, int *iwork, gen_rt_real *x, int *what)
+{
+    const gen_rt_hybrid *hy = m->hybrid;
+    int nh = hy->n, nq = m->nq, j, st, any = 0;
+    gen_rt_real *g = scratch, *gd = scratch + nh, *er = scratch + 2 * nh, gscale = 1;
+    *what = 0;
+    if (active[k]) {
+        /* lift-off: the contact force would pull */
+        active[k] = 0;
+        *what = GEN_RT_HYBRID_LIFTOFF;
+        return GEN_RT_OK;
+    }
+    if (hy->kind[k] == GEN_RT_HYBRID_RESET) {
+        st = gen_rt_hybrid_reset(m, t, p, k, proj_tol, proj_max_iter, pwork, work, x);
+        if (st) return st;
+        *what = GEN_RT_HYBRID_RESET + 1;
+        return GEN_RT_OK;
+    }
+    /* an impact: with every gap closing at the same time (within 1024 eps
+     * of zero) and every contact held */
+    hy->values(x, x + nq, p, t, g);
+    if ((st = gen_rt_hybrid_rates(m, t, x, p, work, iwork, gd))) return st;
+    for (j = 0; j < nq; ++j) gscale = gscale > abs_(x[j]) ? gscale : abs_(x[j]);
+    for (j = 0; j < nh; ++j) {
+        int dir = hy->direction[j];
+        gen_rt_real v = gd[j];
+        int closing = (dir < 0 && v < 0) || (dir > 0 && v > 0) || (dir == 0 && v != 0);
+        rows[j] = 0;
+        er[j] = 0;
+        if (hy->kind[j] != GEN_RT_HYBRID_IMPACT) continue;
+        if (active[j]) { rows[j] = 1; continue; }
+        if (!closing) continue;
+        if (j == k || abs_(g[j]) <= 1024 * GEN_RT_EPS * gscale) {
+            rows[j] = 1;
+            /* the Zeno rule: e = 0, or an impact slower than rest_speed,
+             * holds the contact (while its force pushes) */
+            if (hy->restitution[j] > 0 && abs_(v) > hy->rest_speed[j])
+                er[j] = hy->restitution[j];
+            else
+                er[j] = -1;
+        }
+    }
+    if (!rows[k]) return GEN_RT_OK; /* grazing: not closing */
+    for (j = 0; j < nh; ++j) {
+        if (er[j] < 0) {
+            active[j] = 2; /* tentative */
+            er[j] = 0;
+        }
+    }
+    st = gen_rt_hybrid_impulse(m, t, p, rows, er, work, iwork, x, NULL);
+    if (st) return st;
+    /* the new contacts are held while their force pushes */
+    for (j = 0; j < nh; ++j) {
+        if (active[j] == 2) active[j] = 1;
+        any |= active[j];
+    }
+    if (any) {
+        if ((st = gen_rt_hybrid_values(m, t, x, r, p, active, work, iwork, g))) return st;
+        for (j = 0; j < nh; ++j)
+            if (active[j] && !(g[j] > 0)) active[j] = 0;
+    }
+    *what = GEN_RT_HYBRID_IMPACT + 1;
     return GEN_RT_OK;
 }

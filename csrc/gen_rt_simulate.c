@@ -705,74 +705,22 @@ static int count_active_(const engine *e)
     return n;
 }
 
-/* the jump of hybrid declaration k at (t, e->xe): a lift-off, a reset or
- * an impact (with every gap closing at the same time). *jumped = 0 when
- * nothing happens (a gap that is not closing: grazing). */
+/* the jump of hybrid declaration k at (t, e->xe) (gen_rt_hybrid_jump),
+ * logged; *jumped = 0 when nothing happens (a gap that is not closing) */
 static int hybrid_jump_(engine *e, int k, gen_rt_real t, int *jumped)
 {
     model_ctx *c = e->c;
-    const gen_rt_model *m = c->m;
-    const gen_rt_hybrid *hy = e->hy;
-    int nh = e->nh, nq = m->nq, j, st;
-    gen_rt_real *x = e->xe, gscale = 1;
+    const gen_rt_real *r;
+    int st, what = 0;
     *jumped = 0;
-    copy_n(e->nx, x, e->xb);
-    if (e->active[k]) {
-        /* lift-off: the contact force would pull */
-        e->active[k] = 0;
-        c->n_active = count_active_(e);
-        log_event_(e, e->nev + nh + k, t, e->xb, x);
-        *jumped = 1;
-        return GEN_RT_OK;
-    }
-    if (hy->kind[k] == GEN_RT_HYBRID_RESET) {
-        st = gen_rt_hybrid_reset(m, t, c->p, k, c->proj_tol, c->proj_max_iter, c->work, e->hw, x);
-        if (st) return st;
-        log_event_(e, e->nev + k, t, e->xb, x);
-        *jumped = 1;
-        return GEN_RT_OK;
-    }
-    /* an impact: the gaps' values and rates here */
-    hy->values(x, x + nq, c->p, t, e->hvi);
-    if ((st = gen_rt_hybrid_rates(m, t, x, c->p, e->hw, e->hiw, e->gd))) return st;
-    for (j = 0; j < nq; ++j) gscale = rt_max2(gscale, rt_abs(x[j]));
-    for (j = 0; j < nh; ++j) {
-        int dir = hy->direction[j];
-        gen_rt_real v = e->gd[j];
-        int closing = (dir < 0 && v < 0) || (dir > 0 && v > 0) || (dir == 0 && v != 0);
-        e->rows[j] = 0;
-        e->er[j] = 0;
-        if (hy->kind[j] != GEN_RT_HYBRID_IMPACT) continue;
-        if (e->active[j]) { e->rows[j] = 1; continue; }
-        if (!closing) continue;
-        if (j == k || rt_abs(e->hvi[j]) <= 1024 * GEN_RT_EPS * gscale) {
-            e->rows[j] = 1;
-            /* the Zeno rule: e = 0, or an impact slower than rest_speed,
-             * makes a contact held (while its force pushes) */
-            if (hy->restitution[j] > 0 && rt_abs(v) > hy->rest_speed[j])
-                e->er[j] = hy->restitution[j];
-            else
-                e->er[j] = -1; /* a contact to hold */
-        }
-    }
-    if (!e->rows[k]) return GEN_RT_OK; /* grazing: not closing */
-    for (j = 0; j < nh; ++j) {
-        if (e->er[j] < 0) {
-            e->active[j] = 2; /* tentative */
-            e->er[j] = 0;
-        }
-    }
-    st = gen_rt_hybrid_impulse(m, t, c->p, e->rows, e->er, e->hw, e->hiw, x, NULL);
+    copy_n(e->nx, e->xe, e->xb);
+    if ((st = inputs_now(c, t, e->xe, &r))) return st;
+    st = gen_rt_hybrid_jump(c->m, t, r, c->p, k, c->proj_tol, c->proj_max_iter, c->work,
+                            e->active, e->rows, e->hvi, e->hw, e->hiw, e->xe, &what);
     if (st) return st;
-    /* the new contacts are held while their force pushes */
-    for (j = 0; j < nh; ++j) if (e->active[j] == 2) e->active[j] = 1;
-    if (count_active_(e) > 0) {
-        if ((st = hyb_values_(e, t, x, e->hvi))) return st;
-        for (j = 0; j < nh; ++j)
-            if (e->active[j] && !(e->hvi[j] > 0)) e->active[j] = 0;
-    }
+    if (!what) return GEN_RT_OK;
     c->n_active = count_active_(e);
-    log_event_(e, e->nev + k, t, e->xb, x);
+    log_event_(e, e->nev + (what == GEN_RT_HYBRID_LIFTOFF ? e->nh : 0) + k, t, e->xb, e->xe);
     *jumped = 1;
     return GEN_RT_OK;
 }

@@ -245,7 +245,7 @@ _RUNTIME_INDIRECT = {
     "gen_rt_hybrid_impulse": ["mass_matrix", "velocity_constraint_matrix", "hybrid_jacobian"],
     "gen_rt_hybrid_reset": ["hybrid_reset", "constraints", "velocity_constraints",
                             "constraint_jacobian", "velocity_constraint_matrix"],
-    "hybrid_jump_": ["hybrid_values", "hybrid_jacobian", "mass_matrix",
+    "gen_rt_hybrid_jump": ["hybrid_values", "hybrid_jacobian", "mass_matrix",
                      "velocity_constraint_matrix", "hybrid_reset", "constraints",
                      "velocity_constraints", "constraint_jacobian", "rhs_terms", "accel_terms",
                      "hybrid_bias"],

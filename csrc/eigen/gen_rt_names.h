@@ -36,6 +36,7 @@
 #define gen_rt_expm GEN_RT_NAME_(expm)
 #define gen_rt_hermite GEN_RT_NAME_(hermite)
 #define gen_rt_hybrid_impulse GEN_RT_NAME_(hybrid_impulse)
+#define gen_rt_hybrid_jump GEN_RT_NAME_(hybrid_jump)
 #define gen_rt_hybrid_rates GEN_RT_NAME_(hybrid_rates)
 #define gen_rt_hybrid_reset GEN_RT_NAME_(hybrid_reset)
 #define gen_rt_hybrid_rhs GEN_RT_NAME_(hybrid_rhs)
