@@ -236,7 +236,10 @@ int gen_rt_hybrid_jump(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *
         er[j] = 0;
         if (hy->kind[j] != GEN_RT_HYBRID_IMPACT) continue;
         if (active[j]) { rows[j] = 1; continue; }
-        if (!closing) continue;
+        /* a gap at zero that barely opens (slower than rest_speed) is a
+         * contact coming to rest as well (an importer's root finding can
+         * stop there on the rounding of the gap) */
+        if (!closing && !(j == k && abs_(v) <= hy->rest_speed[j])) continue;
         if (j == k || abs_(g[j]) <= 1024 * GEN_RT_EPS * gscale) {
             rows[j] = 1;
             /* the Zeno rule: e = 0, or an impact slower than rest_speed,
