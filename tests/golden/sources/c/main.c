@@ -83,6 +83,7 @@ static int simulate(const gen_rt_main_run *run, const void *x0, void *t_out, voi
         ev.log_which = run->log_which;
         ev.log_t = run->log_t;
         ev.log_x = run->log_x;
+        ev.log_x_after = run->log_x_after;
         st = pendulum_kane_simulate_events(x0, 0, (pendulum_kane_real)run->t_end, (pendulum_kane_real)run->dt, &in, &ev,
                                  run->p, &opts, run->rows, t_out, x_out, lam_out, r_out, &s);
     } else {
