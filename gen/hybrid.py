@@ -180,15 +180,15 @@ def attach_hybrid(model, hybrid):
                              f"gen.Reset, got {d!r}")
         if isinstance(d, Impact):
             e = d.gap.xreplace(sub)
-            bad_u = sorted(str(back[s]) for s in e.free_symbols & U)
-            bad_u += [str(qd) for qd in qdots if d.gap.has(qd)]
+            bad_u = sorted(_label(back[s]) for s in e.free_symbols & U)
+            bad_u += [_label(qd) for qd in qdots if d.gap.has(qd)]
             if bad_u:
                 raise ModelError(
                     f"model '{model.name}': the gap of impact {name!r} ({d.gap}) must be a "
                     f"function of the coordinates, but it holds the speed(s) "
                     f"{', '.join(bad_u)}; coordinates: "
-                    f"{', '.join(str(s) for s in model.q_orig)}")
-            bad_r = sorted(str(back[s]) for s in e.free_symbols & R)
+                    f"{', '.join(_label(s) for s in model.q_orig)}")
+            bad_r = sorted(_label(back[s]) for s in e.free_symbols & R)
             if bad_r:
                 raise ModelError(f"model '{model.name}': the gap of impact {name!r} ({d.gap}) "
                                  f"holds the input(s) {', '.join(bad_r)}; a gap is a function "
@@ -197,7 +197,7 @@ def attach_hybrid(model, hybrid):
             if e.is_number:
                 raise ModelError(f"model '{model.name}': the gap of impact {name!r} ({d.gap}) "
                                  "is constant; a gap is a function of the coordinates "
-                                 f"{', '.join(str(s) for s in model.q_orig)}")
+                                 f"{', '.join(_label(s) for s in model.q_orig)}")
             decls.append(HybridDecl(name, KIND_IMPACT, e, d.restitution, d.direction,
                                     d.rest_speed))
         else:
@@ -206,10 +206,9 @@ def attach_hybrid(model, hybrid):
             xmap = list(model.q) + list(model.u)
             for k, v in d.map.items():
                 if k not in states_user:
-                    from .model import _sym_name
                     raise ModelError(
                         f"model '{model.name}': the map of reset {name!r} sets "
-                        f"{_sym_name(k) if isinstance(k, sm.Basic) else k}, which is "
+                        f"{_label(k)}, which is "
                         f"not a state; the states are {_user_names(model)}")
                 ve = v.xreplace(sub)
                 _check_known(model, name, f"map[{k}]", v, ve, Q | U | P | {model.t})
@@ -219,15 +218,24 @@ def attach_hybrid(model, hybrid):
     return model
 
 
+def _label(s):
+    """A symbol as the user wrote it: y for y(t), y' for its derivative."""
+    if isinstance(s, sm.Derivative):
+        return _label(s.expr) + "'"
+    if isinstance(s, sm.core.function.AppliedUndef):
+        return s.func.__name__
+    return str(s)
+
+
 def _check_known(model, name, what, user_expr, e, allowed):
     unknown = e.free_symbols - allowed
     fns = {a for a in e.atoms(sm.Function) if isinstance(a, sm.core.function.AppliedUndef)}
     if unknown or fns:
-        names = sorted(str(s) for s in (unknown | fns))
+        names = sorted(_label(s) for s in (unknown | fns))
         raise ModelError(
             f"model '{model.name}': the {what} of {name!r} ({user_expr}) holds unknown "
             f"symbol(s) {', '.join(names)}: neither a coordinate "
-            f"({', '.join(str(s) for s in model.q_orig)}), a speed nor a constant "
+            f"({', '.join(_label(s) for s in model.q_orig)}), a speed nor a constant "
             f"({', '.join(str(s) for s in model.p_orig) or 'none'})")
 
 
