@@ -48,7 +48,10 @@ class Solution:
         The multipliers of the velocity constraints (no columns for a model
         without velocity constraints).
     events : list of gen.Event
-        The crossings found (``events=``), each with ``name``, ``t``, ``x``.
+        The crossings found (``events=``), each with ``name``, ``t``, ``x``;
+        with ``hybrid={...}`` also every impact, reset and lift-off
+        (``"<name>.liftoff"``), as a ``JumpEvent`` that also has ``x_after``,
+        the state after the jump.
     status : int
         0: the run reached t_end; 1: a terminal event ended it (as
         ``solve_ivp``'s). A failed run raises instead.
