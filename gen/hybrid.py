@@ -64,6 +64,13 @@ class Impact:
     rest_speed : float, optional (keyword)
         The Zeno rule's speed: an impact slower than this holds the contact
         (default 1e-6, in the gap's units per unit time).
+
+    Raises
+    ------
+    gen.ModelError
+        For a restitution outside [0, 1], a direction not -1, 0 or 1, or a
+        negative rest_speed (and, in the model builder, a gap that is not a
+        function of the coordinates, naming the symbols).
     """
 
     kind = KIND_IMPACT
@@ -107,6 +114,13 @@ class Reset:
         ``ERR_INCONSISTENT_RESET``.
     direction : {-1, 0, 1}, optional
         -1 (downwards, the default), +1 (upwards) or 0 (both).
+
+    Raises
+    ------
+    gen.ModelError
+        For a map that is not a non-empty dict or a direction not -1, 0 or
+        1 (and, in the model builder, a map of something that is not a
+        state, or an unknown symbol, naming them).
     """
 
     kind = KIND_RESET

@@ -497,6 +497,10 @@ class Model:
             ``{name: expression}`` of quantities to measure (sensor readings,
             point positions) in the coordinates, speeds, inputs, constants and t
             (``sim.outputs``; ``linearize_outputs`` gives C and D).
+        hybrid : dict, optional
+            ``{name: gen.Impact(gap, ...) or gen.Reset(guard, map, ...)}``:
+            impacts and resets, run in C with the rest of the model; every jump
+            is logged in ``sol.events`` (``docs/guides/hybrid.md``).
 
         Returns
         -------
@@ -619,6 +623,10 @@ class Model:
             ``{name: expression}`` of quantities to measure (sensor readings,
             point positions) in the coordinates, speeds, inputs, constants and t
             (``sim.outputs``; ``linearize_outputs`` gives C and D).
+        hybrid : dict, optional
+            ``{name: gen.Impact(gap, ...) or gen.Reset(guard, map, ...)}``:
+            impacts and resets, run in C with the rest of the model; every jump
+            is logged in ``sol.events`` (``docs/guides/hybrid.md``).
 
         Returns
         -------
@@ -744,6 +752,10 @@ class Model:
             ``{name: expression}`` of quantities to measure (sensor readings,
             point positions) in the coordinates, speeds, inputs, constants and t
             (``sim.outputs``; ``linearize_outputs`` gives C and D).
+        hybrid : dict, optional
+            ``{name: gen.Impact(gap, ...) or gen.Reset(guard, map, ...)}``:
+            impacts and resets, run in C with the rest of the model; every jump
+            is logged in ``sol.events`` (``docs/guides/hybrid.md``).
         formulation : {"kane", "recursive"}, optional
             ``"kane"``: the equations the method formed (``form_eoms()`` first).
             ``"recursive"``: a sympy System's joint tree, its equations formed
@@ -835,7 +847,7 @@ class Model:
             the kinematic rows and of the mass matrix's rows and columns.
         kinematics : sympy Matrix, shape (nq, 1)
             Expressions that vanish, ``q' - G(q, u)`` for explicit kinematics.
-        constants, inputs, name, energy, outputs
+        constants, inputs, name, energy, outputs, hybrid
             As for :meth:`from_kanes`.
 
         Returns
