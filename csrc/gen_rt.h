@@ -68,7 +68,7 @@ typedef double gen_rt_real;
 #define GEN_RT_STATUS_ENUM_(name, value, text) GEN_RT_##name = (value),
 enum gen_rt_status { GEN_RT_STATUS_TABLE(GEN_RT_STATUS_ENUM_) GEN_RT_STATUS_END_ = 1 };
 #undef GEN_RT_STATUS_ENUM_
-#define GEN_RT_STATUS_MIN (-14)
+#define GEN_RT_STATUS_MIN (-15)
 
 /* The integration methods, the table holds, the stack bound and the structs
  * of the public API (gen_rt_sim_options, gen_rt_sim_stats, gen_rt_input,
@@ -318,6 +318,32 @@ typedef struct {
     gen_rt_real *Kqd, *Ku, *M, *A, *Kq, *Rq, *Ru, *Rr, *Sq, *Su, *Vq, *Jc, *Sqd;
 } gen_rt_lin_out;
 
+/* Hybrid behaviour of a model (hybrid={...}, gen/hybrid.py; the engine in
+ * gen_rt_hybrid.c and gen_rt_simulate.c): n declarations, each an impact
+ * (a gap g(q, t) >= 0) or a reset (a guard of the state and a map). */
+#define GEN_RT_HYBRID_IMPACT 0
+#define GEN_RT_HYBRID_RESET 1
+typedef struct gen_rt_hybrid {
+    int n;
+    const int *kind;            /* n: GEN_RT_HYBRID_IMPACT or _RESET */
+    const int *direction;       /* n: -1 closing (downwards), +1, 0 both */
+    const int *reset_index;     /* n: the row block of reset's map (-1: an impact) */
+    const gen_rt_real *restitution; /* n: e in [0, 1] (impacts) */
+    const gen_rt_real *rest_speed;  /* n: the Zeno rule's impact speed (impacts) */
+    /* g (n): every gap and guard */
+    void (*values)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *p,
+                   gen_rt_real t, gen_rt_real *g);
+    /* W (n x nu), w (n): g' = W u + w (zero rows for resets) */
+    void (*jacobian)(const gen_rt_real *q, const gen_rt_real *p, gen_rt_real t,
+                     gen_rt_real *W, gen_rt_real *w);
+    /* h (n): g'' = W u' + h */
+    void (*bias)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *p,
+                 gen_rt_real t, gen_rt_real *h);
+    /* xr (nreset x nx): the state after each reset's map; NULL: no reset */
+    void (*reset)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *p,
+                  gen_rt_real t, gen_rt_real *xr);
+} gen_rt_hybrid;
+
 typedef struct gen_rt_model {
     int nq, nu, nr, np, mc, mv;     /* nx = nq + nu, ns = nq - mc + nu - mv */
     int explicit_kinematics;        /* 1: kinematics gives q'; 0: Kqd q' = kr */
@@ -381,6 +407,8 @@ typedef struct gen_rt_model {
     int (*rhs_solve)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
                      const gen_rt_real *p, gen_rt_real t, gen_rt_real *qd, gen_rt_real *M,
                      gen_rt_real *f, gen_rt_real *ud);
+    /* impacts and resets (hybrid={...}); NULL when the model has none */
+    const gen_rt_hybrid *hybrid;
 } gen_rt_model;
 
 /* the options and statistics of advance/simulate (gen_rt_sim_options,
@@ -640,6 +668,67 @@ int gen_rt_model_linearize_discrete(const gen_rt_model *m, const gen_rt_real *x_
                                     const gen_rt_real *r_op, const gen_rt_real *p,
                                     gen_rt_real t, gen_rt_real dt, gen_rt_real *work,
                                     int *iwork, gen_rt_real *Ad, gen_rt_real *Bd);
+
+/* ---- hybrid models: impacts, resets, contact (gen_rt_hybrid.c) --------
+ * The simulation engine (simulate_events) locates the gaps and guards of
+ * m->hybrid as events and calls these at them. Work (reals, ints): */
+#define GEN_RT_HYBRID_CORE_WORK(nq, nu, mv, nh)                                  \
+    ((nu) * (nu) + 2 * (nu) + 3 * ((mv) + (nh)) + ((mv) + (nh)) * (nu) + (nq) * (nq) + \
+     (nq) + (nh) * (nu) + 2 * (nh) + GEN_RT_ACCEL_WORK(nu, (mv) + (nh)))
+#define GEN_RT_HYBRID_FN_WORK(nq, nu, mv, nh)                                    \
+    GEN_RT_MAX_(GEN_RT_HYBRID_CORE_WORK(nq, nu, mv, nh) + 2 * (nh) + (nq) + (nu) + 1, \
+                (nh) * ((nq) + (nu)) + (nq) + (nu) + 1)
+#define GEN_RT_HYBRID_FN_IWORK(nq, nu, mv, nh) ((nq) + GEN_RT_ACCEL_IWORK(nu, (mv) + (nh)))
+/* the engine's: the functions' and its own (values at three points, the
+ * state before a jump; the active contacts and the closing set) */
+#define GEN_RT_HYBRID_WORK(nq, nu, mv, nh)                                       \
+    (GEN_RT_HYBRID_FN_WORK(nq, nu, mv, nh) + 5 * (nh) + 2 * ((nq) + (nu)) + 8)
+#define GEN_RT_HYBRID_IWORK(nq, nu, mv, nh) (GEN_RT_HYBRID_FN_IWORK(nq, nu, mv, nh) + 2 * (nh) + 4)
+/* a reset's map must meet the constraints to this (relative to the state) */
+#ifndef GEN_RT_HYBRID_RESET_TOL
+#ifdef GEN_RT_REAL_FLOAT
+#define GEN_RT_HYBRID_RESET_TOL GEN_RT_C(1e-3)
+#else
+#define GEN_RT_HYBRID_RESET_TOL GEN_RT_C(1e-6)
+#endif
+#endif
+/* x' (and the contact forces lam_c, nh, 0 where inactive; may be NULL)
+ * with the active contacts held as constraints */
+int gen_rt_hybrid_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                      const gen_rt_real *r, const gen_rt_real *p, const int *active,
+                      gen_rt_real *work, int *iwork, gen_rt_real *dxdt, gen_rt_real *lam_c);
+/* the event values (nh): an inactive declaration's gap or guard, an active
+ * contact's force (lift-off where it falls through zero) */
+int gen_rt_hybrid_values(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                         const gen_rt_real *r, const gen_rt_real *p, const int *active,
+                         gen_rt_real *work, int *iwork, gen_rt_real *v);
+/* the gaps' rates g' = W u + w (nh) */
+int gen_rt_hybrid_rates(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                        const gen_rt_real *p, gen_rt_real *work, int *iwork,
+                        gen_rt_real *gd);
+/* the impulse of the gaps rows[k] != 0 with restitutions e (nh): x's
+ * speeds updated; impulse (nh, may be NULL) gets the gaps' impulses */
+int gen_rt_hybrid_impulse(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *p,
+                          const int *rows, const gen_rt_real *e, gen_rt_real *work,
+                          int *iwork, gen_rt_real *x, gen_rt_real *impulse);
+/* x <- the map of reset k, checked against the constraints
+ * (GEN_RT_ERR_INCONSISTENT_RESET) and projected (pwork: the projection's) */
+int gen_rt_hybrid_reset(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *p, int k,
+                        gen_rt_real proj_tol, int proj_max_iter, gen_rt_real *pwork,
+                        gen_rt_real *work, gen_rt_real *x);
+/* The jump of declaration k at (t, x), as the engine and the FMU make it:
+ * a held contact's lift-off (*what = GEN_RT_HYBRID_LIFTOFF), a reset
+ * (GEN_RT_HYBRID_RESET + 1; projected when pwork, the projection's work,
+ * is not NULL) or an impact (GEN_RT_HYBRID_IMPACT + 1) with every gap
+ * closing at the same time and the contacts held, which the Zeno rule
+ * (e = 0, or slower than rest_speed) holds from then on (active, nh flags).
+ * *what = 0: a gap that is not closing (grazing), x unchanged. rows (nh
+ * ints) and scratch (3 nh reals) are the caller's. */
+#define GEN_RT_HYBRID_LIFTOFF 3
+int gen_rt_hybrid_jump(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *r,
+                       const gen_rt_real *p, int k, gen_rt_real proj_tol, int proj_max_iter,
+                       gen_rt_real *pwork, int *active, int *rows, gen_rt_real *scratch,
+                       gen_rt_real *work, int *iwork, gen_rt_real *x, int *what);
 
 #ifdef __cplusplus
 }

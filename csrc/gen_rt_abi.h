@@ -80,6 +80,9 @@ typedef struct {
     int *log_which; /* capacity: the event's index i */
     gen_rt_real *log_t; /* capacity: its time */
     gen_rt_real *log_x; /* capacity x NX: its state (the dense output, projected) */
+    gen_rt_real *log_x_after; /* capacity x NX (NULL: not kept): the state after a hybrid event's jump (impact, reset), else as log_x */
+    gen_rt_real *hybrid_work; /* GEN_RT_HYBRID_WORK(NQ, NU, MV, NH) reals: the engine's hybrid scratch (a model with hybrid={...} needs it) */
+    int *hybrid_iwork; /* GEN_RT_HYBRID_IWORK(NQ, NU, MV, NH) ints */
 } gen_rt_events;
 
 /* Integration statistics (advance accumulates them). A counted field is the caller's array here. */

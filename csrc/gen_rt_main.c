@@ -406,7 +406,7 @@ int gen_rt_main_parse(const gen_rt_main_model *m, int argc, char **argv, gen_rt_
         else return fail_usage(m, "unknown option", arg);
     }
     if (!(a->t_end >= 0)) return fail_usage(m, "--t-end must be >= 0", NULL);
-    if (a->events_csv && a->n_ev == 0)
+    if (a->events_csv && a->n_ev == 0 && m->nh == 0)
         return fail_usage(m, "--events-csv needs at least one --event", a->events_csv);
     return GEN_RT_MAIN_CONTINUE;
 }
@@ -646,24 +646,40 @@ static int write_rows(const gen_rt_main_model *m, const gen_rt_main_args *a, FIL
 
 /* the events of a run: to ev_out as CSV, else one line each on stderr */
 static void write_events(const gen_rt_main_model *m, const gen_rt_main_args *a, FILE *ev_out,
-                         int n_log, const int *log_which, const void *log_t, const void *log_x)
+                         int n_log, const int *log_which, const void *log_t, const void *log_x,
+                         const void *log_x_after)
 {
     int k, i;
     if (ev_out) {
         fprintf(ev_out, "event,t");
         for (i = 0; i < m->nx; ++i) fprintf(ev_out, ",%s", m->state_names[i]);
+        /* a hybrid model: the state after each event too (a jump's) */
+        if (m->nh > 0)
+            for (i = 0; i < m->nx; ++i) fprintf(ev_out, ",%s_after", m->state_names[i]);
         fprintf(ev_out, "\n");
     }
     for (k = 0; k < n_log; ++k) {
         FILE *f = ev_out ? ev_out : stderr;
         const char *sep = ev_out ? "," : " t=";
-        fprintf(f, "%s%s%s%.17g", ev_out ? "" : "event ", event_name(m, a->ev_which[log_which[k]]),
-                sep, gen_rt_main_get(m, log_t, k));
+        int w = log_which[k];
+        /* hybrid jumps are the log's entries n_ev + j (declaration j) and
+         * n_ev + nh + j (lift-off of contact j) */
+        const char *suffix = w >= a->n_ev + m->nh ? ".liftoff" : "";
+        const char *name = w < a->n_ev ? event_name(m, a->ev_which[w])
+                         : m->hybrid_names[(w - a->n_ev) % (m->nh > 0 ? m->nh : 1)];
+        fprintf(f, "%s%s%s%s%.17g", ev_out ? "" : "event ", name, suffix, sep,
+                gen_rt_main_get(m, log_t, k));
         for (i = 0; i < m->nx; ++i) {
             double v = gen_rt_main_get(m, log_x, (long)k * m->nx + i);
             if (ev_out) fprintf(f, ",%.17g", v);
             else fprintf(f, " %s=%.17g", m->state_names[i], v);
         }
+        if (m->nh > 0 && log_x_after)
+            for (i = 0; i < m->nx; ++i) {
+                double v = gen_rt_main_get(m, log_x_after, (long)k * m->nx + i);
+                if (ev_out) fprintf(f, ",%.17g", v);
+                else fprintf(f, " %s_after=%.17g", m->state_names[i], v);
+            }
         fprintf(f, "\n");
     }
 }
@@ -688,23 +704,24 @@ static int run(const gen_rt_main_model *m, const gen_rt_main_args *a, gen_rt_mai
         fprintf(stderr, "%s_sim: out of memory for %d rows\n", m->name, rows);
         failed = 1;
     }
-    if (!failed && a->n_ev > 0) {
+    if (!failed && (a->n_ev > 0 || m->nh > 0)) {
         /* with events: the log has room for EVENT_LOG of them; when more
          * were found, the same run again with room for all */
         int cap = GEN_RT_MAIN_EVENT_LOG, pass, n_log;
         int *log_which = NULL;
-        void *log_t = NULL, *log_x = NULL;
+        void *log_t = NULL, *log_x = NULL, *log_xa = NULL;
         rn->n_events = a->n_ev;
         rn->ev_which = a->ev_which;
         rn->ev_direction = a->ev_dir;
         rn->ev_terminal = a->ev_term;
         rn->ev_level = a->ev_level;
         for (pass = 0; pass < 2 && !failed; ++pass) {
-            free(log_which); free(log_t); free(log_x);
+            free(log_which); free(log_t); free(log_x); free(log_xa);
             log_which = (int *)malloc((size_t)cap * sizeof *log_which);
             log_t = malloc((size_t)cap * (size_t)m->real_size);
             log_x = malloc((size_t)cap * (size_t)m->nx * (size_t)m->real_size);
-            if (!log_which || !log_t || !log_x) {
+            log_xa = malloc((size_t)cap * (size_t)m->nx * (size_t)m->real_size);
+            if (!log_which || !log_t || !log_x || !log_xa) {
                 fprintf(stderr, "%s_sim: out of memory for a log of %d events\n", m->name, cap);
                 failed = 1;
                 break;
@@ -713,13 +730,14 @@ static int run(const gen_rt_main_model *m, const gen_rt_main_args *a, gen_rt_mai
             rn->log_which = log_which;
             rn->log_t = log_t;
             rn->log_x = log_x;
+            rn->log_x_after = log_xa;
             st = m->simulate(rn, a->x, t_out, x_out, l_out, r_out, &stats);
             if (stats.n_events <= cap) break;
             cap = stats.n_events;
         }
         n_log = failed ? 0 : (stats.n_events < cap ? stats.n_events : cap);
-        write_events(m, a, ev_out, n_log, log_which, log_t, log_x);
-        free(log_which); free(log_t); free(log_x);
+        write_events(m, a, ev_out, n_log, log_which, log_t, log_x, log_xa);
+        free(log_which); free(log_t); free(log_x); free(log_xa);
         if (ev_out) {
             if (fclose(ev_out) != 0) {
                 fprintf(stderr, "%s_sim: error writing %s\n", m->name, a->events_csv);

@@ -51,6 +51,7 @@ typedef struct {
     int capacity;                   /* the event log: capacity entries */
     int *log_which;
     void *log_t, *log_x;
+    void *log_x_after;              /* capacity x NX: the state after a hybrid jump */
 } gen_rt_main_run;
 
 /* what the run loop reads of the model's sim_stats */
@@ -87,6 +88,10 @@ typedef struct {
     const char *(*status_message)(int status);
     int tracker;                        /* 1: built with a trajectory tracker (its
                                            inputs vary: their columns are written) */
+    /* hybrid={...}: the declarations' names (nh; 0 and NULL: none). Their
+     * jumps are events: the run always logs them */
+    int nh;
+    const char *const *hybrid_names;
 } gen_rt_main_model;
 
 /* The command line, parsed. The arrays hold the model's scalar type and

@@ -52,6 +52,11 @@ typedef struct {
     gen_rt_real t0;       /* start of the simulation: samples at t0 + k period */
     gen_rt_real t_sampled; /* time of the held sample (each sample is taken once) */
     int sampled;          /* 1 once a sample is held */
+    /* hybrid={...}: the contacts held as constraints (gen_rt_hybrid.c) */
+    int n_active;         /* 0: the model's own right-hand side */
+    const int *active;    /* nh flags */
+    gen_rt_real *hw;      /* GEN_RT_HYBRID_WORK */
+    int *hiw;             /* GEN_RT_HYBRID_IWORK */
 } model_ctx;
 
 /* the last knot index k with T[k] <= t (0 before the first) */
@@ -180,6 +185,8 @@ static int rhs_cb(void *ctx, gen_rt_real t, const gen_rt_real *x, gen_rt_real *d
         if (st) return st;
         r = c->r_buf;
     }
+    if (c->n_active > 0)
+        return gen_rt_hybrid_rhs(c->m, t, x, r, c->p, c->active, c->hw, c->hiw, dxdt, NULL);
     return gen_rt_model_rhs(c->m, t, x, r, c->p, c->work, c->iwork, dxdt, NULL);
 }
 
@@ -195,6 +202,7 @@ int gen_rt_model_step_rk4(const gen_rt_model *m, gen_rt_real t, gen_rt_real h,
     c.work = xn + nx; c.iwork = iwork;
     c.in = NULL; c.r_buf = c.r_held = NULL; c.t_seg = t; c.t0 = t;
     c.t_sampled = t; c.sampled = 0;
+    c.n_active = 0; c.active = NULL; c.hw = NULL; c.hiw = NULL;
     copy_n(nx, x, xn);
     st = gen_rt_rk4_step(rhs_cb, &c, nx, t, h, rk, xn);
     if (st) return st;
@@ -272,6 +280,13 @@ typedef struct {
     int rejected_last, f0_valid;
     gen_rt_real err_old;  /* DOPRI5's PI control: the last accepted error */
     long attempts;        /* since the last output row */
+    /* hybrid={...}: nh declarations, event functions nev.. after the nev
+     * user events (gen_rt_hybrid.c) */
+    const gen_rt_hybrid *hy;
+    int nev, nh;
+    int *active, *rows;   /* nh: contacts held; the impulse's gaps */
+    gen_rt_real *hw, *hva, *hvb, *hvi, *gd, *er, *xb; /* nh x 5, nx */
+    int *hiw;
 } engine;
 
 static gen_rt_real rt_abs(gen_rt_real a) { return a < 0 ? -a : a; }
@@ -460,7 +475,7 @@ static int step_(engine *e, gen_rt_real t, gen_rt_real t_stop)
         e->t1 = t_stop;
         e->h = h;
         e->dense_kind = DENSE_NONE;
-        if (e->ev && e->ev->n > 0) {
+        if (e->nev + e->nh > 0) {
             /* the Hermite interpolant for events: f at the end as well */
             if ((st = rhs_cb(c, t_stop, e->xn, f1))) return st;
             e->s->n_rhs += 1;
@@ -595,11 +610,14 @@ static int step_(engine *e, gen_rt_real t, gen_rt_real t_stop)
 
 /* ---- events ---------------------------------------------------------- */
 
+static int hybrid_check(const gen_rt_model *m, const gen_rt_events *ev);
+
 static int events_check(const gen_rt_model *m, const gen_rt_events *ev)
 {
-    int i, nx = NX_(m);
-    if (!ev || ev->n == 0) return GEN_RT_OK;
+    int i, nx = NX_(m), st;
+    if (!ev || ev->n == 0) return hybrid_check(m, ev);
     if (ev->n < 0 || ev->capacity < 0) return GEN_RT_ERR_BAD_ARG;
+    if ((st = hybrid_check(m, ev))) return st;
     if (!ev->which || !ev->direction) return GEN_RT_ERR_NULL;
     if (ev->capacity > 0 && (!ev->log_which || !ev->log_t || !ev->log_x)) return GEN_RT_ERR_NULL;
     if (ev->level && !finite_n(ev->n, ev->level)) return GEN_RT_ERR_NONFINITE_INPUT;
@@ -607,6 +625,18 @@ static int events_check(const gen_rt_model *m, const gen_rt_events *ev)
         if (ev->which[i] < 0 || ev->which[i] >= nx + m->ny) return GEN_RT_ERR_BAD_ARG;
         if (ev->direction[i] < -1 || ev->direction[i] > 1) return GEN_RT_ERR_BAD_ARG;
     }
+    return GEN_RT_OK;
+}
+
+/* a hybrid model runs with its events struct's hybrid work */
+static int hybrid_check(const gen_rt_model *m, const gen_rt_events *ev)
+{
+    if (!m->hybrid || m->hybrid->n <= 0) return GEN_RT_OK;
+    if (!ev || ev->n < 0) return GEN_RT_ERR_BAD_ARG;
+    if (!ev->hybrid_work || !ev->hybrid_iwork) return GEN_RT_ERR_NULL;
+    if (ev->n > 0 && (!ev->which || !ev->direction)) return GEN_RT_ERR_NULL;
+    if (ev->capacity < 0) return GEN_RT_ERR_BAD_ARG;
+    if (ev->capacity > 0 && (!ev->log_which || !ev->log_t || !ev->log_x)) return GEN_RT_ERR_NULL;
     return GEN_RT_OK;
 }
 
@@ -622,11 +652,36 @@ static int outputs_(engine *e, gen_rt_real t, const gen_rt_real *x, gen_rt_real 
     return finite_n(c->m->ny, y) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
 }
 
-static gen_rt_real event_g(const engine *e, int i, const gen_rt_real *x, const gen_rt_real *y)
+/* the hybrid event values (nh) at (t, x): gaps and guards, the forces of
+ * the contacts held */
+static int hyb_values_(engine *e, gen_rt_real t, const gen_rt_real *x, gen_rt_real *v)
+{
+    model_ctx *c = e->c;
+    const gen_rt_real *r;
+    int st;
+    if ((st = inputs_now(c, t, x, &r))) return st;
+    return gen_rt_hybrid_values(c->m, t, x, r, c->p, e->active, e->hw, e->hiw, v);
+}
+
+/* event i's value: a user event (i < nev) from x and y, a hybrid one from
+ * hv (its values at the same state) */
+static gen_rt_real event_g(const engine *e, int i, const gen_rt_real *x, const gen_rt_real *y,
+                           const gen_rt_real *hv)
 {
     const gen_rt_events *ev = e->ev;
-    int w = ev->which[i];
+    int w;
+    if (i >= e->nev) return hv[i - e->nev];
+    w = ev->which[i];
     return (w < e->nx ? x[w] : y[w - e->nx]) - (ev->level ? ev->level[i] : 0);
+}
+
+/* the direction of event i: a contact held is released when its force
+ * falls through zero */
+static int event_dir(const engine *e, int i)
+{
+    int k = i - e->nev;
+    if (i < e->nev) return e->ev->direction[i];
+    return e->active[k] ? -1 : e->hy->direction[k];
 }
 
 static int crosses(int dir, gen_rt_real ga, gen_rt_real gb)
@@ -643,14 +698,19 @@ static int event_root(engine *e, int i, gen_rt_real lo, gen_rt_real hi, gen_rt_r
     gen_rt_real tol = 4 * GEN_RT_EPS * rt_max2(GEN_RT_C(1.0), rt_max2(rt_abs(e->t), rt_abs(e->t1)));
     int it, side = 0, st;
     for (it = 0; it < 300 && ghi != 0; ++it) {
-        gen_rt_real mid, gm;
+        gen_rt_real mid, gm, tm;
         if ((hi - lo) * rt_abs(e->h) <= tol) break;
         mid = hi - ghi * (hi - lo) / (ghi - glo);
         if (it % 3 == 2 || !(mid > lo && mid < hi)) mid = GEN_RT_C(0.5) * (lo + hi);
         if (!(mid > lo && mid < hi)) break;
         dense_at(e, mid, e->xi);
-        if ((st = outputs_(e, e->t + mid * e->h, e->xi, e->yi))) return st;
-        gm = event_g(e, i, e->xi, e->yi);
+        tm = e->t + mid * e->h;
+        if (i >= e->nev) {
+            if ((st = hyb_values_(e, tm, e->xi, e->hvi))) return st;
+        } else if ((st = outputs_(e, tm, e->xi, e->yi))) {
+            return st;
+        }
+        gm = event_g(e, i, e->xi, e->yi, e->hvi);
         if (gm == 0) { hi = mid; break; }
         if ((gm > 0) == (ghi > 0)) {
             hi = mid; ghi = gm;
@@ -666,25 +726,84 @@ static int event_root(engine *e, int i, gen_rt_real lo, gen_rt_real hi, gen_rt_r
     return GEN_RT_OK;
 }
 
+/* a log row: event index, time, the state before and after */
+static void log_event_(engine *e, int which, gen_rt_real t, const gen_rt_real *xb,
+                       const gen_rt_real *xa)
+{
+    const gen_rt_events *ev = e->ev;
+    gen_rt_sim_stats *s = e->s;
+    if (s->n_events < ev->capacity) {
+        ev->log_which[s->n_events] = which;
+        ev->log_t[s->n_events] = t;
+        copy_n(e->nx, xb, ev->log_x + (long)s->n_events * e->nx);
+        if (ev->log_x_after) copy_n(e->nx, xa, ev->log_x_after + (long)s->n_events * e->nx);
+    }
+    s->n_events += 1;
+}
+
+static int count_active_(const engine *e)
+{
+    int k, n = 0;
+    for (k = 0; k < e->nh; ++k) n += e->active[k] != 0;
+    return n;
+}
+
+/* the jump of hybrid declaration k at (t, e->xe) (gen_rt_hybrid_jump),
+ * logged; *jumped = 0 when nothing happens (a gap that is not closing) */
+static int hybrid_jump_(engine *e, int k, gen_rt_real t, int *jumped)
+{
+    model_ctx *c = e->c;
+    const gen_rt_real *r;
+    int st, what = 0;
+    *jumped = 0;
+    copy_n(e->nx, e->xe, e->xb);
+    if ((st = inputs_now(c, t, e->xe, &r))) return st;
+    st = gen_rt_hybrid_jump(c->m, t, r, c->p, k, c->proj_tol, c->proj_max_iter, c->work,
+                            e->active, e->rows, e->hvi, e->hw, e->hiw, e->xe, &what);
+    if (st) return st;
+    if (!what) return GEN_RT_OK;
+    c->n_active = count_active_(e);
+    log_event_(e, e->nev + (what == GEN_RT_HYBRID_LIFTOFF ? e->nh : 0) + k, t, e->xb, e->xe);
+    *jumped = 1;
+    return GEN_RT_OK;
+}
+
 /* the events in the step just taken, in time order: logged, and *stop set
- * (with *te, e->xe) at the first terminal one */
-static int events_(engine *e, int *stop, gen_rt_real *te)
+ * (with *te, e->xe) at the first terminal one; *jump set (with *te and the
+ * state after in e->xe) at the first hybrid jump */
+static int events_(engine *e, int *stop, int *jump, gen_rt_real *te)
 {
     const gen_rt_events *ev = e->ev;
     gen_rt_sim_stats *s = e->s;
     gen_rt_real a = 0;
-    int st, i;
+    int st, i, n = e->nev + e->nh;
     *stop = 0;
-    if (!ev || ev->n <= 0) return GEN_RT_OK;
+    *jump = 0;
+    if (n <= 0) return GEN_RT_OK;
     if ((st = outputs_(e, e->t, e->x, e->ya))) return st;
     if ((st = outputs_(e, e->t1, e->xn, e->yb))) return st;
+    if (e->nh > 0) {
+        if ((st = hyb_values_(e, e->t, e->x, e->hva))) return st;
+        if ((st = hyb_values_(e, e->t1, e->xn, e->hvb))) return st;
+        /* a gap at zero that opens (just after an impact, or a contact
+         * released) counts as open: its next closing is found */
+        if ((st = gen_rt_hybrid_rates(e->c->m, e->t, e->x, e->c->p, e->hw, e->hiw, e->gd)))
+            return st;
+        for (i = 0; i < e->nh; ++i) {
+            int d = e->hy->direction[i];
+            if (e->active[i] || e->hy->kind[i] != GEN_RT_HYBRID_IMPACT) continue;
+            if (d < 0 && e->hva[i] <= 0 && e->gd[i] > 0) e->hva[i] = GEN_RT_EPS * GEN_RT_EPS;
+            if (d > 0 && e->hva[i] >= 0 && e->gd[i] < 0) e->hva[i] = -GEN_RT_EPS * GEN_RT_EPS;
+        }
+    }
     copy_n(e->nx, e->x, e->xa);
     while (a < 1) {
         int best = -1;
         gen_rt_real th_best = 2, t_ev;
-        for (i = 0; i < ev->n; ++i) {
-            gen_rt_real ga = event_g(e, i, e->xa, e->ya), gb = event_g(e, i, e->xn, e->yb), th;
-            if (!crosses(ev->direction[i], ga, gb)) continue;
+        for (i = 0; i < n; ++i) {
+            gen_rt_real ga = event_g(e, i, e->xa, e->ya, e->hva);
+            gen_rt_real gb = event_g(e, i, e->xn, e->yb, e->hvb), th;
+            if (!crosses(event_dir(e, i), ga, gb)) continue;
             if ((st = event_root(e, i, a, 1, ga, gb, &th))) return st;
             if (th < th_best) { th_best = th; best = i; }
         }
@@ -692,17 +811,22 @@ static int events_(engine *e, int *stop, gen_rt_real *te)
         t_ev = th_best >= 1 ? e->t1 : e->t + th_best * e->h;
         dense_at(e, th_best, e->xe);
         if (th_best < 1 && (st = project_(e, t_ev, e->xe))) return st;
-        if (s->n_events < ev->capacity) {
-            ev->log_which[s->n_events] = best;
-            ev->log_t[s->n_events] = t_ev;
-            copy_n(e->nx, e->xe, ev->log_x + (long)s->n_events * e->nx);
-        }
-        s->n_events += 1;
-        if (ev->terminal && ev->terminal[best]) {
-            *stop = 1;
-            *te = t_ev;
-            s->terminal = best;
-            return GEN_RT_OK;
+        if (best >= e->nev) {
+            int jumped = 0;
+            if ((st = hybrid_jump_(e, best - e->nev, t_ev, &jumped))) return st;
+            if (jumped) {
+                *jump = 1;
+                *te = t_ev;
+                return GEN_RT_OK;
+            }
+        } else {
+            log_event_(e, best, t_ev, e->xe, e->xe);
+            if (ev->terminal && ev->terminal[best]) {
+                *stop = 1;
+                *te = t_ev;
+                s->terminal = best;
+                return GEN_RT_OK;
+            }
         }
         /* search on from the dense output at the event (not the projected
          * state logged: projection may move the value back across the
@@ -710,6 +834,7 @@ static int events_(engine *e, int *stop, gen_rt_real *te)
         a = th_best;
         dense_at(e, a, e->xa);
         if (a < 1 && (st = outputs_(e, t_ev, e->xa, e->ya))) return st;
+        if (a < 1 && e->nh > 0 && (st = hyb_values_(e, t_ev, e->xa, e->hva))) return st;
     }
     return GEN_RT_OK;
 }
@@ -741,6 +866,22 @@ static void engine_init(engine *e, model_ctx *c, const gen_rt_sim_options *o,
     e->err_old = GEN_RT_C(1e-4);
     e->t = e->t1 = e->h = 0;
     e->d_x1 = e->d_k = e->d_f0 = e->d_f1 = NULL;
+    e->nev = (ev && ev->n > 0) ? ev->n : 0;
+    e->hy = NULL; e->nh = 0; e->active = e->rows = e->hiw = NULL;
+    e->hw = e->hva = e->hvb = e->hvi = e->gd = e->er = e->xb = NULL;
+    if (m->hybrid && m->hybrid->n > 0 && ev && ev->hybrid_work && ev->hybrid_iwork) {
+        int nh = m->hybrid->n;
+        gen_rt_real *hx = ev->hybrid_work + GEN_RT_HYBRID_FN_WORK(m->nq, m->nu, m->mv, nh);
+        e->hy = m->hybrid; e->nh = nh;
+        e->hw = ev->hybrid_work; e->hiw = ev->hybrid_iwork;
+        e->hva = hx; e->hvb = hx + nh; e->hvi = hx + 2 * nh; e->gd = hx + 3 * nh;
+        e->er = hx + 4 * nh; e->xb = hx + 5 * nh;
+        e->active = ev->hybrid_iwork + GEN_RT_HYBRID_FN_IWORK(m->nq, m->nu, m->mv, nh);
+        e->rows = e->active + nh;
+        for (i = 0; i < nh; ++i) e->active[i] = 0;
+        c->active = e->active; c->n_active = 0;
+        c->hw = e->hw; c->hiw = e->hiw;
+    }
 }
 
 static int method_ok(const gen_rt_sim_options *o)
@@ -768,6 +909,7 @@ int gen_rt_model_advance(const gen_rt_model *m, gen_rt_real t0, gen_rt_real t1,
     c.proj_tol = o->proj_tol; c.proj_max_iter = o->proj_max_iter;
     c.in = NULL; c.r_buf = c.r_held = NULL; c.t_seg = t0; c.t0 = t0;
     c.t_sampled = t0; c.sampled = 0;
+    c.n_active = 0; c.active = NULL; c.hw = NULL; c.hiw = NULL;
     engine_init(&e, &c, o, NULL, s, x, work, iwork, NULL);
     e.t_span = t1 - t0;
     while (t < t1) {
@@ -892,6 +1034,7 @@ static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t
     c.m = m; c.p = p;
     c.proj_tol = o->proj_tol; c.proj_max_iter = o->proj_max_iter;
     c.in = in; c.t_seg = t0; c.t0 = t0; c.t_sampled = t0; c.sampled = 0;
+    c.n_active = 0; c.active = NULL; c.hw = NULL; c.hiw = NULL;
     c.r_buf = in ? rb : NULL;
     c.r_held = in ? rb + nr + 1 : NULL;
     c.r = in ? (in->period > 0 ? c.r_held : c.r_buf) : r;
@@ -907,19 +1050,19 @@ static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t
     k = 1;
     while (k < rows) {
         gen_rt_real t_stop = o->method == GEN_RT_METHOD_RK4 ? row_time(&out, k) : t_end;
-        int stop = 0;
+        int stop = 0, jump = 0;
         gen_rt_real te = 0;
         if (in) t_stop = next_break(&c, t, t_stop);
         if ((st = sample_(&e, t, x))) FAIL_AT_(t, x);
         c.t_seg = t;
         if ((st = step_(&e, t, t_stop))) FAIL_AT_(t, x);
-        if ((st = events_(&e, &stop, &te))) FAIL_AT_(t, x);
+        if ((st = events_(&e, &stop, &jump, &te))) FAIL_AT_(t, x);
         /* a sample at t1 comes first: the rows at t1 show the new input */
-        if (!stop && (st = sample_(&e, e.t1, e.xn))) FAIL_AT_(t, x);
+        if (!stop && !jump && (st = sample_(&e, e.t1, e.xn))) FAIL_AT_(t, x);
         while (k < rows) {
             gen_rt_real tk = row_time(&out, k), tol1 = time_tol(e.t1);
             const gen_rt_real *xr = e.xn;
-            if (stop ? !(tk < te - time_tol(te)) : !(tk <= e.t1 + tol1)) break;
+            if ((stop || jump) ? !(tk < te - time_tol(te)) : !(tk <= e.t1 + tol1)) break;
             if (tk < e.t1 - tol1) {
                 /* inside the step: the dense output, projected */
                 dense_at(&e, (tk - t) / e.h, e.xi);
@@ -937,6 +1080,18 @@ static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t
             s->h_next = e.h_next;
             copy_n(nx, e.xe, s->x_last);
             return GEN_RT_OK;
+        }
+        if (jump) {
+            /* a hybrid jump at te: on from the state after it, the step
+             * size history reset (the adaptive methods choose a first step
+             * again; RK4 finishes its step from te) */
+            copy_n(nx, e.xe, x);
+            t = te;
+            e.f0_valid = 0;
+            e.rejected_last = 0;
+            e.err_old = GEN_RT_C(1e-4);
+            e.h_next = 0;
+            continue;
         }
         /* the inputs may change at a break: f at t1 is evaluated afresh */
         if (in && t_stop < t_end && e.t1 == t_stop) e.f0_valid = 0;

@@ -34,7 +34,9 @@
                           "options (sim_options.cancel)")                              \
     X(ERR_SINGULAR_REACTIONS, -14, "the reaction forces of the auxiliary speeds are "   \
                                    "not determined at this state: the matrix of their " \
-                                   "auxiliary equations is singular")
+                                   "auxiliary equations is singular")                 \
+    X(ERR_INCONSISTENT_RESET, -15, "a reset's map gives a state that violates the "     \
+                                   "model's constraints (hybrid={...}: gen.Reset)")
 
 /* the message of a code outside the table */
 #define GEN_RT_STATUS_UNKNOWN "unknown status code"

@@ -26,12 +26,13 @@ from .control import LinearFeedback  # noqa: E402
 from .tracking import TrajectoryTracker  # noqa: E402
 from .fmu import export_fmu  # noqa: E402
 from .ensemble import At, EnsembleResult, Final, Max, Mean, Min, Sampler  # noqa: E402
+from .hybrid import Impact, Reset  # noqa: E402
 
 __all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "EomgenError",
            "ModelError", "BuildError", "InputError", "MissingDependencyError",
            "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "UnusedInputWarning", "MasslessSpeedWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
            "TrajectoryTracker", "export_fmu", "Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult",
-           "__version__"]
+           "Impact", "Reset", "__version__"]
 
 
 def __getattr__(name):

@@ -196,6 +196,14 @@ STRUCTS = (
         Field("log_which", "int*", "capacity: the event's index i", 0),
         Field("log_t", "real*", "capacity: its time", 0),
         Field("log_x", "real*", "capacity x NX: its state (the dense output, projected)", 0),
+        # issue 35 (hybrid={...}): impacts, resets and contact run in the engine
+        # with this work; logged as events n.. (n + k: declaration k, n + NH + k:
+        # lift-off of contact k)
+        Field("log_x_after", "real*", "capacity x NX (NULL: not kept): the state after a "
+              "hybrid event's jump (impact, reset), else as log_x", 0),
+        Field("hybrid_work", "real*", "GEN_RT_HYBRID_WORK(NQ, NU, MV, NH) reals: the "
+              "engine's hybrid scratch (a model with hybrid={...} needs it)", 0),
+        Field("hybrid_iwork", "int*", "GEN_RT_HYBRID_IWORK(NQ, NU, MV, NH) ints", 0),
     )),
     Struct("sim_stats", "SimStats", "Integration statistics (advance accumulates them).", (
         Field("n_accepted", "long", "accepted steps"),
@@ -482,6 +490,9 @@ class Interface:
     # the outputs y (NY of them): C-safe names and the user's names
     output_names: list = field(default_factory=list)
     output_labels: list = field(default_factory=list)
+    # hybrid={...} (gen/hybrid.py): the declarations' names and kinds
+    hybrid_names: list = field(default_factory=list)
+    hybrid_kinds: list = field(default_factory=list)
 
     # sizes as attributes: iface.nq, iface.nx, ...
     def __getattr__(self, key):
@@ -577,7 +588,9 @@ def interface(model, real="double", accel="lu"):
         auxiliary_names=list(getattr(m, "auxiliary_names", [])),
         auxiliary_labels=list(getattr(m, "auxiliary_labels", [])),
         output_names=list(getattr(m, "output_names", [])),
-        output_labels=list(getattr(m, "output_labels", [])))
+        output_labels=list(getattr(m, "output_labels", [])),
+        hybrid_names=[d.name for d in getattr(m, "hybrid", [])],
+        hybrid_kinds=[d.kind for d in getattr(m, "hybrid", [])])
 
 
 def host_interface(real="double"):

@@ -41,6 +41,7 @@ EXCEPTIONS = {
     "ERR_CONTROLLER": SolverError,
     "ERR_CANCELLED": KeyboardInterrupt,   # Ctrl-C (gen/interrupt.py)
     "ERR_SINGULAR_REACTIONS": SingularError,
+    "ERR_INCONSISTENT_RESET": SolverError,
 }
 
 
@@ -178,6 +179,10 @@ class Simulator:
         self.ny = iface.sizes.get("NY", 0)
         self.output_names = list(getattr(iface, "output_names", []))
         self.output_labels = list(getattr(iface, "output_labels", []))
+        # hybrid={...}: impacts and resets (gen/hybrid.py)
+        self.hybrid_names = list(getattr(iface, "hybrid_names", []))
+        self.hybrid_kinds = list(getattr(iface, "hybrid_kinds", []))
+        self.nh = len(self.hybrid_names)
         self.has_energy = iface.has_energy
         self.state_names = list(iface.state_names)
         self.input_names = list(iface.input_names)
@@ -359,6 +364,9 @@ class Simulator:
         msg = self._ffi.string(self._fn("status_message")(status)).decode()
         if name == "ERR_SINGULAR_REACTIONS" and self.auxiliary_names:
             msg += f" (the reactions {', '.join(self.auxiliary_names)})"
+        if name == "ERR_INCONSISTENT_RESET":
+            resets = [n for n, k in zip(self.hybrid_names, self.hybrid_kinds) if k == 1]
+            msg += f" (reset(s) {', '.join(resets)} of model '{self.name}')"
         text = f"{self._p}_{where}: {msg} [{name}]"
         if t is not None:
             text += f" at t = {float(t):.17g}"
@@ -955,7 +963,7 @@ class Simulator:
         opts.every = o.every
         opts.final_only = 1 if o.final_only else 0
         evplan = None
-        if o.events is not None:
+        if o.events is not None or self.nh:   # hybrid={...}: its jumps are events
             evplan = plan_events(self, o.events, o.terminal)
             if plan is None:
                 plan = InputPlan(self)

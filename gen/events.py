@@ -35,10 +35,23 @@ class EventPlan:
         self.struct = lib.new("events")
         s = self.struct
         s.n = len(names)
-        s.which = lib.array(self.which, "int[]")
-        s.direction = lib.array(self.direction, "int[]")
-        s.terminal = lib.array(self.terminal, "int[]")
-        s.level = lib.array(self.level)
+        if names:
+            s.which = lib.array(self.which, "int[]")
+            s.direction = lib.array(self.direction, "int[]")
+            s.terminal = lib.array(self.terminal, "int[]")
+            s.level = lib.array(self.level)
+        # hybrid={...}: the engine's work, and the names of the log's rows
+        # n + k (declaration k) and n + nh + k (lift-off of contact k)
+        nh = getattr(sim, "nh", 0)
+        self.log_names = list(names)
+        if nh:
+            from .hybrid import hybrid_iwork_len, hybrid_work_len
+            self.log_names += list(sim.hybrid_names)
+            self.log_names += [f"{n}.liftoff" for n in sim.hybrid_names]
+            self.hwork = np.zeros(hybrid_work_len(sim.nq, sim.nu, sim.mv, nh), dtype=sim.dtype)
+            self.hiwork = np.zeros(hybrid_iwork_len(sim.nq, sim.nu, sim.mv, nh), dtype=np.intc)
+            s.hybrid_work = lib.array(self.hwork)
+            s.hybrid_iwork = lib.array(self.hiwork, "int[]")
         self.resize(capacity)
 
     def resize(self, capacity):
@@ -48,17 +61,27 @@ class EventPlan:
         self.log_which = np.zeros(max(1, self.capacity), dtype=np.intc)
         self.log_t = np.zeros(max(1, self.capacity), dtype=sim.dtype)
         self.log_x = np.zeros((max(1, self.capacity), sim.nx), dtype=sim.dtype)
+        self.log_x_after = np.zeros((max(1, self.capacity), sim.nx), dtype=sim.dtype)
         s.capacity = self.capacity
         s.log_which = lib.array(self.log_which, "int[]")
         s.log_t = lib.array(self.log_t)
         s.log_x = lib.array(self.log_x)
+        s.log_x_after = lib.array(self.log_x_after)
 
     def found(self, n):
-        """The first n logged events as [gen.Event(name, t, x)]."""
-        from .solution import Event
+        """The first n logged events as [gen.Event(name, t, x)] (a hybrid
+        jump also with x_after, the state after it)."""
+        from .solution import Event, JumpEvent
         n = min(int(n), self.capacity)
-        return [Event(self.names[int(self.log_which[k])], float(self.log_t[k]),
-                      self.log_x[k].astype(float).copy()) for k in range(n)]
+        out = []
+        for k in range(n):
+            w = int(self.log_which[k])
+            name, t, x = self.log_names[w], float(self.log_t[k]), self.log_x[k].astype(float).copy()
+            if w < len(self.names):
+                out.append(Event(name, t, x))
+            else:
+                out.append(JumpEvent(name, t, x, self.log_x_after[k].astype(float).copy()))
+        return out
 
 
 def _resolve(sim, name):
@@ -83,6 +106,8 @@ def plan_events(sim, events, terminal=False, capacity=256):
     or an output, direction +1 (upwards), -1 (downwards) or 0 (both).
     terminal: True or False for all, or {name: bool} (names not given are
     not terminal)."""
+    if events is None and getattr(sim, "nh", 0):
+        return EventPlan(sim, [], [], [], [], [], capacity)
     if not isinstance(events, dict) or not events:
         raise TypeError("events must be a non-empty dict {name: direction} (direction +1, -1 or "
                         f"0, or (direction, level)), got {events!r}")

@@ -131,6 +131,10 @@ class FmuDescription:
     default_tolerance: float = 1e-8
     generation_tool: str = f"eomgen {__version__}"
     by_vr: dict = field(default_factory=dict)
+    # hybrid={...}: event indicators and the runtime's scratch (FMI 2.0 ME)
+    nh: int = 0
+    hwork: int = 1
+    hiwork: int = 1
 
 
 def _fmt(v):
@@ -283,6 +287,13 @@ def describe(model, fmi_version="2.0", kind="both", real="double", start=None, u
         raise ModelError(f"real must be 'double' or 'float', got {real!r}")
     if cs_method not in CS_METHODS:
         raise ModelError(f"cs_method must be one of {', '.join(CS_METHODS)}, got {cs_method!r}")
+    nh = len(getattr(m, "hybrid", []) or [])
+    if nh and (fmi_version != "2.0" or kind != "me"):
+        raise ModelError(
+            f"model '{m.name}' is hybrid (hybrid={{{', '.join(d.name for d in m.hybrid)}}}): "
+            "its impacts and resets export as FMI 2.0 Model Exchange (event indicators and "
+            f"the state update at the event): kind='me', fmi_version='2.0' (got "
+            f"kind={kind!r}, fmi_version={fmi_version!r})")
     x0 = _start_state(m, start)
     deps = dependencies(m)
     nq, nx, ns = m.nq, m.nx, m.ns
@@ -429,6 +440,11 @@ def describe(model, fmi_version="2.0", kind="both", real="double", start=None, u
         # the importer's default tolerance (float resolves about 1e-5)
         default_tolerance=1e-8 if real == "double" else 1e-5)
     d.by_vr = by_vr
+    if nh:
+        from .hybrid import hybrid_iwork_len, hybrid_work_len
+        d.nh = nh
+        d.hwork = hybrid_work_len(m.nq, m.nu, m.mv, nh)
+        d.hiwork = hybrid_iwork_len(m.nq, m.nu, m.mv, nh)
     return d
 
 

@@ -237,6 +237,18 @@ _RUNTIME_INDIRECT = {
     "gen_rt_model_eval_outputs": ["outputs"],
     # the simulation engine (gen_rt_simulate.c): output events
     "outputs_": ["outputs"],
+    # hybrid={...} (gen_rt_hybrid.c, and the engine's jumps)
+    "gen_rt_hybrid_rhs": ["rhs_terms", "accel_terms", "hybrid_jacobian", "hybrid_bias"],
+    "gen_rt_hybrid_values": ["hybrid_values", "rhs_terms", "accel_terms", "hybrid_jacobian",
+                             "hybrid_bias"],
+    "gen_rt_hybrid_rates": ["hybrid_jacobian"],
+    "gen_rt_hybrid_impulse": ["mass_matrix", "velocity_constraint_matrix", "hybrid_jacobian"],
+    "gen_rt_hybrid_reset": ["hybrid_reset", "constraints", "velocity_constraints",
+                            "constraint_jacobian", "velocity_constraint_matrix"],
+    "gen_rt_hybrid_jump": ["hybrid_values", "hybrid_jacobian", "mass_matrix",
+                     "velocity_constraint_matrix", "hybrid_reset", "constraints",
+                     "velocity_constraints", "constraint_jacobian", "rhs_terms", "accel_terms",
+                     "hybrid_bias"],
 }
 # what the integrators call back (gen_rt_simulate.c)
 _CALLBACKS = ["rhs_cb"]

@@ -806,6 +806,12 @@ def core_kernels(inputs):
     if getattr(m, "ny", 0):
         # outputs y(q, u, r, p, t) (their Jacobians are derivative kernels)
         kernels["outputs"] = make_kernel("outputs", [Aq, Au, Ar, Ap, At], [("y", m.y)])
+    # hybrid={...} (gen/hybrid.py): gaps and guards, the gaps' rates and
+    # biases, the reset maps
+    from .hybrid import hybrid_kernels
+    hargs = {"q": Aq, "u": Au, "p": Ap, "t": At}
+    for kname, args, outs in hybrid_kernels(m):
+        kernels[kname] = make_kernel(kname, [hargs[c] for c in args], outs)
     return kernels
 
 

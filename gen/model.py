@@ -38,6 +38,7 @@ from sympy.core.basic import _args_sortkey
 from sympy.physics import mechanics as me
 
 from .errors import ModelError
+from .hybrid import attach_hybrid
 from .printers import check_printable
 from .names import C_KEYWORDS, C_LIBRARY_NAMES, c_name, c_names, validate_name  # noqa: F401
 
@@ -332,6 +333,8 @@ class Model:
     y: sm.Matrix = field(default_factory=lambda: sm.zeros(0, 1))
     output_names: list = field(default_factory=list)    # C-safe, unique
     output_labels: list = field(default_factory=list)   # as the user named them
+    # hybrid={name: gen.Impact | gen.Reset} (gen/hybrid.py): HybridDecl in order
+    hybrid: list = field(default_factory=list)
 
     # ------------------------------------------------------------------ sizes
     @property
@@ -445,6 +448,10 @@ class Model:
             sub.update({s: sm.Symbol(f"_ud{i}") for i, s in enumerate(self.ud)})
             parts += [repr(self.auxiliary_names), sm.srepr(self.aux_F.xreplace(sub)),
                       sm.srepr(self.aux_g.xreplace(sub))]
+        for d in self.hybrid:
+            xm = None if d.xmap is None else [sm.srepr(e.xreplace(sub)) for e in d.xmap]
+            parts.append(repr((d.name, d.kind, sm.srepr(d.expr.xreplace(sub)), d.restitution,
+                               d.direction, d.rest_speed, xm)))
         for part in parts:
             h.update(part.encode())
             h.update(b"\0")
@@ -453,7 +460,7 @@ class Model:
     # ------------------------------------------------------------ builders
     @classmethod
     def from_kanes(cls, km, constants=None, inputs=None, name="model",
-                   energy=None, reactions=None, outputs=None):
+                   energy=None, reactions=None, outputs=None, hybrid=None):
         """Build from a ``KanesMethod`` after ``kanes_equations``.
 
         Parameters
@@ -490,6 +497,10 @@ class Model:
             ``{name: expression}`` of quantities to measure (sensor readings,
             point positions) in the coordinates, speeds, inputs, constants and t
             (``sim.outputs``; ``linearize_outputs`` gives C and D).
+        hybrid : dict, optional
+            ``{name: gen.Impact(gap, ...) or gen.Reset(guard, map, ...)}``:
+            impacts and resets, run in C with the rest of the model; every jump
+            is logged in ``sol.events`` (``docs/guides/hybrid.md``).
 
         Returns
         -------
@@ -569,17 +580,18 @@ class Model:
             if any(M.has(r_) or f.has(r_) for r_ in aux[1]):
                 M, f = _eliminate_reactions(M, f, aux, [ui.diff(t) for ui in u], q)
         qdot_map = dict(km._qdot_u_map) if km._qdot_u_map else {}
-        return cls._finish(
+        return attach_hybrid(cls._finish(
             name=name, method="kane", t=t, q=q, u=u, qdots=qdots, udots=[ui.diff(t) for ui in u],
             q_ind=list(range(nq - nqd)), q_dep=list(range(nq - nqd, nq)),
             u_ind=list(range(nu - nud)), u_dep=list(range(nu - nud, nu)),
             Kqd=Kqd, Ku=Ku, kf=kf, M=M, f=f, A=A, b=b, fc=fc,
             qdot_subs=qdot_map, constants=constants, inputs=inputs, energy=energy,
-            speed_names=[_sym_name(x) for x in u], aux=aux, outputs=outputs)
+            speed_names=[_sym_name(x) for x in u], aux=aux, outputs=outputs), hybrid)
 
     @classmethod
     def from_lagrange(cls, lm, q_ind=None, qd_ind=None, q_dep=None, qd_dep=None,
-                      constants=None, inputs=None, name="model", energy=None, outputs=None):
+                      constants=None, inputs=None, name="model", energy=None, outputs=None,
+                      hybrid=None):
         """Build from a ``LagrangesMethod`` after ``form_lagranges_equations``.
 
         The state is x = [q, q'] in the method's coordinate order.
@@ -611,6 +623,10 @@ class Model:
             ``{name: expression}`` of quantities to measure (sensor readings,
             point positions) in the coordinates, speeds, inputs, constants and t
             (``sim.outputs``; ``linearize_outputs`` gives C and D).
+        hybrid : dict, optional
+            ``{name: gen.Impact(gap, ...) or gen.Reset(guard, map, ...)}``:
+            impacts and resets, run in C with the rest of the model; every jump
+            is logged in ``sol.events`` (``docs/guides/hybrid.md``).
 
         Returns
         -------
@@ -700,16 +716,16 @@ class Model:
         Ku = -sm.eye(n)
         kf = sm.zeros(n, 1)
         # Symbols for u: reuse the q' objects; _finish maps them.
-        return cls._finish(
+        return attach_hybrid(cls._finish(
             name=name, method="lagrange", t=t, q=q, u=qdots, qdots=qdots, udots=qdds,
             q_ind=qi, q_dep=qdp, u_ind=ui, u_dep=udp,
             Kqd=Kqd, Ku=Ku, kf=kf, M=M, f=f, A=A, b=b, fc=fc,
             qdot_subs={}, constants=constants, inputs=inputs, energy=energy,
-            speed_names=[_sym_name(x) + "_d" for x in q], outputs=outputs)
+            speed_names=[_sym_name(x) + "_d" for x in q], outputs=outputs), hybrid)
 
     @classmethod
     def from_system(cls, obj, constants=None, inputs=None, name="model", energy=None,
-                    outputs=None, formulation="kane", **partition):
+                    outputs=None, formulation="kane", hybrid=None, **partition):
         """Build from whatever holds formed equations of motion.
 
         Dispatches to :meth:`from_kanes` or :meth:`from_lagrange` on the formed
@@ -736,6 +752,10 @@ class Model:
             ``{name: expression}`` of quantities to measure (sensor readings,
             point positions) in the coordinates, speeds, inputs, constants and t
             (``sim.outputs``; ``linearize_outputs`` gives C and D).
+        hybrid : dict, optional
+            ``{name: gen.Impact(gap, ...) or gen.Reset(guard, map, ...)}``:
+            impacts and resets, run in C with the rest of the model; every jump
+            is logged in ``sol.events`` (``docs/guides/hybrid.md``).
         formulation : {"kane", "recursive"}, optional
             ``"kane"``: the equations the method formed (``form_eoms()`` first).
             ``"recursive"``: a sympy System's joint tree, its equations formed
@@ -768,7 +788,7 @@ class Model:
             from .recursive import equations_of_tree
             M, f, q, u, kdes = equations_of_tree(obj)
             return cls.from_matrices(M, f, q, u, kdes, constants=constants, inputs=inputs,
-                                     name=name, energy=energy, outputs=outputs)
+                                     name=name, energy=energy, outputs=outputs, hybrid=hybrid)
         if formulation != "kane":
             raise ModelError(f"formulation={formulation!r} for Model.from_system: "
                              "accepted are 'kane' and 'recursive'")
@@ -794,19 +814,21 @@ class Model:
             raise ModelError(f"{needs}, got {desc} {accepted}")
         # the builder's own further keywords (partition, reactions, ...)
         extra = [k for k in inspect.signature(builder).parameters
-                 if k not in ("km", "lm", "constants", "inputs", "name", "energy", "outputs")]
+                 if k not in ("km", "lm", "constants", "inputs", "name", "energy", "outputs",
+                              "hybrid")]
         bad = sorted(set(partition) - set(extra))
         if bad:
             raise ModelError(
                 f"unknown argument(s) {', '.join(bad)} for Model.from_system with {desc}: "
                 f"accepted are {', '.join(extra) or 'none'}")
         return builder(obj, constants=constants, inputs=inputs, name=name, energy=energy,
-                       outputs=outputs, **partition)
+                       outputs=outputs, hybrid=hybrid, **partition)
 
     # ---- from matrices (gen.pydy: PyDy's forms; any M, f and kinematics) ----
     @classmethod
     def from_matrices(cls, mass_matrix, forcing, coordinates, speeds, kinematics,
-                      constants=None, inputs=None, name="model", energy=None, outputs=None):
+                      constants=None, inputs=None, name="model", energy=None, outputs=None,
+                      hybrid=None):
         """Build from the equations themselves, without a formed method.
 
         ``mass_matrix * speeds' = forcing``, with the kinematic equations
@@ -825,7 +847,7 @@ class Model:
             the kinematic rows and of the mass matrix's rows and columns.
         kinematics : sympy Matrix, shape (nq, 1)
             Expressions that vanish, ``q' - G(q, u)`` for explicit kinematics.
-        constants, inputs, name, energy, outputs
+        constants, inputs, name, energy, outputs, hybrid
             As for :meth:`from_kanes`.
 
         Returns
@@ -877,13 +899,13 @@ class Model:
                 and all(Kqd[i, i] != 0 for i in range(nq)):
             qdot_map = {qd_: -(Ku[i, :].dot(sm.Matrix(u)) + kf[i]) / Kqd[i, i]
                         for i, qd_ in enumerate(qdots)}
-        return cls._finish(
+        return attach_hybrid(cls._finish(
             name=name, method="kane", t=t, q=q, u=u, qdots=qdots,
             udots=[ui.diff(t) for ui in u], q_ind=list(range(nq)), q_dep=[],
             u_ind=list(range(nu)), u_dep=[], Kqd=Kqd, Ku=Ku, kf=kf, M=M, f=f,
             A=sm.zeros(0, nu), b=sm.zeros(0, 1), fc=sm.zeros(0, 1), qdot_subs=qdot_map,
             constants=constants, inputs=inputs, energy=energy,
-            speed_names=[_sym_name(x) for x in u], outputs=outputs)
+            speed_names=[_sym_name(x) for x in u], outputs=outputs), hybrid)
 
     # ------------------------------------------------------------ internals
     @classmethod

@@ -61,6 +61,10 @@ _KERNEL_DOCS = {
     "outputs": "the outputs y(q, u, r, t)",
     "output_jacobian": "dy/dq, dy/du, dy/dr",
     "lin_terms": "Jacobian blocks of the linearization",
+    "hybrid_values": "the gaps and guards of hybrid={...}",
+    "hybrid_jacobian": "the gaps' rates g' = W u + w",
+    "hybrid_bias": "the gaps' acceleration bias h: g'' = W u' + h",
+    "hybrid_reset": "the states after the reset maps",
 }
 
 
@@ -322,12 +326,37 @@ def build_context(plan, iface, timings=None, backend="c"):
         "constant_names": m.constant_names,
         "ind_names": m.independent_state_names,
         "runtime_sources": RUNTIME_SOURCES,
+        # hybrid={...} (gen/hybrid.py): the declarations as data
+        "hybrid": _hybrid_context(m, real),
     }
     ctx.update(abi_context())
     ctx.update(b.context(m, kernels))
     if timings is not None:
         timings["printing"] = t2 - t1
     return ctx
+
+
+def _hybrid_context(m, real):
+    """The hybrid declarations for model.c.j2 (None: the model has none)."""
+    decls = getattr(m, "hybrid", None) or []
+    if not decls:
+        return None
+    from .hybrid import KIND_RESET, hybrid_iwork_len, hybrid_work_len
+    resets = [i for i, d in enumerate(decls) if d.kind == KIND_RESET]
+    return {
+        "n": len(decls),
+        "names": [d.name for d in decls],
+        "kind": [d.kind for d in decls],
+        "direction": [d.direction for d in decls],
+        "restitution": [_fmt_real(d.restitution, real) for d in decls],
+        "rest_speed": [_fmt_real(d.rest_speed, real) for d in decls],
+        # the row block of each declaration in hybrid_reset's output (-1: none)
+        "reset_index": [resets.index(i) if i in resets else -1 for i in range(len(decls))],
+        "has_reset": bool(resets),
+        # the engine's scratch (GEN_RT_HYBRID_WORK / _IWORK of gen_rt.h)
+        "work": hybrid_work_len(m.nq, m.nu, m.mv, len(decls)),
+        "iwork": hybrid_iwork_len(m.nq, m.nu, m.mv, len(decls)),
+    }
 
 
 def abi_context():

@@ -18,6 +18,17 @@ class Event(NamedTuple):
     x: np.ndarray
 
 
+class JumpEvent(Event):
+    """A hybrid event (an impact, a reset or a contact's lift-off,
+    ``hybrid={...}``): also ``x_after``, the state after the jump. Unpacks
+    as ``name, t, x = event`` like every Event."""
+
+    def __new__(cls, name, t, x, x_after):
+        self = super().__new__(cls, name, t, x)
+        self.x_after = x_after
+        return self
+
+
 class Solution:
     """The result of :meth:`gen.bindings.Simulator.simulate`.
 
@@ -37,7 +48,10 @@ class Solution:
         The multipliers of the velocity constraints (no columns for a model
         without velocity constraints).
     events : list of gen.Event
-        The crossings found (``events=``), each with ``name``, ``t``, ``x``.
+        The crossings found (``events=``), each with ``name``, ``t``, ``x``;
+        with ``hybrid={...}`` also every impact, reset and lift-off
+        (``"<name>.liftoff"``), as a ``JumpEvent`` that also has ``x_after``,
+        the state after the jump.
     status : int
         0: the run reached t_end; 1: a terminal event ended it (as
         ``solve_ivp``'s). A failed run raises instead.

@@ -8,6 +8,9 @@
 #include <stdio.h>
 #include <string.h>
 #include "gen_fmu.h"
+#if GEN_FMU_NH > 0
+#include "gen_rt.h"
+#endif
 
 /* the variables' names by value reference (messages), and the model's
  * partition and start values, from gen_fmu_model.h */
@@ -160,7 +163,19 @@ static int refresh(gen_fmu *c, const char *fn)
     gen_fmu_real t = (gen_fmu_real)c->time;
     if (c->fresh) return GEN_FMU_OK;
     if ((st = solve_dependent(c, fn))) return st;
+#if GEN_FMU_NH > 0
+    {
+        int k, any = 0;
+        for (k = 0; k < GEN_FMU_NH; ++k) any |= c->h_active[k];
+        if (any)   /* the contacts held as constraints (gen_rt_hybrid.c) */
+            st = gen_rt_hybrid_rhs(GEN_FMU_RUNTIME_MODEL(), t, c->x, c->r, c->p, c->h_active,
+                                   c->h_work, c->h_iwork, c->dx, NULL);
+        else
+            st = GEN_FMU_M(eval_rhs)(t, c->x, c->r, c->p, c->dx, GEN_FMU_MV > 0 ? c->lam : NULL);
+    }
+#else
     st = GEN_FMU_M(eval_rhs)(t, c->x, c->r, c->p, c->dx, GEN_FMU_MV > 0 ? c->lam : NULL);
+#endif
     if (st) return model_failed(c, fn, "the right-hand side", st);
 #if GEN_FMU_NOUT_Y > 0
     st = GEN_FMU_M(eval_outputs)(t, c->x, c->r, c->p, c->out);
@@ -209,12 +224,145 @@ int gen_fmu_enter_init(gen_fmu *c, int tolerance_defined, double tolerance, doub
     return GEN_FMU_OK;
 }
 
+static int bad_count(gen_fmu *c, const char *fn, size_t n, int want, const char *what);
+
+/* ---- hybrid={...}: event indicators and jumps ------------------------ */
+#if GEN_FMU_NH > 0
+/* the indicators at (time, x) into c->h_v */
+static int hybrid_values(gen_fmu *c, const char *fn)
+{
+    int st;
+    if ((st = solve_dependent(c, fn))) return st;
+    st = gen_rt_hybrid_values(GEN_FMU_RUNTIME_MODEL(), (gen_fmu_real)c->time, c->x, c->r, c->p,
+                              c->h_active, c->h_work, c->h_iwork, c->h_v);
+    if (st) return model_failed(c, fn, "the hybrid event indicators", st);
+    return GEN_FMU_OK;
+}
+
+/* an indicator this far from zero is on a side (the importer's root
+ * finding leaves it within rounding of zero at an event) */
+static gen_fmu_real side_tol(const gen_fmu *c)
+{
+    gen_fmu_real s = 1;
+    int i;
+    for (i = 0; i < GEN_FMU_NX; ++i) s = s > fabs((double)c->x[i]) ? s : (gen_fmu_real)fabs((double)c->x[i]);
+    return (gen_fmu_real)(sizeof(gen_fmu_real) == sizeof(float) ? 1e-4 : 1e-9) * s;
+}
+
+static void update_sides(gen_fmu *c)
+{
+    gen_fmu_real tol = side_tol(c);
+    int k;
+    for (k = 0; k < GEN_FMU_NH; ++k) {
+        if (c->h_v[k] > tol) c->h_side[k] = 1;
+        else if (c->h_v[k] < -tol) c->h_side[k] = -1;
+    }
+}
+#endif
+
+int gen_fmu_event_indicators(gen_fmu *c, double *z, size_t n)
+{
+    const char *fn = "GetEventIndicators";
+    if (n == 0 && GEN_FMU_NH == 0) return GEN_FMU_OK;
+    if (gen_fmu_allowed(c, fn, GEN_FMU_INIT | GEN_FMU_EVENT | GEN_FMU_CONT |
+                        GEN_FMU_TERMINATED | GEN_FMU_FAILED))
+        return GEN_FMU_ERROR;
+    if (n != (size_t)GEN_FMU_NH) return bad_count(c, fn, n, GEN_FMU_NH, "event indicators");
+#if GEN_FMU_NH > 0
+    {
+        int k, st;
+        if (!z) return fail(c, "GetEventIndicators: the output array is NULL");
+        if ((st = hybrid_values(c, fn))) return st;
+        for (k = 0; k < GEN_FMU_NH; ++k) z[k] = (double)c->h_v[k];
+    }
+#else
+    (void)z;
+#endif
+    return GEN_FMU_OK;
+}
+
+int gen_fmu_completed_step(gen_fmu *c)
+{
+#if GEN_FMU_NH > 0
+    int st;
+    if ((st = hybrid_values(c, "CompletedIntegratorStep"))) return st;
+    update_sides(c);
+#else
+    (void)c;
+#endif
+    return GEN_FMU_OK;
+}
+
+int gen_fmu_new_discrete_states(gen_fmu *c, int *changed, int *again)
+{
+    *changed = 0;
+    *again = 0;
+#if GEN_FMU_NH > 0
+    {
+        const char *fn = "NewDiscreteStates";
+        const gen_rt_model *m = GEN_FMU_RUNTIME_MODEL();
+        gen_fmu_real tol;
+        int k, st;
+        if ((st = hybrid_values(c, fn))) return st;
+        tol = side_tol(c);
+        for (k = 0; k < GEN_FMU_NH; ++k) {
+            int dir = m->hybrid->direction[k], what = 0, fire;
+            gen_fmu_real v = c->h_v[k];
+            if (c->h_active[k]) {
+                fire = !(v > 0);          /* lift-off: the force would pull */
+            } else if (m->hybrid->kind[k] == GEN_RT_HYBRID_IMPACT) {
+                /* a gap at (or past) zero: an impact if it is closing
+                 * (gen_rt_hybrid_jump tells; a gap opening is left alone) */
+                fire = (dir <= 0 && v <= tol) || (dir >= 0 && v >= -tol);
+            } else {
+                /* a guard crossed from the side it was on at the last
+                 * completed step (a reset's map may land on the guard) */
+                fire = (dir <= 0 && c->h_side[k] > 0 && v <= tol) ||
+                       (dir >= 0 && c->h_side[k] < 0 && v >= -tol);
+            }
+            if (!fire) continue;
+            st = gen_rt_hybrid_jump(m, (gen_fmu_real)c->time, c->r, c->p, k, 0, 0, NULL,
+                                    c->h_active, c->h_rows, c->h_scratch, c->h_work,
+                                    c->h_iwork, c->x, &what);
+            if (st) return model_failed(c, fn, "the hybrid jump", st);
+            if (!what) continue;
+            c->h_side[k] = 0;            /* at zero: its side is known again once it leaves */
+            c->fresh = 0;
+            c->solved = 0;               /* a reset is projected by the consistent state */
+            *changed = 1;
+            *again = 1;                  /* another declaration may fire at this state */
+            if (c->debug) {
+                snprintf(c->message, sizeof c->message, "hybrid event %d (%s) at t = %.17g", k,
+                         what == GEN_RT_HYBRID_LIFTOFF ? "lift-off" : "jump", c->time);
+                say(c, GEN_FMU_OK, c->message);
+            }
+            if ((st = solve_dependent(c, fn))) return st;
+            return GEN_FMU_OK;
+        }
+    }
+#else
+    (void)c;
+#endif
+    return GEN_FMU_OK;
+}
+
 int gen_fmu_exit_init(gen_fmu *c)
 {
     const char *fn = "ExitInitializationMode";
     int st;
     if (gen_fmu_allowed(c, fn, GEN_FMU_INIT)) return GEN_FMU_ERROR;
     c->fresh = 0;
+#if GEN_FMU_NH > 0
+    {
+        int k;
+        for (k = 0; k < GEN_FMU_NH; ++k) c->h_active[k] = c->h_side[k] = 0;
+        if ((st = hybrid_values(c, fn))) {
+            c->mode = GEN_FMU_FAILED;
+            return st;
+        }
+        update_sides(c);
+    }
+#endif
     if ((st = refresh(c, fn))) {
         c->mode = GEN_FMU_FAILED;
         return st;

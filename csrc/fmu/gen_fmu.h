@@ -102,6 +102,16 @@ typedef struct {
     gen_fmu_real out[GEN_FMU_DIM_(GEN_FMU_NOUT)];
     GEN_FMU_M(sim_options) opts;
     GEN_FMU_M(sim_stats) stats;
+    /* hybrid={...} (GEN_FMU_NH > 0): the contacts held, the side of each
+     * indicator at the last completed step (+1, -1, 0 unknown) and the
+     * runtime's scratch */
+    int h_active[GEN_FMU_DIM_(GEN_FMU_NH)];
+    int h_side[GEN_FMU_DIM_(GEN_FMU_NH)];
+    int h_rows[GEN_FMU_DIM_(GEN_FMU_NH)];
+    gen_fmu_real h_v[GEN_FMU_DIM_(GEN_FMU_NH)];
+    gen_fmu_real h_scratch[3 * GEN_FMU_DIM_(GEN_FMU_NH)];
+    gen_fmu_real h_work[GEN_FMU_HWORK];
+    int h_iwork[GEN_FMU_HIWORK];
     char message[512];
 } gen_fmu;
 
@@ -140,6 +150,14 @@ int gen_fmu_set_states(gen_fmu *c, const double *x, size_t n);
 int gen_fmu_get_states(gen_fmu *c, double *x, size_t n);
 int gen_fmu_get_derivatives(gen_fmu *c, double *dx, size_t n);
 int gen_fmu_get_nominals(gen_fmu *c, double *nominal, size_t n);
+
+/* Model Exchange with hybrid={...}: the event indicators (NH: a gap or
+ * guard, a held contact's force), the sides they are on after a completed
+ * step, and the jumps at an event (*changed: the states jumped; *again:
+ * call again, another declaration may fire) */
+int gen_fmu_event_indicators(gen_fmu *c, double *z, size_t n);
+int gen_fmu_completed_step(gen_fmu *c);
+int gen_fmu_new_discrete_states(gen_fmu *c, int *changed, int *again);
 
 /* Co-Simulation: integrate from t to t + h (t must be the instance's time) */
 int gen_fmu_do_step(gen_fmu *c, double t, double h);

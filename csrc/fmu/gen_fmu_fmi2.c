@@ -367,13 +367,18 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component comp, fmi2EventInfo *eventInfo)
     CORE(comp);
     if (gen_fmu_allowed(c, "fmi2NewDiscreteStates", GEN_FMU_EVENT)) return fmi2Error;
     if (!eventInfo) return null_arg(c, "fmi2NewDiscreteStates", "eventInfo");
-    /* no discrete states, no time or state events */
-    eventInfo->newDiscreteStatesNeeded = fmi2False;
-    eventInfo->terminateSimulation = fmi2False;
-    eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
-    eventInfo->valuesOfContinuousStatesChanged = fmi2False;
-    eventInfo->nextEventTimeDefined = fmi2False;
-    eventInfo->nextEventTime = 0;
+    /* no discrete states or time events; a hybrid model's jumps (impacts,
+     * resets, lift-off) update the continuous states */
+    {
+        int changed = 0, again = 0, st = gen_fmu_new_discrete_states(c, &changed, &again);
+        eventInfo->newDiscreteStatesNeeded = again ? fmi2True : fmi2False;
+        eventInfo->terminateSimulation = fmi2False;
+        eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
+        eventInfo->valuesOfContinuousStatesChanged = changed ? fmi2True : fmi2False;
+        eventInfo->nextEventTimeDefined = fmi2False;
+        eventInfo->nextEventTime = 0;
+        if (st) return (fmi2Status)st;
+    }
     return fmi2OK;
 }
 
@@ -397,7 +402,7 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component comp,
         return null_arg(c, "fmi2CompletedIntegratorStep", "enterEventMode or terminateSimulation");
     *enterEventMode = fmi2False;
     *terminateSimulation = fmi2False;
-    return fmi2OK;
+    return (fmi2Status)gen_fmu_completed_step(c);
 }
 
 fmi2Status fmi2SetTime(fmi2Component comp, fmi2Real time)
@@ -421,11 +426,7 @@ fmi2Status fmi2GetDerivatives(fmi2Component comp, fmi2Real derivatives[], size_t
 fmi2Status fmi2GetEventIndicators(fmi2Component comp, fmi2Real eventIndicators[], size_t ni)
 {
     CORE(comp);
-    (void)eventIndicators;
-    if (ni == 0) return fmi2OK;
-    gen_fmu_log(c, GEN_FMU_ERROR, "logStatusError",
-                "fmi2GetEventIndicators: this FMU has no event indicators");
-    return fmi2Error;
+    return (fmi2Status)gen_fmu_event_indicators(c, eventIndicators, ni);
 }
 
 fmi2Status fmi2GetContinuousStates(fmi2Component comp, fmi2Real x[], size_t nx)

@@ -130,7 +130,7 @@ static gen_rt_model pend_model(int accel)
     m.rhs_terms = p_rhs_terms; m.constraints = p_constraints; m.constraint_jacobian = p_jac;
     m.velocity_constraints = p_vc; m.velocity_constraint_matrix = p_vcm;
     m.energy = NULL; m.lin_terms = p_lin; m.mass_solve = NULL;
-    m.na = 0; m.auxiliary = NULL; m.accel_terms = NULL; m.rhs_solve = NULL;
+    m.na = 0; m.auxiliary = NULL; m.accel_terms = NULL; m.rhs_solve = NULL; m.hybrid = NULL;
     return m;
 }
 
@@ -279,7 +279,7 @@ static gen_rt_model osc_model(int accel)
     m.velocity_constraints = NULL; m.velocity_constraint_matrix = NULL;
     m.energy = NULL; m.lin_terms = o_lin;
     m.mass_solve = accel == GEN_RT_ACCEL_LDLT ? o_solve : NULL;
-    m.na = 0; m.auxiliary = NULL; m.accel_terms = NULL; m.rhs_solve = NULL;
+    m.na = 0; m.auxiliary = NULL; m.accel_terms = NULL; m.rhs_solve = NULL; m.hybrid = NULL;
     return m;
 }
 

@@ -96,6 +96,7 @@ static int simulate(const gen_rt_main_run *run, const void *x0, void *t_out, voi
         ev.log_which = run->log_which;
         ev.log_t = run->log_t;
         ev.log_x = run->log_x;
+        ev.log_x_after = run->log_x_after;
         st = pendulum_kane_simulate_events(x0, 0, (pendulum_kane_real)run->t_end, (pendulum_kane_real)run->dt, &in, &ev,
                                  run->p, &opts, run->rows, t_out, x_out, lam_out, r_out, &s);
     } else {
@@ -130,7 +131,7 @@ static const gen_rt_main_model model = {
     .eval_constraints = eval_constraints, .eval_energy = eval_energy,
     .status_message = pendulum_kane_status_message,
 #ifdef PENDULUM_KANE_TRACKER
-    .tracker = 1
+    .tracker = 1,
 #endif
 };
 

@@ -66,6 +66,9 @@ typedef char pendulum_kane_abi_matches_runtime[(
     offsetof(pendulum_kane_events, log_which) == offsetof(gen_rt_events, log_which) &&
     offsetof(pendulum_kane_events, log_t) == offsetof(gen_rt_events, log_t) &&
     offsetof(pendulum_kane_events, log_x) == offsetof(gen_rt_events, log_x) &&
+    offsetof(pendulum_kane_events, log_x_after) == offsetof(gen_rt_events, log_x_after) &&
+    offsetof(pendulum_kane_events, hybrid_work) == offsetof(gen_rt_events, hybrid_work) &&
+    offsetof(pendulum_kane_events, hybrid_iwork) == offsetof(gen_rt_events, hybrid_iwork) &&
     offsetof(pendulum_kane_sim_stats, n_accepted) == offsetof(gen_rt_sim_stats, n_accepted) &&
     offsetof(pendulum_kane_sim_stats, n_rejected) == offsetof(gen_rt_sim_stats, n_rejected) &&
     offsetof(pendulum_kane_sim_stats, n_rhs) == offsetof(gen_rt_sim_stats, n_rhs) &&
@@ -137,6 +140,7 @@ static const gen_rt_model pendulum_kane_model = {
     0, NULL,
     pendulum_kane_k_accel_terms,
     0, NULL, NULL,
+    NULL,
     NULL
 };
 
@@ -566,6 +570,9 @@ int pendulum_kane_simulate_events(const pendulum_kane_real *x0, pendulum_kane_re
     ev_rt.log_which = ev->log_which;
     ev_rt.log_t = ev->log_t;
     ev_rt.log_x = ev->log_x;
+    ev_rt.log_x_after = ev->log_x_after;
+    ev_rt.hybrid_work = ev->hybrid_work;
+    ev_rt.hybrid_iwork = ev->hybrid_iwork;
     if (!opts) { pendulum_kane_sim_options_default(&opts_default); opts = &opts_default; }
     opts_rt.method = opts->method;
     opts_rt.project = opts->project;

@@ -43,7 +43,8 @@ typedef double pendulum_kane_real;
 #define PENDULUM_KANE_ERR_CONTROLLER (-12) /* the controller callback returned an error */
 #define PENDULUM_KANE_ERR_CANCELLED (-13) /* cancelled: the caller set the cancellation flag of the options (sim_options.cancel) */
 #define PENDULUM_KANE_ERR_SINGULAR_REACTIONS (-14) /* the reaction forces of the auxiliary speeds are not determined at this state: the matrix of their auxiliary equations is singular */
-#define PENDULUM_KANE_STATUS_MIN (-14) /* the most negative code */
+#define PENDULUM_KANE_ERR_INCONSISTENT_RESET (-15) /* a reset's map gives a state that violates the model's constraints (hybrid={...}: gen.Reset) */
+#define PENDULUM_KANE_STATUS_MIN (-15) /* the most negative code */
 
 /* Integration methods for pendulum_kane_sim_options.method */
 #define PENDULUM_KANE_METHOD_RK4 0
@@ -131,6 +132,9 @@ typedef struct {
     int *log_which; /* capacity: the event's index i */
     pendulum_kane_real *log_t; /* capacity: its time */
     pendulum_kane_real *log_x; /* capacity x NX: its state (the dense output, projected) */
+    pendulum_kane_real *log_x_after; /* capacity x NX (NULL: not kept): the state after a hybrid event's jump (impact, reset), else as log_x */
+    pendulum_kane_real *hybrid_work; /* GEN_RT_HYBRID_WORK(NQ, NU, MV, NH) reals: the engine's hybrid scratch (a model with hybrid={...} needs it) */
+    int *hybrid_iwork; /* GEN_RT_HYBRID_IWORK(NQ, NU, MV, NH) ints */
 } pendulum_kane_events;
 
 /* Integration statistics (advance accumulates them). */

@@ -66,6 +66,7 @@ inline constexpr Status ERR_DIVERGED = PENDULUM_KANE_ERR_DIVERGED;
 inline constexpr Status ERR_CONTROLLER = PENDULUM_KANE_ERR_CONTROLLER;
 inline constexpr Status ERR_CANCELLED = PENDULUM_KANE_ERR_CANCELLED;
 inline constexpr Status ERR_SINGULAR_REACTIONS = PENDULUM_KANE_ERR_SINGULAR_REACTIONS;
+inline constexpr Status ERR_INCONSISTENT_RESET = PENDULUM_KANE_ERR_INCONSISTENT_RESET;
 inline const char *status_message(int status) noexcept { return pendulum_kane_status_message(status); }
 
 using Method = int;
@@ -268,6 +269,11 @@ struct Input : detail::Api<S>::input {
  *   int * log_which: capacity: the event's index i
  *   S * log_t: capacity: its time
  *   S * log_x: capacity x NX: its state (the dense output, projected)
+ *   S * log_x_after: capacity x NX (NULL: not kept): the state after a hybrid event's
+ *       jump (impact, reset), else as log_x
+ *   S * hybrid_work: GEN_RT_HYBRID_WORK(NQ, NU, MV, NH) reals: the engine's hybrid
+ *       scratch (a model with hybrid={...} needs it)
+ *   int * hybrid_iwork: GEN_RT_HYBRID_IWORK(NQ, NU, MV, NH) ints
  */
 template <typename S>
 struct Events : detail::Api<S>::events {

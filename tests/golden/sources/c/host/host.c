@@ -44,6 +44,9 @@ typedef struct {
     int *log_which;
     eomgen_real *log_t;
     eomgen_real *log_x;
+    eomgen_real *log_x_after;
+    eomgen_real *hybrid_work;
+    int *hybrid_iwork;
 } eomgen_events;
 typedef struct {
     long n_accepted;
