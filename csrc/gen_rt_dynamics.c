@@ -133,3 +133,57 @@ int gen_rt_accel_partitioned(int n, int m, const int *ind, const int *dep,
     }
     return GEN_RT_OK;
 }
+
+/* K = [M, -G; C, H] ((n + na) square) into K */
+static void reactions_matrix(int n, int na, const gen_rt_real *M, const gen_rt_real *G,
+                             const gen_rt_real *C, const gen_rt_real *H, gen_rt_real *K)
+{
+    int N = n + na, i, j;
+    for (i = 0; i < N; ++i)
+        for (j = 0; j < N; ++j) {
+            gen_rt_real v;
+            if (i < n && j < n) v = M[i * n + j];
+            else if (i < n) v = -G[i * na + (j - n)];
+            else if (j < n) v = C[(i - n) * n + j];
+            else v = H[(i - n) * na + (j - n)];
+            K[i * N + j] = v;
+        }
+}
+
+int gen_rt_accel_reactions(int n, int na, const gen_rt_real *M, const gen_rt_real *f,
+                           const gen_rt_real *G, const gen_rt_real *C, const gen_rt_real *H,
+                           const gen_rt_real *g0, gen_rt_real *work, int *iwork,
+                           gen_rt_real *ud, gen_rt_real *R)
+{
+    int N = n + na, i;
+    gen_rt_real *K = work, *z = work + N * N;
+    if (n <= 0 || na <= 0) return GEN_RT_ERR_BAD_ARG;
+    if (!M || !f || !G || !C || !H || !g0 || !work || !iwork || !ud) return GEN_RT_ERR_NULL;
+    reactions_matrix(n, na, M, G, C, H, K);
+    for (i = 0; i < n; ++i) z[i] = f[i];
+    for (i = 0; i < na; ++i) z[n + i] = -g0[i];
+    if (!gen_rt_all_finite(N * N, K) || !gen_rt_all_finite(N, z))
+        return GEN_RT_ERR_NONFINITE_MODEL;
+    if (gen_rt_lu_factor(N, K, iwork, 0) || gen_rt_lu_solve(N, K, iwork, 1, z) ||
+        !gen_rt_all_finite(N, z))
+        return GEN_RT_ERR_SINGULAR_REACTIONS;
+    for (i = 0; i < n; ++i) ud[i] = z[i];
+    if (R) for (i = 0; i < na; ++i) R[i] = z[n + i];
+    return GEN_RT_OK;
+}
+
+int gen_rt_reactions_columns(int n, int na, const gen_rt_real *M, const gen_rt_real *G,
+                             const gen_rt_real *C, const gen_rt_real *H, int nc,
+                             gen_rt_real *work, int *iwork, gen_rt_real *B)
+{
+    int N = n + na;
+    gen_rt_real *K = work;
+    if (n <= 0 || na <= 0 || nc < 0) return GEN_RT_ERR_BAD_ARG;
+    if (!M || !G || !C || !H || !work || !iwork || (nc > 0 && !B)) return GEN_RT_ERR_NULL;
+    reactions_matrix(n, na, M, G, C, H, K);
+    if (!gen_rt_all_finite(N * N, K)) return GEN_RT_ERR_NONFINITE_MODEL;
+    if (gen_rt_lu_factor(N, K, iwork, 0) || (nc > 0 && gen_rt_lu_solve(N, K, iwork, nc, B)) ||
+        !gen_rt_all_finite(N * nc, B))
+        return GEN_RT_ERR_SINGULAR_REACTIONS;
+    return GEN_RT_OK;
+}

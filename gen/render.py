@@ -61,6 +61,8 @@ _KERNEL_DOCS = {
     "outputs": "the outputs y(q, u, r, t)",
     "output_jacobian": "dy/dq, dy/du, dy/dr",
     "lin_terms": "Jacobian blocks of the linearization",
+    "reaction_terms": "G, C, H, g0 of the coupled solve [M, -G; C, H] [u'; R] = [f; -g0]",
+    "reaction_lin": "Jacobians of the reactions' share of the dynamic and auxiliary residuals",
 }
 
 
@@ -306,6 +308,8 @@ def build_context(plan, iface, timings=None, backend="c"):
         "mass_solve_statements": (ldlt_statements(mass_plan)
                                   if mass_plan and not mass_plan["loop"] else None),
         "fused_rhs": fused,
+        # reactions inside the motion, solved with u' (gen_rt_accel_reactions)
+        "reactions_coupled": getattr(m, "aux_G", None) is not None,
         # q' is u itself (the usual q' = u): the fused right-hand side's q'
         # is finite when the checked state is, so only its u' is checked
         "qdot_is_u": (m.qdot is not None and m.nq == m.nu
