@@ -242,3 +242,60 @@ def test_nonlinear_reaction_in_the_auxiliary_accelerations_is_refused():
     km.kanes_equations([me.Particle('p', P, 1)], [(P, Nf * B.y - Nf**2 * N.x)])
     with pytest.raises(gen.ModelError, match=r"not linear in the reaction force\(s\) N"):
         gen.Model.from_kanes(km, name="nonlin")
+
+
+@pytest.mark.slow
+@pytest.mark.eigen
+def test_cpp_typed_face_eval_auxiliary_forces(tmp_path, ref):
+    """tests/cpp/test_reactions.cpp: the C++/Eigen face's eval_rhs,
+    eval_auxiliary_forces and linearize for double and float (the library's
+    two copies) against Newton's law, and the singular status."""
+    import subprocess
+    from pathlib import Path
+    from conftest import require_eigen, require_tool
+    from gen.eigen import ALT_DEFINE, sources
+    from gen.render import C_TEMPLATES, RUNTIME_SOURCES
+    inc = require_eigen()
+    cc, cxx = require_tool("gcc"), require_tool("g++")
+    km, consts, F, _ = bead_kane("vertical")
+    model = gen.Model.from_kanes(km, constants=consts, inputs=[F], name="bead_e")
+    out = tmp_path
+    gen.generate(model, out, backend="eigen")
+    main, alt, cxx_src = sources("bead_e", "double", True, C_TEMPLATES)
+    prog = Path(__file__).resolve().parent / "cpp" / "test_reactions.cpp"
+    strict = ["-Wall", "-Wextra", "-Werror", "-pedantic", "-O1"]
+    units = [(out / f, cc, ["-std=c99"]) for f in main + RUNTIME_SOURCES]
+    units += [(out / f, cc, ["-std=c99", f"-D{ALT_DEFINE}"]) for f in alt + RUNTIME_SOURCES]
+    units += [(out / f, cxx, ["-std=c++17"]) for f in cxx_src] + [(prog, cxx, ["-std=c++17"])]
+    objs = []
+    for i, (src, comp, flags) in enumerate(units):
+        obj = out / f"u{i}_{Path(src).stem}.o"
+        r = subprocess.run([comp, *flags, *strict, "-I", str(out), "-isystem", str(inc),
+                            "-c", str(src), "-o", str(obj)], capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        objs.append(str(obj))
+    exe = out / "test_reactions"
+    r = subprocess.run([cxx, *objs, "-o", str(exe), "-lm"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    X, Fs = states(5, 21)
+    stdin = "".join(f"{float(x[0])!r} {float(x[1])!r} {float(Fv)!r}\n" for x, Fv in zip(X, Fs))
+    r = subprocess.run([str(exe)], input=stdin, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    assert r.stdout.rstrip().endswith("ok")
+    got = {}
+    for line in r.stdout.splitlines()[:-1]:
+        typ, what, k, *vals = line.split()
+        got[typ, what, int(k)] = np.array([float.fromhex(v) for v in vals])
+    assert len(got) == 2 * 4 * len(X)
+    f, (th, w, Fsym, wd, _) = ref
+    J = sm.lambdify([th, w, Fsym], sm.Matrix([wd]).jacobian([th, w, Fsym]), "numpy")
+    for k, (x, Fv) in enumerate(zip(X, Fs)):
+        for typ, tol in (("double", 1e-12), ("float", 2e-5)):
+            xs = x if typ == "double" else np.float32(x).astype(float)
+            Fk = Fv if typ == "double" else float(np.float32(Fv))
+            wd_ref, n_ref = f(xs[0], xs[1], Fk)
+            Js = np.array(J(xs[0], xs[1], Fk), dtype=float)[0]
+            assert rel_err(got[typ, "rhs", k], [xs[1], wd_ref]) < tol, (typ, k)
+            assert abs(got[typ, "N", k][0] - n_ref) <= tol * max(1.0, abs(n_ref)), (typ, k)
+            assert rel_err(got[typ, "A", k], [0.0, 1.0, Js[0], Js[1]]) < 100 * tol, (typ, k)
+            assert rel_err(got[typ, "B", k], [0.0, Js[2]]) < 100 * tol, (typ, k)
