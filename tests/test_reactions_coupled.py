@@ -299,3 +299,21 @@ def test_cpp_typed_face_eval_auxiliary_forces(tmp_path, ref):
             assert abs(got[typ, "N", k][0] - n_ref) <= tol * max(1.0, abs(n_ref)), (typ, k)
             assert rel_err(got[typ, "A", k], [0.0, 1.0, Js[0], Js[1]]) < 100 * tol, (typ, k)
             assert rel_err(got[typ, "B", k], [0.0, Js[2]]) < 100 * tol, (typ, k)
+
+
+def test_verify_and_symbolic_linearization_know_the_coupled_solve(bead, ref):
+    # gen.verify's references (numpy's solve of the coupled system, sympy's
+    # linearization by the implicit function theorem) agree with the
+    # compiled model, and linearize_symbolic with the Newton reference
+    model, sim = bead
+    report = gen.verify(model, samples=6, linearize_samples=2, sim=sim)
+    assert report.ok, report
+    assert {"eval_rhs", "eval_auxiliary_forces", "linearize"} <= {r[0] for r in report.rows}
+    _, (th, w, F, wd, _) = ref
+    J = [float(v) for v in sm.Matrix([wd]).jacobian([th, w, F]).subs({th: 0.4, w: -0.7, F: 0.3})]
+    A, B = gen.linearize_symbolic(model, {"theta": 0.4, "omega": -0.7}, r_op={"F": 0.3},
+                                  constants="values", simplify=False)
+    np.testing.assert_allclose(np.array(A.evalf(), dtype=float), [[0, 1], [J[0], J[1]]],
+                               rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(np.array(B.evalf(), dtype=float), [[0], [J[2]]],
+                               rtol=1e-12, atol=1e-12)
