@@ -489,10 +489,12 @@ class Model:
             (every force along the auxiliary directions is a declared input or
             constant), the model is built all the same and
             ``sim.auxiliary_forces`` gives, for each auxiliary speed (named
-            after it), the value of its auxiliary equation (Kane's Fr + Fr*)
-            at the declared inputs: zero when they are the forces the
-            auxiliary direction carries; a further generalized force of minus
-            that value would be needed otherwise.
+            after it), the generalized force that direction still needs to
+            keep its speed zero, minus the value of its auxiliary equation
+            (Kane's Fr + Fr*) at the declared inputs: zero when they are the
+            forces the auxiliary direction carries, and with the declared
+            force along it at zero, the reaction itself (the number the model
+            with that force left unknown gives).
         outputs : dict, optional
             ``{name: expression}`` of quantities to measure (sensor readings,
             point positions) in the coordinates, speeds, inputs, constants and t
@@ -1200,10 +1202,12 @@ def _kane_auxiliary(km, q, u, uaux, inputs, reactions, t, zero):
     auxiliary forces (the reactions).
 
     When none is found (every force along the auxiliary directions is a
-    declared input or constant), there is nothing to solve for: F = -I,
+    declared input or constant), there is nothing to solve for: F = I,
     reactions = [], g = the auxiliary equations, named = the auxiliary
-    speeds, so that the auxiliary forces are the values of the auxiliary
-    equations (Kane's Fr + Fr*) at the declared inputs."""
+    speeds, so that the auxiliary forces are minus the values of the
+    auxiliary equations (Kane's Fr + Fr*) at the declared inputs: the
+    generalized force each auxiliary direction still needs to keep its
+    speed zero (the reaction an unknown force along it would take)."""
     eqs = sm.Matrix(km.auxiliary_eqs).xreplace(zero[0]).xreplace(zero[1])
     na = len(uaux)
     if eqs.shape[0] != na:
@@ -1232,10 +1236,12 @@ def _kane_auxiliary(km, q, u, uaux, inputs, reactions, t, zero):
     if not reactions and where.startswith("found"):
         # no unknown force: every force along the auxiliary directions is a
         # declared input (or constant). The model is well posed; what the
-        # auxiliary equations give is the generalized force each auxiliary
-        # direction needs, their value at the declared inputs: F = -I makes
-        # the runtime's solve of F w + g = 0 return w = g exactly
-        return -sm.eye(na), [], eqs, list(uaux)
+        # auxiliary equations give is the generalized force w each auxiliary
+        # direction still needs, Fr + Fr* + w = 0 at the declared inputs (0
+        # when they are the reactions; the reaction itself when an unknown
+        # force along it is left out): F = I makes the runtime's solve of
+        # F w + g = 0 return w = -g exactly
+        return sm.eye(na), [], eqs, list(uaux)
     if len(reactions) != na:
         raise ModelError(
             f"{na} auxiliary speed(s) {[_sym_name(s) for s in uaux]} but {len(reactions)} "

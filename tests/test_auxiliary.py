@@ -598,17 +598,23 @@ def test_sympy_test_aux_with_declared_forces():
     X = random_states(20, sim.nx, 33)
     R = np.random.default_rng(33).uniform(-3, 3, (20, 2))
     got = np.array([sim.auxiliary_forces(0.0, x, r=r) for x, r in zip(X, R)])
-    ref = np.array([sympy_auxiliary_values(km, consts, [x], [f1, f2], r)[0]
-                    for x, r in zip(X, R)])
+    # the force each direction still needs: minus sympy's Fr + Fr*
+    ref = -np.array([sympy_auxiliary_values(km, consts, [x], [f1, f2], r)[0]
+                     for x, r in zip(X, R)])
     assert rel_err(got, ref) < 1e-12, rel_err(got, ref)
-    # the force along u4 enters Fr + Fr* as f1 itself: its derivative is one
+    # the force along u4 enters Fr + Fr* as f1 itself: a unit more of it is a
+    # unit less needed
     x, r = X[0], R[0]
     d = sim.auxiliary_forces(0.0, x, r=r + [1.0, 0.0]) - sim.auxiliary_forces(0.0, x, r=r)
-    np.testing.assert_allclose(d, [1.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(d, [-1.0, 0.0], atol=1e-12)
+    # with the declared forces at zero, the forces needed are the reactions
+    # of the model that leaves them unknown
     # where the declared forces are the reactions (from the reaction model),
     # the auxiliary equations hold: zero
     react = gen.compile(gen.Model.from_kanes(km, constants=consts, name="disc_aux"))
     w = react.auxiliary_forces(0.0, x)
+    np.testing.assert_allclose(sim.auxiliary_forces(0.0, x, r=[0.0, 0.0]), w, rtol=1e-12,
+                               atol=1e-12 * np.max(np.abs(w)))
     assert np.max(np.abs(sim.auxiliary_forces(0.0, x, r=w))) < 1e-12 * max(1.0, np.max(np.abs(w)))
 
 
@@ -626,7 +632,7 @@ def test_sympy_test_aux_dep_with_declared_forces():
     for x in random_states(8, sim.nx, 8):
         x = sim.consistent_state(x)
         r = rng.uniform(-3, 3, 3)
-        ref = sympy_auxiliary_values(km, consts, [x], forces, r)[0]
+        ref = -sympy_auxiliary_values(km, consts, [x], forces, r)[0]
         got = sim.auxiliary_forces(0.0, x, r=r)
         assert np.max(np.abs(ref)) > 0.1
         worst = max(worst, rel_err(got, ref))
@@ -636,7 +642,8 @@ def test_sympy_test_aux_dep_with_declared_forces():
 
 def test_sympy_box_on_ground_with_normal_force_declared():
     # sympy's test_box_on_ground with N among the inputs: the motion is
-    # u' = (F - mu N)/m and the auxiliary equation N - m g (sympy's aux_eqs)
+    # u' = (F - mu N)/m and the auxiliary equation N - m g (sympy's aux_eqs);
+    # the force the vertical direction still needs is m g - N
     system, consts, F, Nf = box_on_ground(friction=True)
     model = gen.Model.from_kanes(system, constants=consts, inputs=[F, Nf], name="box_in")
     assert model.na == 1 and model.auxiliary_labels == ["ua"]
@@ -647,8 +654,8 @@ def test_sympy_box_on_ground_with_normal_force_declared():
         r = rng.uniform(0, 30, 2)
         assert abs(sim.rhs(0.0, x, r=r)[1] - (r[0] - mu * r[1]) / m) < 1e-14 * 30
         fa = sim.auxiliary_forces(0.0, x, r=r)
-        assert abs(fa[0] - (r[1] - m * g)) < 1e-14 * 30
-        ref = sympy_auxiliary_values(system.eom_method, consts, [x], [F, Nf], r)[0]
+        assert abs(fa[0] - (m * g - r[1])) < 1e-14 * 30
+        ref = -sympy_auxiliary_values(system.eom_method, consts, [x], [F, Nf], r)[0]
         assert rel_err(fa, ref) < 1e-12
     # with N = m g the auxiliary equation holds and the block slides at F/m - mu g
     r = [5.0, m * g]
@@ -676,7 +683,8 @@ def test_eigen_backend_with_declared_forces_matches_c():
     X = random_states(10, 6, 12)
     R = np.random.default_rng(12).uniform(-3, 3, (10, 2))
     got = np.array([e.auxiliary_forces(0.0, x, r=r) for x, r in zip(X, R)])
-    ref = np.array([sympy_auxiliary_values(km, consts, [x], [f1, f2], r)[0] for x, r in zip(X, R)])
+    ref = -np.array([sympy_auxiliary_values(km, consts, [x], [f1, f2], r)[0]
+                     for x, r in zip(X, R)])
     assert rel_err(got, ref) < 1e-12
     assert rel_err(got, [c.auxiliary_forces(0.0, x, r=r) for x, r in zip(X, R)]) < 1e-13
 
