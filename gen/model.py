@@ -1343,7 +1343,36 @@ def _eliminate_reactions(M, f, aux, udots, coords, constrained=False):
             "must be solved together with the accelerations, which eomgen does for models "
             "without velocity constraints (dependent speeds); not supported here")
     f0 = f.xreplace({r_: 0 for r_ in reactions})
+    _check_coupled_regular(M, G, C, F, names)
     return M, f0, tuple(aux[:4]) + (G,)
+
+
+def _check_coupled_regular(M, G, C, H, names):
+    """Refuse reactions that the coupled system [M, -G; C, H] leaves
+    undetermined at every state (singular at three random points: a
+    reaction that neither its auxiliary equations nor the accelerations
+    fix), naming them; a system singular only at some configurations is the
+    run time's GEN_RT_ERR_SINGULAR_REACTIONS."""
+    import numpy as np
+    K = sm.Matrix(sm.BlockMatrix([[M, -G], [C, H]]))
+    atoms = set()
+    for e in K:
+        atoms |= {a for a in e.atoms(sm.core.function.AppliedUndef, sm.Symbol)}
+    rng = np.random.default_rng(0)
+    n = K.shape[0]
+    for _ in range(3):
+        vals = {a: sm.Float(rng.uniform(0.3, 1.3)) for a in atoms}
+        try:
+            Kn = np.array(K.xreplace(vals).evalf(), dtype=float)
+        except (TypeError, ValueError):
+            return                    # not a number at this point: left to the run time
+        if np.all(np.isfinite(Kn)) and np.linalg.matrix_rank(Kn) == n:
+            return
+    raise ModelError(
+        f"the reaction force(s) {', '.join(names)} enter the equations of motion but the "
+        "auxiliary equations together with the motion do not determine them (the coupled "
+        "system in the accelerations and the reactions is singular at random states): apply "
+        "each reaction along its auxiliary direction")
 
 
 # the reactions of a constant, regular auxiliary matrix whose share of the

@@ -345,3 +345,20 @@ def test_standalone_binary_writes_the_coupled_reaction(tmp_path, ref):
     f, _ = ref
     n_ref = np.array([f(row[1], row[2], 0.5)[1] for row in data])
     assert rel_err(data[:, 3], n_ref) < 1e-12
+
+
+def test_reaction_the_auxiliary_equations_never_determine_is_refused():
+    # R pushes along N.x (the motion); along the auxiliary direction N.y its
+    # coefficient is (sin^2 + cos^2 - 1) R, zero though not structurally,
+    # and no acceleration is: undetermined at every state
+    th, w, ua, R = me.dynamicsymbols('theta omega ua R')
+    g = sm.Symbol('g')
+    N = me.ReferenceFrame('N')
+    P = me.Point('P')
+    P.set_vel(N, w * N.x + ua * N.y)
+    km = me.KanesMethod(N, q_ind=[th], u_ind=[w], kd_eqs=[th.diff(t) - w], u_auxiliary=[ua])
+    km.kanes_equations([me.Particle('p', P, 1)],
+                       [(P, R * N.x + R * (sm.sin(th)**2 + sm.cos(th)**2 - 1) * N.y - g * N.y)])
+    with pytest.raises(gen.ModelError, match=r"reaction force\(s\) R enter the equations of "
+                                             r"motion but .* do not determine them"):
+        gen.Model.from_kanes(km, constants={g: 9.81}, name="undet")
