@@ -936,7 +936,9 @@ def accel_method(model, mass_symmetric):
     """Kane with velocity constraints: the partitioned solve (dependent
     speeds eliminated); Lagrange with constraints: the KKT system; no
     constraints: an LDL^T unrolled over M's pattern when M is symmetric,
-    else pivoted LU."""
+    else pivoted LU; reactions inside the motion (model.aux_G): "lu", the
+    plan's name for the runtime's general path, where the model's
+    reaction_solve takes u' and the reactions from one LU solve."""
     if model.mv:
         return "partitioned" if model.method == "kane" else "kkt"
     if getattr(model, "aux_G", None) is not None:

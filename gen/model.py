@@ -494,7 +494,10 @@ class Model:
             (Kane's Fr + Fr*) at the declared inputs: zero when they are the
             forces the auxiliary direction carries, and with the declared
             force along it at zero, the reaction itself (the number the model
-            with that force left unknown gives).
+            with that force left unknown gives). Reactions that enter the
+            motion (friction ``-mu*N``) are eliminated exactly when their
+            auxiliary coefficients are constant, else solved with u' at run
+            time, one linear system per evaluation (:doc:`/guides/model`).
         outputs : dict, optional
             ``{name: expression}`` of quantities to measure (sensor readings,
             point positions) in the coordinates, speeds, inputs, constants and t
