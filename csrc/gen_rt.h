@@ -170,6 +170,25 @@ int gen_rt_accel_reactions(int n, int na, const gen_rt_real *M, const gen_rt_rea
 int gen_rt_reactions_columns(int n, int na, const gen_rt_real *M, const gen_rt_real *G,
                              const gen_rt_real *C, const gen_rt_real *H, int nc,
                              gen_rt_real *work, int *iwork, gen_rt_real *B);
+/* The linearization blocks of such a model made those of the coupled solve
+ * (the implicit function theorem): with the dynamic residual M u' - f - G R
+ * and the auxiliary residual C u' + H R + g0 at the solved u' and R, Rq, Ru,
+ * Rr (nu x nq, nu x nu, nu x nr) hold the first one's Jacobians at fixed R
+ * without the reactions' share, Xq, Xu, Xr that share (-d(G R)/d.), Pq, Pu,
+ * Pr the second one's Jacobians. On return Rq, Ru, Rr are the first nu rows
+ * of [M, -G; C, H]^-1 [Rq + Xq, Ru + Xu, Rr + Xr; Pq, Pu, Pr] and Mout the
+ * identity, so that M du' = -(Rq dq + Ru du + Rr dr) (what gen_rt_linearize
+ * and the Jacobian solve) gives the coupled solve's derivative. Xr, Pr, Rr
+ * may be NULL when nr == 0. Work: GEN_RT_REACTIONS_LIN_WORK reals, nu + na
+ * ints. */
+#define GEN_RT_REACTIONS_LIN_WORK(nq, nu, nr, na)                               \
+    (((nu) + (na)) * ((nq) + (nu) + (nr)) + GEN_RT_REACTIONS_WORK(nu, na))
+int gen_rt_reactions_lin(int nq, int nu, int nr, int na, const gen_rt_real *M,
+                         const gen_rt_real *G, const gen_rt_real *C, const gen_rt_real *H,
+                         const gen_rt_real *Xq, const gen_rt_real *Xu, const gen_rt_real *Xr,
+                         const gen_rt_real *Pq, const gen_rt_real *Pu, const gen_rt_real *Pr,
+                         gen_rt_real *work, int *iwork, gen_rt_real *Rq, gen_rt_real *Ru,
+                         gen_rt_real *Rr, gen_rt_real *Mout);
 
 /* Multiplier form: solve [M, -A^T; A, 0] [u'; lam] = [f; -a] with pivoted LU.
  * lam may be NULL. */

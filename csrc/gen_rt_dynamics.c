@@ -187,3 +187,43 @@ int gen_rt_reactions_columns(int n, int na, const gen_rt_real *M, const gen_rt_r
         return GEN_RT_ERR_SINGULAR_REACTIONS;
     return GEN_RT_OK;
 }
+
+int gen_rt_reactions_lin(int nq, int nu, int nr, int na, const gen_rt_real *M,
+                         const gen_rt_real *G, const gen_rt_real *C, const gen_rt_real *H,
+                         const gen_rt_real *Xq, const gen_rt_real *Xu, const gen_rt_real *Xr,
+                         const gen_rt_real *Pq, const gen_rt_real *Pu, const gen_rt_real *Pr,
+                         gen_rt_real *work, int *iwork, gen_rt_real *Rq, gen_rt_real *Ru,
+                         gen_rt_real *Rr, gen_rt_real *Mout)
+{
+    int nc = nq + nu + nr, i, j, st;
+    gen_rt_real *B = work, *w = work + (nu + na) * nc;
+    if (nq < 0 || nu <= 0 || nr < 0 || na <= 0) return GEN_RT_ERR_BAD_ARG;
+    if (!M || !G || !C || !H || !Xq || !Xu || !Pq || !Pu || !work || !iwork || !Rq || !Ru ||
+        !Mout || (nr > 0 && (!Xr || !Pr || !Rr)))
+        return GEN_RT_ERR_NULL;
+    /* B = [Rq + Xq, Ru + Xu, Rr + Xr; Pq, Pu, Pr] */
+    for (i = 0; i < nu; ++i) {
+        gen_rt_real *b = B + i * nc;
+        for (j = 0; j < nq; ++j) b[j] = Rq[i * nq + j] + Xq[i * nq + j];
+        for (j = 0; j < nu; ++j) b[nq + j] = Ru[i * nu + j] + Xu[i * nu + j];
+        for (j = 0; j < nr; ++j) b[nq + nu + j] = Rr[i * nr + j] + Xr[i * nr + j];
+    }
+    for (i = 0; i < na; ++i) {
+        gen_rt_real *b = B + (nu + i) * nc;
+        for (j = 0; j < nq; ++j) b[j] = Pq[i * nq + j];
+        for (j = 0; j < nu; ++j) b[nq + j] = Pu[i * nu + j];
+        for (j = 0; j < nr; ++j) b[nq + nu + j] = Pr[i * nr + j];
+    }
+    if ((st = gen_rt_reactions_columns(nu, na, M, G, C, H, nc, w, iwork, B))) return st;
+    /* the first nu rows of K^-1 B, with the identity for M */
+    for (i = 0; i < nu; ++i) {
+        const gen_rt_real *b = B + i * nc;
+        for (j = 0; j < nq; ++j) Rq[i * nq + j] = b[j];
+        for (j = 0; j < nu; ++j) {
+            Ru[i * nu + j] = b[nq + j];
+            Mout[i * nu + j] = i == j ? 1 : 0;
+        }
+        for (j = 0; j < nr; ++j) Rr[i * nr + j] = b[nq + nu + j];
+    }
+    return GEN_RT_OK;
+}

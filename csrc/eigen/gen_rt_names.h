@@ -68,6 +68,7 @@
 #define gen_rt_model_step_rk4 GEN_RT_NAME_(model_step_rk4)
 #define gen_rt_model_step_sensitivity GEN_RT_NAME_(model_step_sensitivity)
 #define gen_rt_reactions_columns GEN_RT_NAME_(reactions_columns)
+#define gen_rt_reactions_lin GEN_RT_NAME_(reactions_lin)
 #define gen_rt_rk4_step GEN_RT_NAME_(rk4_step)
 #define gen_rt_rodas4_trial GEN_RT_NAME_(rodas4_trial)
 #define gen_rt_simulate_rows GEN_RT_NAME_(simulate_rows)

@@ -279,9 +279,32 @@ static void test_reactions(void)
               GEN_RT_ERR_NULL);
 }
 
+/* gen_rt_reactions_lin, one of each: K = [2, -1/2; 1, 2] (det 9/2),
+ * B = [Rq + Xq, Ru + Xu, Rr + Xr; Pq, Pu, Pr] = [4, 0, -1; 4, 1, 0]; the first
+ * row of K^-1 B is (2 B0 + B1 / 2) / (9/2) = (20, 1, -4) / 9 */
+static void test_reactions_lin(void)
+{
+    const gen_rt_real M[1] = {2}, G[1] = {0.5}, C[1] = {1}, H[1] = {2};
+    const gen_rt_real Xq[1] = {1}, Xu[1] = {0}, Xr[1] = {0}, Pq[1] = {4}, Pu[1] = {1}, Pr[1] = {0};
+    gen_rt_real Rq[1] = {3}, Ru[1] = {0}, Rr[1] = {-1}, Mo[1] = {7};
+    gen_rt_real work[GEN_RT_REACTIONS_LIN_WORK(1, 1, 1, 1)];
+    int iwork[2];
+    CHECK_INT(gen_rt_reactions_lin(1, 1, 1, 1, M, G, C, H, Xq, Xu, Xr, Pq, Pu, Pr, work, iwork,
+                                   Rq, Ru, Rr, Mo), GEN_RT_OK);
+    CHECK_NEAR(Rq[0], 20.0 / 9.0, TOL(1e-15, 1e-6));
+    CHECK_NEAR(Ru[0], 1.0 / 9.0, TOL(1e-15, 1e-6));
+    CHECK_NEAR(Rr[0], -4.0 / 9.0, TOL(1e-15, 1e-6));
+    CHECK_NEAR(Mo[0], 1.0, 0.0);
+    CHECK_INT(gen_rt_reactions_lin(1, 1, 1, 1, M, G, C, H, Xq, Xu, NULL, Pq, Pu, Pr, work, iwork,
+                                   Rq, Ru, Rr, Mo), GEN_RT_ERR_NULL);
+    CHECK_INT(gen_rt_reactions_lin(1, 1, 0, 1, M, G, C, H, Xq, Xu, NULL, Pq, Pu, NULL, work, iwork,
+                                   Rq, Ru, NULL, Mo), GEN_RT_OK);
+}
+
 int main(void)
 {
     test_reactions();
+    test_reactions_lin();
     test_pendulum();
     test_pendulum_horizontal();
     test_free_particle();
