@@ -219,6 +219,7 @@ def test_normal_auxiliary_direction_is_eliminated_and_equals_the_coupled_solve(r
         np.testing.assert_allclose(B2, B1, rtol=1e-11, atol=1e-11)
 
 
+@pytest.mark.slow
 def test_float_build_agrees_with_double(bead):
     model, sim = bead
     simf = gen.compile(model, real="float")
