@@ -151,6 +151,45 @@ gen_rt_real gen_rt_max_abs(int n, const gen_rt_real *v);
 #define GEN_RT_ACCEL_WORK(n, m) (((n) + (m)) * ((n) + (m) + 1) + 2 * (n) * (n) + 4 * (n) + 1)
 #define GEN_RT_ACCEL_IWORK(n, m) ((n) + (m) + 1)
 
+/* Reactions inside the motion (the auxiliary speeds' reaction forces R
+ * entering the dynamics, friction -mu N): M u' = f + G R and the auxiliary
+ * equations C u' + H R + g0 = 0 solved as one linear system
+ *   [M, -G; C, H] [u'; R] = [f; -g0]
+ * by pivoted LU (G: n x na, C: na x n, H: na x na). R may be NULL. Work:
+ * GEN_RT_REACTIONS_WORK(n, na) reals, n + na ints. GEN_RT_ERR_SINGULAR_REACTIONS
+ * when the system is singular (or its solution overflows),
+ * GEN_RT_ERR_NONFINITE_MODEL when a block is not finite. */
+#define GEN_RT_REACTIONS_WORK(n, na) (((n) + (na)) * ((n) + (na) + 1) + 1)
+int gen_rt_accel_reactions(int n, int na, const gen_rt_real *M, const gen_rt_real *f,
+                           const gen_rt_real *G, const gen_rt_real *C, const gen_rt_real *H,
+                           const gen_rt_real *g0, gen_rt_real *work, int *iwork,
+                           gen_rt_real *ud, gen_rt_real *R);
+/* The same matrix applied inversely to nc columns: B ((n + na) x nc,
+ * row-major) becomes [M, -G; C, H]^-1 B (the derivatives of the coupled
+ * solve by the implicit function theorem). Work: GEN_RT_REACTIONS_WORK. */
+int gen_rt_reactions_columns(int n, int na, const gen_rt_real *M, const gen_rt_real *G,
+                             const gen_rt_real *C, const gen_rt_real *H, int nc,
+                             gen_rt_real *work, int *iwork, gen_rt_real *B);
+/* The linearization blocks of such a model made those of the coupled solve
+ * (the implicit function theorem): with the dynamic residual M u' - f - G R
+ * and the auxiliary residual C u' + H R + g0 at the solved u' and R, Rq, Ru,
+ * Rr (nu x nq, nu x nu, nu x nr) hold the first one's Jacobians at fixed R
+ * without the reactions' share, Xq, Xu, Xr that share (-d(G R)/d.), Pq, Pu,
+ * Pr the second one's Jacobians. On return Rq, Ru, Rr are the first nu rows
+ * of [M, -G; C, H]^-1 [Rq + Xq, Ru + Xu, Rr + Xr; Pq, Pu, Pr] and Mout the
+ * identity, so that M du' = -(Rq dq + Ru du + Rr dr) (what gen_rt_linearize
+ * and the Jacobian solve) gives the coupled solve's derivative. Xr, Pr, Rr
+ * may be NULL when nr == 0. Work: GEN_RT_REACTIONS_LIN_WORK reals, nu + na
+ * ints. */
+#define GEN_RT_REACTIONS_LIN_WORK(nq, nu, nr, na)                               \
+    (((nu) + (na)) * ((nq) + (nu) + (nr)) + GEN_RT_REACTIONS_WORK(nu, na))
+int gen_rt_reactions_lin(int nq, int nu, int nr, int na, const gen_rt_real *M,
+                         const gen_rt_real *G, const gen_rt_real *C, const gen_rt_real *H,
+                         const gen_rt_real *Xq, const gen_rt_real *Xu, const gen_rt_real *Xr,
+                         const gen_rt_real *Pq, const gen_rt_real *Pu, const gen_rt_real *Pr,
+                         gen_rt_real *work, int *iwork, gen_rt_real *Rq, gen_rt_real *Ru,
+                         gen_rt_real *Rr, gen_rt_real *Mout);
+
 /* Multiplier form: solve [M, -A^T; A, 0] [u'; lam] = [f; -a] with pivoted LU.
  * lam may be NULL. */
 int gen_rt_accel_kkt(int n, int m, const gen_rt_real *M, const gen_rt_real *f,
@@ -409,6 +448,13 @@ typedef struct gen_rt_model {
                      gen_rt_real *f, gen_rt_real *ud);
     /* impacts and resets (hybrid={...}); NULL when the model has none */
     const gen_rt_hybrid *hybrid;
+    /* reactions inside the motion (na of them, mv == 0): u' (and the
+     * reactions R when not NULL) from M and f of rhs_terms and the model's
+     * coupled blocks (gen_rt_accel_reactions); a status. NULL when the
+     * model's reactions do not enter its motion (or it has none). */
+    int (*reaction_solve)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
+                          const gen_rt_real *p, gen_rt_real t, const gen_rt_real *M,
+                          const gen_rt_real *f, gen_rt_real *ud, gen_rt_real *R);
 } gen_rt_model;
 
 /* the options and statistics of advance/simulate (gen_rt_sim_options,

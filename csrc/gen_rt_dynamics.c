@@ -133,3 +133,97 @@ int gen_rt_accel_partitioned(int n, int m, const int *ind, const int *dep,
     }
     return GEN_RT_OK;
 }
+
+/* K = [M, -G; C, H] ((n + na) square) into K */
+static void reactions_matrix(int n, int na, const gen_rt_real *M, const gen_rt_real *G,
+                             const gen_rt_real *C, const gen_rt_real *H, gen_rt_real *K)
+{
+    int N = n + na, i, j;
+    for (i = 0; i < N; ++i)
+        for (j = 0; j < N; ++j) {
+            gen_rt_real v;
+            if (i < n && j < n) v = M[i * n + j];
+            else if (i < n) v = -G[i * na + (j - n)];
+            else if (j < n) v = C[(i - n) * n + j];
+            else v = H[(i - n) * na + (j - n)];
+            K[i * N + j] = v;
+        }
+}
+
+int gen_rt_accel_reactions(int n, int na, const gen_rt_real *M, const gen_rt_real *f,
+                           const gen_rt_real *G, const gen_rt_real *C, const gen_rt_real *H,
+                           const gen_rt_real *g0, gen_rt_real *work, int *iwork,
+                           gen_rt_real *ud, gen_rt_real *R)
+{
+    int N = n + na, i;
+    gen_rt_real *K = work, *z = work + N * N;
+    if (n <= 0 || na <= 0) return GEN_RT_ERR_BAD_ARG;
+    if (!M || !f || !G || !C || !H || !g0 || !work || !iwork || !ud) return GEN_RT_ERR_NULL;
+    reactions_matrix(n, na, M, G, C, H, K);
+    for (i = 0; i < n; ++i) z[i] = f[i];
+    for (i = 0; i < na; ++i) z[n + i] = -g0[i];
+    if (!gen_rt_all_finite(N * N, K) || !gen_rt_all_finite(N, z))
+        return GEN_RT_ERR_NONFINITE_MODEL;
+    if (gen_rt_lu_factor(N, K, iwork, 0) || gen_rt_lu_solve(N, K, iwork, 1, z) ||
+        !gen_rt_all_finite(N, z))
+        return GEN_RT_ERR_SINGULAR_REACTIONS;
+    for (i = 0; i < n; ++i) ud[i] = z[i];
+    if (R) for (i = 0; i < na; ++i) R[i] = z[n + i];
+    return GEN_RT_OK;
+}
+
+int gen_rt_reactions_columns(int n, int na, const gen_rt_real *M, const gen_rt_real *G,
+                             const gen_rt_real *C, const gen_rt_real *H, int nc,
+                             gen_rt_real *work, int *iwork, gen_rt_real *B)
+{
+    int N = n + na;
+    gen_rt_real *K = work;
+    if (n <= 0 || na <= 0 || nc < 0) return GEN_RT_ERR_BAD_ARG;
+    if (!M || !G || !C || !H || !work || !iwork || (nc > 0 && !B)) return GEN_RT_ERR_NULL;
+    reactions_matrix(n, na, M, G, C, H, K);
+    if (!gen_rt_all_finite(N * N, K)) return GEN_RT_ERR_NONFINITE_MODEL;
+    if (gen_rt_lu_factor(N, K, iwork, 0) || (nc > 0 && gen_rt_lu_solve(N, K, iwork, nc, B)) ||
+        !gen_rt_all_finite(N * nc, B))
+        return GEN_RT_ERR_SINGULAR_REACTIONS;
+    return GEN_RT_OK;
+}
+
+int gen_rt_reactions_lin(int nq, int nu, int nr, int na, const gen_rt_real *M,
+                         const gen_rt_real *G, const gen_rt_real *C, const gen_rt_real *H,
+                         const gen_rt_real *Xq, const gen_rt_real *Xu, const gen_rt_real *Xr,
+                         const gen_rt_real *Pq, const gen_rt_real *Pu, const gen_rt_real *Pr,
+                         gen_rt_real *work, int *iwork, gen_rt_real *Rq, gen_rt_real *Ru,
+                         gen_rt_real *Rr, gen_rt_real *Mout)
+{
+    int nc = nq + nu + nr, i, j, st;
+    gen_rt_real *B = work, *w = work + (nu + na) * nc;
+    if (nq < 0 || nu <= 0 || nr < 0 || na <= 0) return GEN_RT_ERR_BAD_ARG;
+    if (!M || !G || !C || !H || !Xq || !Xu || !Pq || !Pu || !work || !iwork || !Rq || !Ru ||
+        !Mout || (nr > 0 && (!Xr || !Pr || !Rr)))
+        return GEN_RT_ERR_NULL;
+    /* B = [Rq + Xq, Ru + Xu, Rr + Xr; Pq, Pu, Pr] */
+    for (i = 0; i < nu; ++i) {
+        gen_rt_real *b = B + i * nc;
+        for (j = 0; j < nq; ++j) b[j] = Rq[i * nq + j] + Xq[i * nq + j];
+        for (j = 0; j < nu; ++j) b[nq + j] = Ru[i * nu + j] + Xu[i * nu + j];
+        for (j = 0; j < nr; ++j) b[nq + nu + j] = Rr[i * nr + j] + Xr[i * nr + j];
+    }
+    for (i = 0; i < na; ++i) {
+        gen_rt_real *b = B + (nu + i) * nc;
+        for (j = 0; j < nq; ++j) b[j] = Pq[i * nq + j];
+        for (j = 0; j < nu; ++j) b[nq + j] = Pu[i * nu + j];
+        for (j = 0; j < nr; ++j) b[nq + nu + j] = Pr[i * nr + j];
+    }
+    if ((st = gen_rt_reactions_columns(nu, na, M, G, C, H, nc, w, iwork, B))) return st;
+    /* the first nu rows of K^-1 B, with the identity for M */
+    for (i = 0; i < nu; ++i) {
+        const gen_rt_real *b = B + i * nc;
+        for (j = 0; j < nq; ++j) Rq[i * nq + j] = b[j];
+        for (j = 0; j < nu; ++j) {
+            Ru[i * nu + j] = b[nq + j];
+            Mout[i * nu + j] = i == j ? 1 : 0;
+        }
+        for (j = 0; j < nr; ++j) Rr[i * nr + j] = b[nq + nu + j];
+    }
+    return GEN_RT_OK;
+}

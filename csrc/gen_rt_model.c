@@ -148,6 +148,15 @@ static int rhs_(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
     const gen_rt_real *q = x, *u = x + nq;
     gen_rt_real *M = work, *f = M + nu * nu, *A = f + nu, *a = A + mv * nu,
                 *Kqd = a + mv;
+    if (m->reaction_solve) {
+        /* reactions inside the motion: u' and the reactions from one
+         * linear system (the model's blocks, gen_rt_accel_reactions) */
+        m->rhs_terms(q, u, r, p, t, m->explicit_kinematics ? NULL : Kqd, dxdt, M, f, NULL,
+                     NULL);
+        if ((st = solve_kinematics(m, Kqd, iwork, dxdt))) return st;
+        if (!finite_n(nu * nu, M) || !finite_n(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
+        return m->reaction_solve(q, u, r, p, t, M, f, dxdt + nq, NULL);
+    }
     if (m->accel == GEN_RT_ACCEL_LDLT && m->explicit_kinematics) {
         /* the common unconstrained case in one pass (no constraints with
          * LDL^T): q' and u' from the model's fused right-hand side (or its
@@ -222,6 +231,21 @@ int gen_rt_model_eval_auxiliary_forces(const gen_rt_model *m, gen_rt_real t,
     int na = m->na, i, st;
     gen_rt_real *dx = work, *Fm = dx + NX_(m), *g = Fm + na * na, *w = g + na;
     if (na <= 0 || !m->auxiliary) return GEN_RT_OK;
+    if (m->reaction_solve) {
+        /* the reactions enter the motion: they come with u' from the
+         * coupled solve (the auxiliary equations alone may not determine
+         * them) */
+        int nu = m->nu;
+        gen_rt_real *M = w, *f = M + nu * nu, *Kqd = f + nu;
+        m->rhs_terms(x, x + m->nq, r, p, t, m->explicit_kinematics ? NULL : Kqd, dx, M, f,
+                     NULL, NULL);
+        if (!finite_n(nu * nu, M) || !finite_n(nu, f))
+            return failure_at_(m, x, GEN_RT_ERR_NONFINITE_MODEL);
+        st = m->reaction_solve(x, x + m->nq, r, p, t, M, f, dx + m->nq, g);
+        if (st) return failure_at_(m, x, st);
+        copy_n(na, g, F);
+        return GEN_RT_OK;
+    }
     /* u' of the real speeds, then the auxiliary equations at them */
     st = gen_rt_model_rhs(m, t, x, r, p, w, iwork, dx, NULL);
     if (st) return st;
@@ -425,7 +449,12 @@ static int linearize_(const gen_rt_model *m, const gen_rt_real *x_op,
         m->rhs_terms(q, u, r_op, p, t, m->explicit_kinematics ? NULL : Kt, qdt, M, f, A, a);
     }
     if (!finite_n(nu * nu, M) || !finite_n(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
-    if (mv) {
+    if (m->reaction_solve) {
+        /* u' of the coupled solve (lin_terms then writes the blocks of its
+         * derivative, by the implicit function theorem) */
+        if ((st = m->reaction_solve(q, u, r_op, p, t, M, f, ud, NULL))) return st;
+        lam[0] = 0;
+    } else if (mv) {
         if (m->accel_terms) m->accel_terms(q, u, qd, p, t, a);
         if (!finite_n(mv * nu, A) || !finite_n(mv, a)) return GEN_RT_ERR_NONFINITE_MODEL;
         st = gen_rt_accel_kkt(nu, mv, M, f, A, a, scratch, iwork, ud, lam);

@@ -318,9 +318,10 @@ FUNCTIONS = (
     Function("eval_auxiliary_forces",
              _params("t:scalar, x:in:NX, r:in?:NR=r, p:in?:NP=p, F:out:NA"),
              "Reaction forces along the auxiliary speeds (Kane's u_auxiliary), NA: u' from the "
-             "right-hand side, then F_aux reactions = -g_aux (GEN_RT_ERR_SINGULAR_REACTIONS "
-             "when F_aux is singular); with no unknown force along them (all declared inputs) "
-             "the values of the auxiliary equations at the inputs given; NA == 0: nothing "
+             "right-hand side, then F_aux reactions = -g_aux; reactions that enter the motion "
+             "come with u' from one linear system (GEN_RT_ERR_SINGULAR_REACTIONS when either "
+             "solve is singular); with no unknown force along them (all declared inputs) the "
+             "force each direction still needs, -g_aux at the inputs given; NA == 0: nothing "
              "written.",
              work="AUX", iwork=True, work_args="NA"),
     Function("project", _params("t:scalar, p:in?:NP=p, tol:value, max_iter:value::int, x:inout:NX"),

@@ -719,7 +719,12 @@ class Simulator:
     def auxiliary_forces(self, t, x, *, r=None, p=None):
         """The reaction forces along the auxiliary speeds (Kane's
         ``u_auxiliary``) at a state: u' from the right-hand side, then the
-        auxiliary equations ``F reactions + g = 0`` solved.
+        auxiliary equations ``F reactions + g = 0`` solved (reactions that
+        enter the motion, friction on a normal force, come from the same
+        linear system as u'). When every force along the auxiliary
+        directions is a declared input, the force each direction still
+        needs to keep its speed zero, ``-(Fr + Fr*)`` at the inputs given
+        (zero when they are the reactions).
 
         Parameters
         ----------

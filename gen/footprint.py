@@ -214,26 +214,32 @@ _RUNTIME_INDIRECT = {
     "gen_rt_model_eval_velocity_constraints": ["velocity_constraints"],
     "gen_rt_model_eval_velocity_constraint_matrix": ["velocity_constraint_matrix"],
     "gen_rt_model_eval_energy": ["energy"],
-    "gen_rt_model_eval_auxiliary_forces": ["auxiliary"],
+    "gen_rt_model_eval_auxiliary_forces": ["auxiliary", "rhs_terms", "reaction_solve"],
     # static helpers of gen_rt_model.c, when the compiler does not inline them
     "constraint_jacobian_at": ["constraint_jacobian"],
     "velocity_matrix_at": ["velocity_constraint_matrix"],
-    "gen_rt_model_rhs": ["rhs_terms", "accel_terms", "mass_solve", "rhs_solve"],
-    "rhs_": ["rhs_terms", "accel_terms", "mass_solve", "rhs_solve"],
-    "gen_rt_model_eval_rhs": ["rhs_terms", "accel_terms", "mass_solve", "rhs_solve"],
+    "gen_rt_model_rhs": ["rhs_terms", "accel_terms", "mass_solve", "rhs_solve", "reaction_solve"],
+    "rhs_": ["rhs_terms", "accel_terms", "mass_solve", "rhs_solve", "reaction_solve"],
+    "gen_rt_model_eval_rhs": ["rhs_terms", "accel_terms", "mass_solve", "rhs_solve",
+                              "reaction_solve"],
     "gen_rt_model_project": ["constraint_jacobian", "velocity_constraint_matrix"],
     "gen_rt_model_consistent_state": ["constraint_jacobian", "velocity_constraint_matrix"],
-    "gen_rt_model_linearize": ["rhs_terms", "accel_terms", "lin_terms", "mass_solve"],
+    "gen_rt_model_linearize": ["rhs_terms", "accel_terms", "lin_terms", "mass_solve",
+                               "reaction_solve"],
     # the user's controller callback (simulate_input): its stack is the
     # user's own and not part of the model's report
     "input_at": [],
-    "gen_rt_model_jacobian": ["rhs_terms", "accel_terms", "mass_solve", "rhs_solve", "lin_terms"],
+    "gen_rt_model_jacobian": ["rhs_terms", "accel_terms", "mass_solve", "rhs_solve", "lin_terms",
+                              "reaction_solve"],
     "jacobian_at": ["lin_terms"],
-    "gen_rt_model_step_sensitivity": ["rhs_terms", "accel_terms", "mass_solve", "rhs_solve", "lin_terms"],
-    "gen_rt_model_linearize_discrete": ["rhs_terms", "accel_terms", "lin_terms", "mass_solve"],
-    "linearize_": ["rhs_terms", "accel_terms", "lin_terms", "mass_solve", "output_jacobian"],
+    "gen_rt_model_step_sensitivity": ["rhs_terms", "accel_terms", "mass_solve", "rhs_solve",
+                                      "lin_terms", "reaction_solve"],
+    "gen_rt_model_linearize_discrete": ["rhs_terms", "accel_terms", "lin_terms", "mass_solve",
+                                        "reaction_solve"],
+    "linearize_": ["rhs_terms", "accel_terms", "lin_terms", "mass_solve", "output_jacobian",
+                   "reaction_solve"],
     "gen_rt_model_linearize_outputs": ["rhs_terms", "accel_terms", "lin_terms", "mass_solve",
-                                       "output_jacobian"],
+                                       "output_jacobian", "reaction_solve"],
     "gen_rt_model_eval_outputs": ["outputs"],
     # the simulation engine (gen_rt_simulate.c): output events
     "outputs_": ["outputs"],
@@ -259,7 +265,8 @@ def _indirect_targets(p):
     member = {"kinematics": f"{p}_kinematics", "rhs_terms": f"{p}_rhs_terms",
               "lin_terms": f"{p}_lin_terms", "mass_solve": f"{p}_mass_solve",
               "output_jacobian": f"{p}_output_jacobian", "mass_matrix": f"{p}_mass_matrix",
-              "forcing": f"{p}_forcing", "rhs_solve": f"{p}_k_rhs_terms"}
+              "forcing": f"{p}_forcing", "rhs_solve": f"{p}_k_rhs_terms",
+              "reaction_solve": f"{p}_reaction_solve"}
     out = {caller: [member.get(k, f"{p}_k_{k}") for k in ks]
            for caller, ks in _RUNTIME_INDIRECT.items()}
     for integrator in ("gen_rt_rk4_step", "gen_rt_dopri5_integrate", "gen_rt_dopri5_trial",

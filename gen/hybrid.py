@@ -168,6 +168,12 @@ def attach_hybrid(model, hybrid):
     if not isinstance(hybrid, dict) or not hybrid:
         raise ModelError(f"model '{model.name}': hybrid must be a non-empty dict "
                          f"{{name: gen.Impact(...) or gen.Reset(...)}}, got {hybrid!r}")
+    if getattr(model, "aux_G", None) is not None and any(
+            isinstance(d, Impact) for d in hybrid.values()):
+        names = ", ".join(str(x) for x in model.reaction_orig)
+        raise ModelError(f"model '{model.name}': gen.Impact on a model whose reactions ({names}) "
+                         f"enter its motion is not supported (the impulse and the held contact "
+                         f"would leave out the coupled reaction solve); gen.Reset is")
     from sympy.physics import mechanics as me
     t = me.dynamicsymbols._t
     # the user's symbols -> the internal ones

@@ -803,6 +803,11 @@ def core_kernels(inputs):
         kernels["auxiliary"] = make_kernel(
             "auxiliary", [Aq, Au, Arg("ud", tuple(m.ud)), Ar, Ap, At],
             [("F", m.aux_F), ("g", m.aux_g)])
+        if getattr(m, "aux_G", None) is not None:
+            # reactions inside the motion: the blocks of the coupled system
+            # [M, -G; C, H] [u'; reactions] = [f; -g0] (gen_rt_accel_reactions)
+            kernels["reaction_terms"] = make_kernel(
+                "reaction_terms", [Aq, Au, Ar, Ap, At], reaction_blocks(m))
     if getattr(m, "ny", 0):
         # outputs y(q, u, r, p, t) (their Jacobians are derivative kernels)
         kernels["outputs"] = make_kernel("outputs", [Aq, Au, Ar, Ap, At], [("y", m.y)])
@@ -813,6 +818,37 @@ def core_kernels(inputs):
     for kname, args, outs in hybrid_kernels(m):
         kernels[kname] = make_kernel(kname, [hargs[c] for c in args], outs)
     return kernels
+
+
+def reaction_blocks(m):
+    """The blocks of the coupled solve of a model whose reactions enter the
+    motion (m.aux_G): G (nu x na, f = f0 + G reactions), C (na x nu, the
+    accelerations' coefficients in the auxiliary equations), H (na x na,
+    the reactions' = aux_F) and g0 (na, the auxiliary equations at u' = 0
+    and zero reactions), as [(name, Matrix)]."""
+    zero = {s: 0 for s in m.ud}
+    return [("G", m.aux_G), ("C", m.aux_g.jacobian(list(m.ud))), ("H", m.aux_F),
+            ("g0", m.aux_g.xreplace(zero))]
+
+
+def reaction_lin_kernel(m, Aq, Au, Ar, Ap, At):
+    """The derivative kernel of the coupled solve: at the accelerations ud
+    and the reactions rx it solved, the Jacobians with respect to q, u and r
+    of the reactions' share of the dynamic residual, -G rx (Xq, Xu, Xr), and
+    of the auxiliary residual, aux_F rx + aux_g(ud) (Pq, Pu, Pr)."""
+    Rx = [sm.Dummy(f"rx{i}") for i in range(m.na)]
+    rx = sm.Matrix(Rx)
+    X = -(m.aux_G * rx)
+    P = m.aux_F * rx + m.aux_g
+    jacs = [("Xq", X, m.q), ("Xu", X, m.u)]
+    if m.nr:
+        jacs.append(("Xr", X, m.r))
+    jacs += [("Pq", P, m.q), ("Pu", P, m.u)]
+    if m.nr:
+        jacs.append(("Pr", P, m.r))
+    return make_jacobian_kernel(
+        "reaction_lin", [Aq, Au, Arg("ud", tuple(m.ud)), Arg("rx", tuple(Rx)), Ar, Ap, At],
+        [], jacs)
 
 
 def derivative_kernels(inputs, lin="auto"):
@@ -853,6 +889,8 @@ def derivative_kernels(inputs, lin="auto"):
     if m.mv and qd_model:
         jacs.append(("Sqd", S, Qd))
     lin_args = [Aq, Au, Aqd, Aud, Alam, Ar, Ap, At]
+    if getattr(m, "aux_G", None) is not None:
+        kernels["reaction_lin"] = reaction_lin_kernel(m, Aq, Au, Ar, Ap, At)
     lin = lin_mode(m, lin)
     if lin == "unrolled":
         kernels["lin_terms"] = make_jacobian_kernel("lin_terms", lin_args, plain, jacs)
@@ -880,7 +918,7 @@ def derivative_kernels(inputs, lin="auto"):
 
 # the derivative kernels (build_kernels(..., derivatives=True) adds them):
 # the C backend compiles them apart, in <name>_lin.c
-DERIVATIVE_KERNELS = ("lin_terms", "lin_plain", "lin_jvp", "output_jacobian")
+DERIVATIVE_KERNELS = ("lin_terms", "lin_plain", "lin_jvp", "output_jacobian", "reaction_lin")
 
 
 @dataclass
@@ -904,9 +942,15 @@ def accel_method(model, mass_symmetric):
     """Kane with velocity constraints: the partitioned solve (dependent
     speeds eliminated); Lagrange with constraints: the KKT system; no
     constraints: an LDL^T unrolled over M's pattern when M is symmetric,
-    else pivoted LU."""
+    else pivoted LU; reactions inside the motion (model.aux_G): "lu", the
+    plan's name for the runtime's general path, where the model's
+    reaction_solve takes u' and the reactions from one LU solve."""
     if model.mv:
         return "partitioned" if model.method == "kane" else "kkt"
+    if getattr(model, "aux_G", None) is not None:
+        # reactions inside the motion: u' and the reactions from one LU
+        # solve (the model's reaction_solve; gen_rt_accel_reactions)
+        return "lu"
     return "ldlt" if mass_symmetric else "lu"
 
 

@@ -321,6 +321,11 @@ class Model:
     # and aux_g in q, u, ud (the internal symbols of u'), r, p, t
     aux_F: sm.Matrix | None = None
     aux_g: sm.Matrix | None = None
+    # reactions inside the dynamics, solved with u' at run time (one linear
+    # system in [u', reactions] per evaluation): f holds them at zero and
+    # M u' = f + aux_G reactions (NU x NA, in q, u, r, p, t); None when the
+    # reactions do not enter the motion or were eliminated symbolically
+    aux_G: sm.Matrix | None = None
     ud: list = field(default_factory=list)
     reaction_orig: list = field(default_factory=list)
     auxiliary_names: list = field(default_factory=list)   # C-safe, unique
@@ -448,6 +453,8 @@ class Model:
             sub.update({s: sm.Symbol(f"_ud{i}") for i, s in enumerate(self.ud)})
             parts += [repr(self.auxiliary_names), sm.srepr(self.aux_F.xreplace(sub)),
                       sm.srepr(self.aux_g.xreplace(sub))]
+            if self.aux_G is not None:
+                parts += ["coupled", sm.srepr(self.aux_G.xreplace(sub))]
         for d in self.hybrid:
             xm = None if d.xmap is None else [sm.srepr(e.xreplace(sub)) for e in d.xmap]
             parts.append(repr((d.name, d.kind, sm.srepr(d.expr.xreplace(sub)), d.restitution,
@@ -489,10 +496,15 @@ class Model:
             (every force along the auxiliary directions is a declared input or
             constant), the model is built all the same and
             ``sim.auxiliary_forces`` gives, for each auxiliary speed (named
-            after it), the value of its auxiliary equation (Kane's Fr + Fr*)
-            at the declared inputs: zero when they are the forces the
-            auxiliary direction carries; a further generalized force of minus
-            that value would be needed otherwise.
+            after it), the generalized force that direction still needs to
+            keep its speed zero, minus the value of its auxiliary equation
+            (Kane's Fr + Fr*) at the declared inputs: zero when they are the
+            forces the auxiliary direction carries, and with the declared
+            force along it at zero, the reaction itself (the number the model
+            with that force left unknown gives). Reactions that enter the
+            motion (friction ``-mu*N``) are eliminated exactly when their
+            auxiliary coefficients are constant, else solved with u' at run
+            time, one linear system per evaluation (:doc:`/guides/model`).
         outputs : dict, optional
             ``{name: expression}`` of quantities to measure (sensor readings,
             point positions) in the coordinates, speeds, inputs, constants and t
@@ -578,7 +590,8 @@ class Model:
             A, b = A.xreplace(zero[0]).xreplace(zero[1]), b.xreplace(zero[0]).xreplace(zero[1])
             aux = _kane_auxiliary(km, q, u, uaux, inputs, reactions, t, zero)
             if any(M.has(r_) or f.has(r_) for r_ in aux[1]):
-                M, f = _eliminate_reactions(M, f, aux, [ui.diff(t) for ui in u], q)
+                M, f, aux = _eliminate_reactions(M, f, aux, [ui.diff(t) for ui in u], q,
+                                                 constrained=bool(nud))
         qdot_map = dict(km._qdot_u_map) if km._qdot_u_map else {}
         return attach_hybrid(cls._finish(
             name=name, method="kane", t=t, q=q, u=u, qdots=qdots, udots=[ui.diff(t) for ui in u],
@@ -984,7 +997,7 @@ class Model:
             out_labels, exprs = _outputs_of(outputs)
             Y_ = conv(sm.Matrix(exprs), "outputs") if exprs else sm.zeros(0, 1)
         # auxiliary equations F reactions + g = 0: u' becomes the symbols UD
-        UD, aux_F_, aux_g_, reactions, aux_of = [], None, None, [], []
+        UD, aux_F_, aux_g_, aux_G_, reactions, aux_of = [], None, None, None, [], []
         if aux is not None:
             UD = [sm.Dummy(f"ud{i}") for i in range(nu)]
             usub = dict(zip(udots, UD))
@@ -1003,6 +1016,9 @@ class Model:
 
             aux_F_ = conv_aux(aux[0], "auxiliary equations (reaction coefficients)")
             aux_g_ = conv_aux(aux[2], "auxiliary equations")
+            if len(aux) > 4:
+                # the reactions' coefficients in the dynamics (coupled solve)
+                aux_G_ = conv_aux(aux[4], "forcing (reaction coefficients)")
             # the reactions solved for, and what names the auxiliary forces:
             # the reactions, or the auxiliary speeds when none is unknown
             reactions, aux_of = list(aux[1]), list(aux[3] if len(aux) > 3 else aux[1])
@@ -1010,7 +1026,8 @@ class Model:
         # ---- constants that no expression uses: a warning naming them ----
         used = set()
         for mat in (Kqd_, Ku_, kf_, M_, f_, A_, b_, fc_, Y_) + (
-                (aux_F_, aux_g_) if aux_F_ is not None else ()):
+                (aux_F_, aux_g_) if aux_F_ is not None else ()) + (
+                (aux_G_,) if aux_G_ is not None else ()):
             for e in mat:
                 used |= e.free_symbols
         if E_ is not None:
@@ -1114,7 +1131,7 @@ class Model:
             energy=E_, state_names=state_names, input_names=input_names,
             constant_names=constant_names, state_labels=state_labels,
             input_labels=input_labels, constant_labels=constant_labels,
-            aux_F=aux_F_, aux_g=aux_g_, ud=UD, reaction_orig=reactions,
+            aux_F=aux_F_, aux_g=aux_g_, aux_G=aux_G_, ud=UD, reaction_orig=reactions,
             auxiliary_names=aux_names, auxiliary_labels=aux_labels, qd=QD,
             y=Y_, output_names=out_names, output_labels=list(out_labels))
         model._check_partition()
@@ -1210,10 +1227,12 @@ def _kane_auxiliary(km, q, u, uaux, inputs, reactions, t, zero):
     auxiliary forces (the reactions).
 
     When none is found (every force along the auxiliary directions is a
-    declared input or constant), there is nothing to solve for: F = -I,
+    declared input or constant), there is nothing to solve for: F = I,
     reactions = [], g = the auxiliary equations, named = the auxiliary
-    speeds, so that the auxiliary forces are the values of the auxiliary
-    equations (Kane's Fr + Fr*) at the declared inputs."""
+    speeds, so that the auxiliary forces are minus the values of the
+    auxiliary equations (Kane's Fr + Fr*) at the declared inputs: the
+    generalized force each auxiliary direction still needs to keep its
+    speed zero (the reaction an unknown force along it would take)."""
     eqs = sm.Matrix(km.auxiliary_eqs).xreplace(zero[0]).xreplace(zero[1])
     na = len(uaux)
     if eqs.shape[0] != na:
@@ -1242,10 +1261,12 @@ def _kane_auxiliary(km, q, u, uaux, inputs, reactions, t, zero):
     if not reactions and where.startswith("found"):
         # no unknown force: every force along the auxiliary directions is a
         # declared input (or constant). The model is well posed; what the
-        # auxiliary equations give is the generalized force each auxiliary
-        # direction needs, their value at the declared inputs: F = -I makes
-        # the runtime's solve of F w + g = 0 return w = g exactly
-        return -sm.eye(na), [], eqs, list(uaux)
+        # auxiliary equations give is the generalized force w each auxiliary
+        # direction still needs, Fr + Fr* + w = 0 at the declared inputs (0
+        # when they are the reactions; the reaction itself when an unknown
+        # force along it is left out): F = I makes the runtime's solve of
+        # F w + g = 0 return w = -g exactly
+        return sm.eye(na), [], eqs, list(uaux)
     if len(reactions) != na:
         raise ModelError(
             f"{na} auxiliary speed(s) {[_sym_name(s) for s in uaux]} but {len(reactions)} "
@@ -1292,16 +1313,23 @@ def _outputs_of(outputs):
     return names, exprs
 
 
-def _eliminate_reactions(M, f, aux, udots, coords):
+def _eliminate_reactions(M, f, aux, udots, coords, constrained=False):
     """Reactions in the real speeds' equations (friction -mu*N on the normal
-    reaction N of an auxiliary speed): M u' = f(N) and the auxiliary
+    reaction N of an auxiliary speed): M u' = f0 + G N and the auxiliary
     equations aux_F N + aux_g(u') = 0 form one linear system in (u', N).
-    N = -aux_F^-1 aux_g(u') is put into f, and its u' terms move into M
-    (which may then be unsymmetric; the runtime solves it by LU).
+    Returns (M, f, aux).
 
-    aux_F must be free of the state, inputs and time (a reaction applied
-    along its auxiliary direction, the usual case), so that its inverse
-    cannot divide by zero at some configuration; it is refused otherwise."""
+    When aux_F is constant and regular and N's share of the motion leaves
+    the matrix multiplying u' free of the speeds (a reaction applied along
+    its auxiliary direction on flat ground, the usual case), N =
+    -aux_F^-1 aux_g(u') is put into f exactly, its u' terms move into M
+    (which may then be unsymmetric; the runtime solves it by LU) and aux is
+    returned as given. Otherwise (coefficients that depend on the
+    configuration, the speeds or the time; a reaction that its own
+    auxiliary direction does not determine) the reactions stay unknowns: f
+    is returned at N = 0 and aux gains G = df/dN, and the runtime solves
+    [M, -G; C, aux_F] [u'; N] = [f0; -g0] (C = d aux_g/du', g0 = aux_g at
+    u' = 0) by pivoted LU at every evaluation (gen_rt_accel_reactions)."""
     F, reactions, g = aux[:3]
     names = [_sym_name(r_) for r_ in reactions]
     inM = [n for r_, n in zip(reactions, names) if M.has(r_)]
@@ -1315,39 +1343,68 @@ def _eliminate_reactions(M, f, aux, udots, coords):
                          f"{', '.join(nonlin)} (for example Abs(N) or a product of "
                          "reactions): eomgen solves the motion and the reactions together "
                          "and needs them to enter linearly")
-    varying = sorted({_sym_name(fn) for e in F
-                      for fn in e.atoms(sm.core.function.AppliedUndef)}
-                     | ({"t"} if any(e.has(me.dynamicsymbols._t) for e in F) else set()))
-    if varying:
+    C = g.jacobian(udots)
+    if any(e.has(*udots) for e in C):
+        raise ModelError(f"the auxiliary equations of the reaction force(s) {', '.join(names)} "
+                         "are not linear in the accelerations; not supported")
+    if any(e.has(ud) for e in G for ud in udots):
+        raise ModelError(f"the coefficients of the reaction force(s) {', '.join(names)} in the "
+                         "forcing depend on the accelerations; not supported")
+    varying = any(fn.args == (me.dynamicsymbols._t,) for e in F
+                  for fn in e.atoms(sm.core.function.AppliedUndef)) \
+        or any(e.has(me.dynamicsymbols._t) for e in F)
+    if _ELIMINATE_CONSTANT and not varying and sm.simplify(F.det()) != 0:
+        sol = -F.LUsolve(g)
+        f_sub = f.xreplace(dict(zip(reactions, sol)))
+        J = f_sub.jacobian(udots)
+        speeds = [fn for e in J for fn in e.atoms(sm.core.function.AppliedUndef)
+                  if fn not in coords]
+        if not any(e.has(ud) for e in J for ud in udots) and not speeds:
+            zero = {ud: 0 for ud in udots}
+            return M - J, f_sub.xreplace(zero), aux
+    if constrained:
         raise ModelError(
-            f"the reaction force(s) {', '.join(names)} appear in the equations of motion "
-            "(for example a friction force proportional to a normal force), and their "
-            f"coefficients in the auxiliary equations depend on {', '.join(varying)}: "
-            "eomgen solves for such reactions only when each is applied along a fixed "
-            "combination of its auxiliary directions (the coefficients are constants)")
-    det = sm.simplify(F.det())
-    if det == 0:
-        raise ModelError(f"the auxiliary equations do not determine the reaction force(s) "
-                         f"{', '.join(names)} (their coefficient matrix is singular)")
-    sol = -F.LUsolve(g)
-    f_sub = f.xreplace(dict(zip(reactions, sol)))
-    J = f_sub.jacobian(udots)
-    if any(e.has(ud) for e in J for ud in udots):
-        raise ModelError("the reaction forces make the equations of motion nonlinear in "
-                         "the accelerations; not supported")
-    speeds = sorted({_sym_name(fn) for e in J for fn in e.atoms(sm.core.function.AppliedUndef)
-                     if fn not in coords})
-    if speeds:
-        raise ModelError(
-            f"the reaction force(s) {', '.join(names)} enter the equations of motion with "
-            f"coefficients that depend on {', '.join(speeds)} (for example "
-            "Coulomb friction -mu*N*sign(v)) while the reactions depend on the "
-            "accelerations: solved together, the matrix multiplying u' would depend on them, "
-            "and eomgen's mass matrix is a function of the configuration only; not "
-            "supported (a reaction that does not depend on the accelerations, such as the "
-            "normal force of a block on flat ground, is)")
-    zero = {ud: 0 for ud in udots}
-    return M - J, f_sub.xreplace(zero)
+            f"the reaction force(s) {', '.join(names)} appear in the equations of motion and "
+            "must be solved together with the accelerations, which eomgen does for models "
+            "without velocity constraints (dependent speeds); not supported here")
+    f0 = f.xreplace({r_: 0 for r_ in reactions})
+    _check_coupled_regular(M, G, C, F, names)
+    return M, f0, tuple(aux[:4]) + (G,)
+
+
+def _check_coupled_regular(M, G, C, H, names):
+    """Refuse reactions that the coupled system [M, -G; C, H] leaves
+    undetermined at every state (singular at three random points: a
+    reaction that neither its auxiliary equations nor the accelerations
+    fix), naming them; a system singular only at some configurations is the
+    run time's GEN_RT_ERR_SINGULAR_REACTIONS."""
+    import numpy as np
+    K = sm.Matrix(sm.BlockMatrix([[M, -G], [C, H]]))
+    atoms = set()
+    for e in K:
+        atoms |= {a for a in e.atoms(sm.core.function.AppliedUndef, sm.Symbol)}
+    rng = np.random.default_rng(0)
+    n = K.shape[0]
+    for _ in range(3):
+        vals = {a: sm.Float(rng.uniform(0.3, 1.3)) for a in atoms}
+        try:
+            Kn = np.array(K.xreplace(vals).evalf(), dtype=float)
+        except (TypeError, ValueError):
+            return                    # not a number at this point: left to the run time
+        if np.all(np.isfinite(Kn)) and np.linalg.matrix_rank(Kn) == n:
+            return
+    raise ModelError(
+        f"the reaction force(s) {', '.join(names)} enter the equations of motion but the "
+        "auxiliary equations together with the motion do not determine them (the coupled "
+        "system in the accelerations and the reactions is singular at random states): apply "
+        "each reaction along its auxiliary direction")
+
+
+# the reactions of a constant, regular auxiliary matrix whose share of the
+# motion leaves M free of the speeds are eliminated symbolically (exact, and
+# M stays a matrix of q alone); False sends every reaction inside the motion
+# through the coupled solve (bench/bench_reactions.py compares the two)
+_ELIMINATE_CONSTANT = True
 
 
 def _xreplace_shared(mat, rule, memo):

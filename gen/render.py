@@ -65,6 +65,8 @@ _KERNEL_DOCS = {
     "hybrid_jacobian": "the gaps' rates g' = W u + w",
     "hybrid_bias": "the gaps' acceleration bias h: g'' = W u' + h",
     "hybrid_reset": "the states after the reset maps",
+    "reaction_terms": "G, C, H, g0 of the coupled solve [M, -G; C, H] [u'; R] = [f; -g0]",
+    "reaction_lin": "Jacobians of the reactions' share of the dynamic and auxiliary residuals",
 }
 
 
@@ -310,6 +312,8 @@ def build_context(plan, iface, timings=None, backend="c"):
         "mass_solve_statements": (ldlt_statements(mass_plan)
                                   if mass_plan and not mass_plan["loop"] else None),
         "fused_rhs": fused,
+        # reactions inside the motion, solved with u' (gen_rt_accel_reactions)
+        "reactions_coupled": getattr(m, "aux_G", None) is not None,
         # q' is u itself (the usual q' = u): the fused right-hand side's q'
         # is finite when the checked state is, so only its u' is checked
         "qdot_is_u": (m.qdot is not None and m.nq == m.nu

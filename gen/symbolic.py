@@ -151,13 +151,25 @@ def linearize_symbolic(model: Model, op_point=None, r_op=None, constants=None, t
         K[:nu, nu:] = -A0.T
         K[nu:, :nu] = A0
         rhs[nu:, 0] = -at(m.a).xreplace(dict(zip(m.qd, qd0)))
-    sol = _solve(K, rhs, "the constrained dynamics [M, -A^T; A, 0]")
+    coupled = getattr(m, "aux_G", None) is not None
+    if coupled:
+        # reactions inside the motion (mv == 0): [M, -G; C, H] [u'; R] = [f; -g0]
+        na = m.na
+        zero_ud = {s_: 0 for s_ in m.ud}
+        K = sm.zeros(nu + na, nu + na)
+        K[:nu, :nu] = M0
+        K[:nu, nu:] = -at(m.aux_G)
+        K[nu:, :nu] = at(m.aux_g.jacobian(list(m.ud)))
+        K[nu:, nu:] = at(m.aux_F)
+        rhs = f0.col_join(-at(m.aux_g.xreplace(zero_ud)))
+    sol = _solve(K, rhs, "the constrained dynamics [M, -A^T; A, 0]" if not coupled else
+                 "the coupled dynamics and reactions [M, -G; C, F]")
     ud0, lam0 = sol[:nu, 0], sol[nu:, 0]
 
     # ---- Jacobians at the point (the Linearizer's f_0..f_4, f_c, f_v, f_a)
     Qd = sm.Matrix([sm.Dummy(f"qd{i}") for i in range(nq)])
     Ud = sm.Matrix([sm.Dummy(f"ud{i}") for i in range(nu)])
-    Lam = sm.Matrix([sm.Dummy(f"lam{i}") for i in range(mv)])
+    Lam = sm.Matrix([sm.Dummy(f"lam{i}") for i in range(mv if not coupled else m.na)])
     rates = dict(zip(Qd, qd0))
     rates.update(zip(Ud, ud0))
     rates.update(zip(Lam, lam0))
@@ -167,6 +179,8 @@ def linearize_symbolic(model: Model, op_point=None, r_op=None, constants=None, t
 
     Kq = jac(m.Kqd * Qd + m.Ku * U + m.kf, Q)
     R = m.M * Ud - m.f - (m.A.T * Lam if mv else sm.zeros(nu, 1))
+    if coupled:
+        R = R - m.aux_G * Lam
     Rq, Ru = jac(R, Q), jac(R, U)
     Rr = jac(R, sm.Matrix(m.r)) if nr else sm.zeros(nu, 0)
 
@@ -207,6 +221,13 @@ def linearize_symbolic(model: Model, op_point=None, r_op=None, constants=None, t
         if m.qd:
             GS = GS - jac(S, Qd) * Dq
         G = G.col_join(GS.row_join(sm.zeros(mv, nr)))
+    if coupled:
+        # the auxiliary residual F R + g(u'): the implicit function theorem
+        # on the coupled system
+        S = m.aux_F * Lam + m.aux_g.xreplace(dict(zip(m.ud, Ud)))
+        Sq, Su = jac(S, Q), jac(S, U)
+        Sr = jac(S, sm.Matrix(m.r)) if nr else sm.zeros(m.na, 0)
+        G = G.col_join((-(Sq * Qm + Su * Uq)).row_join(-Su * Uu).row_join(-Sr))
     Z = _solve(K, G, "the constrained dynamics [M, -A^T; A, 0]")
     # ---- 5. independent rows
     A_lin = sm.zeros(ns, ns)

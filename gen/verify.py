@@ -118,6 +118,14 @@ def _reference(model):
         # auxiliary equations F reactions + g = 0, over the arguments and u'
         ref["auxF"] = sm.lambdify(args + list(m.ud), m.aux_F, modules="numpy")
         ref["auxg"] = sm.lambdify(args + list(m.ud), m.aux_g, modules="numpy")
+    if getattr(m, "aux_G", None) is not None:
+        # reactions inside the motion: M u' = f + G R, and the auxiliary
+        # equations (linear in u') C u' + F R + g0 = 0
+        zero = {s: 0 for s in m.ud}
+        ref["auxG"] = lam(m.aux_G)
+        ref["auxC"] = lam(m.aux_g.jacobian(list(m.ud)))
+        ref["auxg0"] = lam(m.aux_g.xreplace(zero))
+        ref["auxH"] = lam(m.aux_F)
     return ref
 
 
@@ -159,6 +167,16 @@ def _rhs_reference(model, ref, x, r, p, t):
         K[nu:, :nu] = A
         z[nu:] = -np.array(ref["a"](*x, *r, *p, t, *(qd if m.qd else [])),
                             dtype=float).ravel()
+    if "auxG" in ref:
+        # the coupled solve [M, -G; C, H] [u'; R] = [f; -g0] (mv == 0): the
+        # second part returned is the reactions
+        na = m.na
+        K = np.zeros((nu + na, nu + na))
+        K[:nu, :nu] = M
+        K[:nu, nu:] = -_call(ref["auxG"], x, r, p, t)
+        K[nu:, :nu] = _call(ref["auxC"], x, r, p, t)
+        K[nu:, nu:] = _call(ref["auxH"], x, r, p, t)
+        z = np.concatenate([f, -_call(ref["auxg0"], x, r, p, t).ravel()])
     sol = np.linalg.solve(K, z)
     return np.concatenate([qd, sol[:nu]]), sol[nu:]
 
@@ -266,7 +284,9 @@ def verify(model, samples=20, backend="c", real="double", sources=None, seed=0, 
             note("eval_rhs", _rel(sim.rhs(t, x, r=r), xd_ref))
             if m.mv:
                 note("eval_rhs (multipliers)", _rel(sim.multipliers(t, x, r=r), lam_ref))
-            if getattr(m, "na", 0):
+            if getattr(m, "aux_G", None) is not None:
+                note("eval_auxiliary_forces", _rel(sim.auxiliary_forces(t, x, r=r), lam_ref))
+            elif getattr(m, "na", 0):
                 ud = xd_ref[m.nq:]
                 Fa = np.array(ref["auxF"](*x, *r, *p, t, *ud), dtype=float)
                 ga = np.array(ref["auxg"](*x, *r, *p, t, *ud), dtype=float).ravel()

@@ -275,12 +275,12 @@ def cart_pendulum_with_friction(signed=False):
     return km, consts, F, Nf
 
 
-def newton_euler(x_state, F, mc=1.4, mp=0.6, l=0.7, g=9.81, mu=0.25):
+def newton_euler(x_state, F, mc=1.4, mp=0.6, l=0.7, g=9.81, mu=0.25, sg=1.0):
     """By hand: the bob at (x + l sin th, -l cos th) with rod tension T, the
     cart with N and friction mu N against +x; four linear equations in
     x'', th'', T, N."""
     _, th, v, w = x_state
-    s, c, sg = np.sin(th), np.cos(th), 1.0
+    s, c = np.sin(th), np.cos(th)
     # unknowns [x'', th'', T, N]
     K = np.array([
         [mp, mp * l * c, s, 0.0],            # bob x: mp ax = -T sin th
@@ -314,28 +314,56 @@ def test_cart_pendulum_friction_on_varying_normal_force_by_hand():
     assert rel_err(A, An) < 1e-8
 
 
-def test_reaction_with_speed_dependent_coefficient_is_refused():
+def test_coulomb_friction_on_varying_normal_force_solved_with_the_motion_by_hand():
     # Coulomb friction -mu N sign(v) on a normal force that depends on the
-    # accelerations: u'-coefficients would depend on v
+    # accelerations: the matrix multiplying (u', N) depends on v, so u' and N
+    # are solved together at run time (one linear system per evaluation)
     km, consts, F, _ = cart_pendulum_with_friction(signed=True)
-    with pytest.raises(ModelError, match=r"reaction force\(s\) N enter the equations of motion "
-                                         r"with coefficients that depend on v"):
-        gen.Model.from_kanes(km, constants=consts, inputs=[F], name="cartfric")
+    model = gen.Model.from_kanes(km, constants=consts, inputs=[F], name="cartfric_s")
+    assert model.aux_G is not None
+    sim = gen.compile(model)
+    rng = np.random.default_rng(12)
+    for _ in range(20):
+        x = rng.uniform(-2, 2, 4)
+        r = rng.uniform(-5, 5, 1)
+        xdd, thdd, _, n_val = newton_euler(x, r[0], sg=np.sign(x[2]))
+        got = sim.rhs(0.0, x, r=r)
+        np.testing.assert_allclose(got, [x[2], x[3], xdd, thdd], rtol=1e-12, atol=1e-12)
+        assert abs(sim.auxiliary_forces(0.0, x, r=r)[0] - n_val) < 1e-12 * abs(n_val)
+    # the linearization (sliding: sign(v) is locally constant) is the
+    # derivative of that rhs (central differences)
+    x0, r0 = np.array([0.1, 0.8, 0.4, -0.3]), np.array([1.5])
+    A, B = sim.linearize(x0, r=r0)
+    h = 1e-6
+    An = np.column_stack([(sim.rhs(0.0, x0 + h * e, r=r0) - sim.rhs(0.0, x0 - h * e, r=r0)) / (2 * h)
+                          for e in np.eye(4)])
+    Bn = ((sim.rhs(0.0, x0, r=r0 + h) - sim.rhs(0.0, x0, r=r0 - h)) / (2 * h))[:, None]
+    assert rel_err(A, An) < 1e-8 and rel_err(B, Bn) < 1e-8
 
 
-def test_reaction_along_a_turning_direction_in_the_motion_is_refused():
-    # the reaction acts along a direction that turns with q: solving for it
-    # would divide by cos(q), which can vanish
+def test_reaction_along_a_turning_direction_solved_with_the_motion():
+    # the reaction acts along B.y, which turns with q, while its auxiliary
+    # speed is along N.y: the auxiliary equation R cos(q) - g = 0 gives
+    # R = g / cos(q), and the motion u' = -R (sin(q) + 1/3); at cos(q) = 0
+    # the reaction is not determined (the status names it)
     q, u, ua, R = me.dynamicsymbols('q u ua R')
+    g = sm.Symbol('g')
     N = me.ReferenceFrame('N')
     B = N.orientnew('B', 'Axis', [q, N.z])
     P = me.Point('P')
     P.set_vel(N, u * N.x + ua * N.y)
     km = me.KanesMethod(N, q_ind=[q], u_ind=[u], kd_eqs=[q.diff(t) - u], u_auxiliary=[ua])
-    km.kanes_equations([me.Particle('p', P, 1)], [(P, R * B.y - sm.Rational(1, 3) * R * N.x)])
-    with pytest.raises(ModelError, match=r"reaction force\(s\) R appear in the equations of "
-                                         r"motion .* depend on q"):
-        gen.Model.from_kanes(km, name="turning")
+    km.kanes_equations([me.Particle('p', P, 1)],
+                       [(P, R * B.y - sm.Rational(1, 3) * R * N.x - g * N.y)])
+    sim = gen.compile(gen.Model.from_kanes(km, constants={g: 9.81}, name="turning"))
+    for qv in (-1.2, -0.3, 0.0, 0.7, 1.4):
+        x = [qv, 0.4]
+        r_val = 9.81 / np.cos(qv)
+        np.testing.assert_allclose(sim.rhs(0.0, x), [0.4, -r_val * (np.sin(qv) + 1 / 3)],
+                                   rtol=1e-13, atol=1e-13)
+        assert abs(sim.auxiliary_forces(0.0, x)[0] - r_val) < 1e-13 * abs(r_val)
+    with pytest.raises(gen.SingularError, match=r"the reactions R\) \[ERR_SINGULAR_REACTIONS"):
+        sim.rhs(0.0, [np.pi / 2, 0.4])
 
 
 def test_errors_name_the_symbols():
@@ -570,17 +598,23 @@ def test_sympy_test_aux_with_declared_forces():
     X = random_states(20, sim.nx, 33)
     R = np.random.default_rng(33).uniform(-3, 3, (20, 2))
     got = np.array([sim.auxiliary_forces(0.0, x, r=r) for x, r in zip(X, R)])
-    ref = np.array([sympy_auxiliary_values(km, consts, [x], [f1, f2], r)[0]
-                    for x, r in zip(X, R)])
+    # the force each direction still needs: minus sympy's Fr + Fr*
+    ref = -np.array([sympy_auxiliary_values(km, consts, [x], [f1, f2], r)[0]
+                     for x, r in zip(X, R)])
     assert rel_err(got, ref) < 1e-12, rel_err(got, ref)
-    # the force along u4 enters Fr + Fr* as f1 itself: its derivative is one
+    # the force along u4 enters Fr + Fr* as f1 itself: a unit more of it is a
+    # unit less needed
     x, r = X[0], R[0]
     d = sim.auxiliary_forces(0.0, x, r=r + [1.0, 0.0]) - sim.auxiliary_forces(0.0, x, r=r)
-    np.testing.assert_allclose(d, [1.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(d, [-1.0, 0.0], atol=1e-12)
+    # with the declared forces at zero, the forces needed are the reactions
+    # of the model that leaves them unknown
     # where the declared forces are the reactions (from the reaction model),
     # the auxiliary equations hold: zero
     react = gen.compile(gen.Model.from_kanes(km, constants=consts, name="disc_aux"))
     w = react.auxiliary_forces(0.0, x)
+    np.testing.assert_allclose(sim.auxiliary_forces(0.0, x, r=[0.0, 0.0]), w, rtol=1e-12,
+                               atol=1e-12 * np.max(np.abs(w)))
     assert np.max(np.abs(sim.auxiliary_forces(0.0, x, r=w))) < 1e-12 * max(1.0, np.max(np.abs(w)))
 
 
@@ -598,7 +632,7 @@ def test_sympy_test_aux_dep_with_declared_forces():
     for x in random_states(8, sim.nx, 8):
         x = sim.consistent_state(x)
         r = rng.uniform(-3, 3, 3)
-        ref = sympy_auxiliary_values(km, consts, [x], forces, r)[0]
+        ref = -sympy_auxiliary_values(km, consts, [x], forces, r)[0]
         got = sim.auxiliary_forces(0.0, x, r=r)
         assert np.max(np.abs(ref)) > 0.1
         worst = max(worst, rel_err(got, ref))
@@ -608,7 +642,8 @@ def test_sympy_test_aux_dep_with_declared_forces():
 
 def test_sympy_box_on_ground_with_normal_force_declared():
     # sympy's test_box_on_ground with N among the inputs: the motion is
-    # u' = (F - mu N)/m and the auxiliary equation N - m g (sympy's aux_eqs)
+    # u' = (F - mu N)/m and the auxiliary equation N - m g (sympy's aux_eqs);
+    # the force the vertical direction still needs is m g - N
     system, consts, F, Nf = box_on_ground(friction=True)
     model = gen.Model.from_kanes(system, constants=consts, inputs=[F, Nf], name="box_in")
     assert model.na == 1 and model.auxiliary_labels == ["ua"]
@@ -619,8 +654,8 @@ def test_sympy_box_on_ground_with_normal_force_declared():
         r = rng.uniform(0, 30, 2)
         assert abs(sim.rhs(0.0, x, r=r)[1] - (r[0] - mu * r[1]) / m) < 1e-14 * 30
         fa = sim.auxiliary_forces(0.0, x, r=r)
-        assert abs(fa[0] - (r[1] - m * g)) < 1e-14 * 30
-        ref = sympy_auxiliary_values(system.eom_method, consts, [x], [F, Nf], r)[0]
+        assert abs(fa[0] - (m * g - r[1])) < 1e-14 * 30
+        ref = -sympy_auxiliary_values(system.eom_method, consts, [x], [F, Nf], r)[0]
         assert rel_err(fa, ref) < 1e-12
     # with N = m g the auxiliary equation holds and the block slides at F/m - mu g
     r = [5.0, m * g]
@@ -648,7 +683,8 @@ def test_eigen_backend_with_declared_forces_matches_c():
     X = random_states(10, 6, 12)
     R = np.random.default_rng(12).uniform(-3, 3, (10, 2))
     got = np.array([e.auxiliary_forces(0.0, x, r=r) for x, r in zip(X, R)])
-    ref = np.array([sympy_auxiliary_values(km, consts, [x], [f1, f2], r)[0] for x, r in zip(X, R)])
+    ref = -np.array([sympy_auxiliary_values(km, consts, [x], [f1, f2], r)[0]
+                     for x, r in zip(X, R)])
     assert rel_err(got, ref) < 1e-12
     assert rel_err(got, [c.auxiliary_forces(0.0, x, r=r) for x, r in zip(X, R)]) < 1e-13
 

@@ -202,3 +202,34 @@ def test_friction_block_example_and_its_csv(tmp_path):
     assert np.max(np.abs(data[:, 3] - m * g)) < 1e-12 * m * g
     # u(t) = 0.5 + (F/m - mu g) t
     assert np.max(np.abs(data[:, 2] - (0.5 + (4.0 / m - mu * g) * data[:, 0]))) < 1e-12
+
+
+# ------------------------------------------ the cart-pole with friction
+def test_cart_pole_friction_example_and_its_csv(tmp_path):
+    """examples/cart_pole_friction.py (issue 33): Coulomb friction on a
+    normal force that the swinging pendulum changes, solved with u' in C;
+    the script and `eomgen simulate --csv`'s N column against Newton-Euler
+    by hand (the example's own newton_euler, numpy's solve of four equations)."""
+    import sys
+    from pathlib import Path
+
+    import cart_pole_friction as cpf
+    N, err = cpf.main(["--t-end", "1.0"])
+    weight = (cpf.DEFAULTS["m_c"] + cpf.DEFAULTS["m_p"]) * cpf.DEFAULTS["g"]
+    assert err < 1e-12
+    assert N.min() < weight < N.max()          # the pendulum lifts and presses the cart
+    root = Path(__file__).resolve().parent.parent
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(root) + os.pathsep + env.get("PYTHONPATH", "")
+    out = tmp_path / "cart.csv"
+    proc = subprocess.run([sys.executable, "-m", "gen", "simulate",
+                           str(root / "examples" / "cart_pole_friction.py"), "--t-end", "0.3",
+                           "--dt", "0.01", "--x0", "theta=2.5", "--x0", "v=0.8", "--input", "F=1.5",
+                           "--csv", str(out)], capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stderr
+    lines = out.read_text().splitlines()
+    assert lines[0].split(",") == ["t", "x", "theta", "v", "omega", "N"]
+    data = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+    assert data.shape == (31, 6)
+    n_ref = np.array([cpf.newton_euler(row[1:5], 1.5)[3] for row in data])
+    assert np.max(np.abs(data[:, 5] - n_ref)) < 1e-12 * np.max(np.abs(n_ref))

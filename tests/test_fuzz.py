@@ -32,9 +32,18 @@ def _box_friction():
     return gen.Model.from_kanes(system, constants=consts, inputs=[F], name="box_fric")
 
 
+def _bead_coupled():
+    """A bead on a curved track whose normal force N enters the motion with
+    a coefficient in theta and omega: u' and N from one linear system per
+    call (gen_rt_accel_reactions; singular where the track is vertical)."""
+    from test_reactions_coupled import bead_kane
+    km, consts, F, _ = bead_kane("vertical")
+    return gen.Model.from_kanes(km, constants=consts, inputs=[F], name="bead_cpl")
+
+
 MODELS = {"kane": sp.kane_model, "lagrange": sp.lagrange_model,
           "rolling_disc": rolling_disc.model, "four_bar": four_bar.model,
-          "box_friction": _box_friction}
+          "box_friction": _box_friction, "bead_coupled": _bead_coupled}
 
 
 def _build(model, out, cc, flags, extra=()):
@@ -67,7 +76,7 @@ def test_hostile_inputs_under_sanitizers(tmp_path, key):
 
 @pytest.mark.slow
 @pytest.mark.eigen
-@pytest.mark.parametrize("key", ["rolling_disc", "box_friction"])
+@pytest.mark.parametrize("key", ["rolling_disc", "box_friction", "bead_coupled"])
 def test_eigen_backend_under_sanitizers(tmp_path, key):
     """The C++/Eigen backend's library (the C model and runtime for both
     scalar types, the second copy's names prefixed, and the face

@@ -25,6 +25,7 @@
 
 #define gen_rt_accel_kkt GEN_RT_NAME_(accel_kkt)
 #define gen_rt_accel_partitioned GEN_RT_NAME_(accel_partitioned)
+#define gen_rt_accel_reactions GEN_RT_NAME_(accel_reactions)
 #define gen_rt_all_finite GEN_RT_NAME_(all_finite)
 #define gen_rt_c2d_zoh GEN_RT_NAME_(c2d_zoh)
 #define gen_rt_chol_factor GEN_RT_NAME_(chol_factor)
@@ -72,6 +73,8 @@
 #define gen_rt_model_simulate_input GEN_RT_NAME_(model_simulate_input)
 #define gen_rt_model_step_rk4 GEN_RT_NAME_(model_step_rk4)
 #define gen_rt_model_step_sensitivity GEN_RT_NAME_(model_step_sensitivity)
+#define gen_rt_reactions_columns GEN_RT_NAME_(reactions_columns)
+#define gen_rt_reactions_lin GEN_RT_NAME_(reactions_lin)
 #define gen_rt_rk4_step GEN_RT_NAME_(rk4_step)
 #define gen_rt_rodas4_trial GEN_RT_NAME_(rodas4_trial)
 #define gen_rt_simulate_rows GEN_RT_NAME_(simulate_rows)

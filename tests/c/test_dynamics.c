@@ -1,6 +1,8 @@
 /* test_dynamics.c - gen_rt_accel_kkt and gen_rt_accel_partitioned on a
  * planar pendulum in Cartesian coordinates, checked against the exact
- * solution in polar coordinates; a free particle with a full mass matrix. */
+ * solution in polar coordinates; a free particle with a full mass matrix;
+ * gen_rt_accel_reactions and gen_rt_reactions_columns on a system solved by
+ * hand. */
 #include "test_common.h"
 
 #define PM 1.3   /* mass */
@@ -236,8 +238,73 @@ static void test_args(void)
               GEN_RT_ERR_SINGULAR);
 }
 
+/* [M, -G; C, H] [u'; R] = [f; -g0] with M = diag(2, 3), f = (1, -2),
+ * G = (1/2, 1), C = (1, -1), H = 2, g0 = 1/4: by hand R = -17/23,
+ * u' = (29/92, -21/23) */
+static void test_reactions(void)
+{
+    const gen_rt_real M[4] = {2, 0, 0, 3}, f[2] = {1, -2}, G[2] = {0.5, 1};
+    const gen_rt_real C[2] = {1, -1}, H[1] = {2}, g0[1] = {0.25}, Hs[1] = {0}, Gs[2] = {0, 0};
+    gen_rt_real work[GEN_RT_REACTIONS_WORK(2, 1)], ud[2] = {7, 7}, R[1] = {7};
+    gen_rt_real B[6] = {1, 2, -2, 0, -0.25, 0};
+    int iwork[3];
+    CHECK_INT(gen_rt_accel_reactions(2, 1, M, f, G, C, H, g0, work, iwork, ud, R), GEN_RT_OK);
+    CHECK_NEAR(ud[0], 29.0 / 92.0, TOL(1e-15, 1e-6));
+    CHECK_NEAR(ud[1], -21.0 / 23.0, TOL(1e-15, 1e-6));
+    CHECK_NEAR(R[0], -17.0 / 23.0, TOL(1e-15, 1e-6));
+    CHECK_INT(gen_rt_accel_reactions(2, 1, M, f, G, C, H, g0, work, iwork, ud, NULL), GEN_RT_OK);
+    CHECK_NEAR(ud[1], -21.0 / 23.0, TOL(1e-15, 1e-6));
+    /* the same matrix on two columns: [f; -g0] gives [u'; R], and the unit
+     * column e0 scaled by 2 the first column of the inverse times 2 */
+    CHECK_INT(gen_rt_reactions_columns(2, 1, M, G, C, H, 2, work, iwork, B), GEN_RT_OK);
+    CHECK_NEAR(B[0], 29.0 / 92.0, TOL(1e-15, 1e-6));
+    CHECK_NEAR(B[2], -21.0 / 23.0, TOL(1e-15, 1e-6));
+    CHECK_NEAR(B[4], -17.0 / 23.0, TOL(1e-15, 1e-6));
+    /* the second column z = K^-1 (2, 0, 0): 2 z0 - z2/2 = 2, 3 z1 - z2 = 0, z0 - z1 + 2 z2 = 0 */
+    CHECK_NEAR(2 * B[1] - 0.5 * B[5], 2.0, TOL(1e-14, 1e-5));
+    CHECK_NEAR(3 * B[3] - B[5], 0.0, TOL(1e-14, 1e-5));
+    CHECK_NEAR(B[1] - B[3] + 2 * B[5], 0.0, TOL(1e-14, 1e-5));
+    /* the reaction appears nowhere: singular, outputs untouched */
+    ud[0] = ud[1] = R[0] = 7;
+    CHECK_INT(gen_rt_accel_reactions(2, 1, M, f, Gs, C, Hs, g0, work, iwork, ud, R),
+              GEN_RT_ERR_SINGULAR_REACTIONS);
+    CHECK(ud[0] == 7 && ud[1] == 7 && R[0] == 7);
+    CHECK_INT(gen_rt_reactions_columns(2, 1, M, Gs, C, Hs, 2, work, iwork, B),
+              GEN_RT_ERR_SINGULAR_REACTIONS);
+    CHECK_INT(gen_rt_accel_reactions(2, 1, NULL, f, G, C, H, g0, work, iwork, ud, R),
+              GEN_RT_ERR_NULL);
+    CHECK_INT(gen_rt_accel_reactions(2, 0, M, f, G, C, H, g0, work, iwork, ud, R),
+              GEN_RT_ERR_BAD_ARG);
+    CHECK_INT(gen_rt_reactions_columns(2, 1, M, G, C, H, 2, work, iwork, NULL),
+              GEN_RT_ERR_NULL);
+}
+
+/* gen_rt_reactions_lin, one of each: K = [2, -1/2; 1, 2] (det 9/2),
+ * B = [Rq + Xq, Ru + Xu, Rr + Xr; Pq, Pu, Pr] = [4, 0, -1; 4, 1, 0]; the first
+ * row of K^-1 B is (2 B0 + B1 / 2) / (9/2) = (20, 1, -4) / 9 */
+static void test_reactions_lin(void)
+{
+    const gen_rt_real M[1] = {2}, G[1] = {0.5}, C[1] = {1}, H[1] = {2};
+    const gen_rt_real Xq[1] = {1}, Xu[1] = {0}, Xr[1] = {0}, Pq[1] = {4}, Pu[1] = {1}, Pr[1] = {0};
+    gen_rt_real Rq[1] = {3}, Ru[1] = {0}, Rr[1] = {-1}, Mo[1] = {7};
+    gen_rt_real work[GEN_RT_REACTIONS_LIN_WORK(1, 1, 1, 1)];
+    int iwork[2];
+    CHECK_INT(gen_rt_reactions_lin(1, 1, 1, 1, M, G, C, H, Xq, Xu, Xr, Pq, Pu, Pr, work, iwork,
+                                   Rq, Ru, Rr, Mo), GEN_RT_OK);
+    CHECK_NEAR(Rq[0], 20.0 / 9.0, TOL(1e-15, 1e-6));
+    CHECK_NEAR(Ru[0], 1.0 / 9.0, TOL(1e-15, 1e-6));
+    CHECK_NEAR(Rr[0], -4.0 / 9.0, TOL(1e-15, 1e-6));
+    CHECK_NEAR(Mo[0], 1.0, 0.0);
+    CHECK_INT(gen_rt_reactions_lin(1, 1, 1, 1, M, G, C, H, Xq, Xu, NULL, Pq, Pu, Pr, work, iwork,
+                                   Rq, Ru, Rr, Mo), GEN_RT_ERR_NULL);
+    CHECK_INT(gen_rt_reactions_lin(1, 1, 0, 1, M, G, C, H, Xq, Xu, NULL, Pq, Pu, NULL, work, iwork,
+                                   Rq, Ru, NULL, Mo), GEN_RT_OK);
+}
+
 int main(void)
 {
+    test_reactions();
+    test_reactions_lin();
     test_pendulum();
     test_pendulum_horizontal();
     test_free_particle();

@@ -131,6 +131,7 @@ static gen_rt_model pend_model(int accel)
     m.velocity_constraints = p_vc; m.velocity_constraint_matrix = p_vcm;
     m.energy = p_energy; m.lin_terms = p_lin; m.mass_solve = NULL;
     m.na = 0; m.auxiliary = NULL; m.accel_terms = NULL; m.rhs_solve = NULL;
+    m.reaction_solve = NULL;
     m.ny = 0; m.outputs = NULL; m.output_jacobian = NULL; m.hybrid = NULL;
     return m;
 }
@@ -226,6 +227,7 @@ static gen_rt_model osc_model(int accel)
     m.mass_solve = accel == GEN_RT_ACCEL_LDLT ? o_solve : NULL;
     m.na = 0; m.auxiliary = NULL; m.accel_terms = NULL;
     m.rhs_solve = accel == GEN_RT_ACCEL_LDLT ? o_rhs_solve : NULL;
+    m.reaction_solve = NULL;
     m.ny = 0; m.outputs = NULL; m.output_jacobian = NULL; m.hybrid = NULL;
     return m;
 }

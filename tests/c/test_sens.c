@@ -131,6 +131,7 @@ static gen_rt_model pend_model(int accel)
     m.velocity_constraints = p_vc; m.velocity_constraint_matrix = p_vcm;
     m.energy = NULL; m.lin_terms = p_lin; m.mass_solve = NULL;
     m.na = 0; m.auxiliary = NULL; m.accel_terms = NULL; m.rhs_solve = NULL; m.hybrid = NULL;
+    m.reaction_solve = NULL;
     return m;
 }
 
@@ -280,6 +281,7 @@ static gen_rt_model osc_model(int accel)
     m.energy = NULL; m.lin_terms = o_lin;
     m.mass_solve = accel == GEN_RT_ACCEL_LDLT ? o_solve : NULL;
     m.na = 0; m.auxiliary = NULL; m.accel_terms = NULL; m.rhs_solve = NULL; m.hybrid = NULL;
+    m.reaction_solve = NULL;
     return m;
 }
 

@@ -141,6 +141,7 @@ static const gen_rt_model pendulum_kane_model = {
     pendulum_kane_k_accel_terms,
     0, NULL, NULL,
     NULL,
+    NULL,
     NULL
 };
 

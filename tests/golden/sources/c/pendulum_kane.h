@@ -181,7 +181,7 @@ int pendulum_kane_eval_energy(const pendulum_kane_real *q, const pendulum_kane_r
 /* State derivative x' (NX) and, if lam != NULL, the multipliers (MV). */
 int pendulum_kane_eval_rhs(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *dxdt, pendulum_kane_real *lam);
 
-/* Reaction forces along the auxiliary speeds (Kane's u_auxiliary), NA: u' from the right-hand side, then F_aux reactions = -g_aux (GEN_RT_ERR_SINGULAR_REACTIONS when F_aux is singular); with no unknown force along them (all declared inputs) the values of the auxiliary equations at the inputs given; NA == 0: nothing written. */
+/* Reaction forces along the auxiliary speeds (Kane's u_auxiliary), NA: u' from the right-hand side, then F_aux reactions = -g_aux; reactions that enter the motion come with u' from one linear system (GEN_RT_ERR_SINGULAR_REACTIONS when either solve is singular); with no unknown force along them (all declared inputs) the force each direction still needs, -g_aux at the inputs given; NA == 0: nothing written. */
 int pendulum_kane_eval_auxiliary_forces(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *F);
 
 /* Project x onto f_c = 0 (Gauss-Newton, minimum norm) and the velocity constraints; x unchanged on failure. */

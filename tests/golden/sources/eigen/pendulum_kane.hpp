@@ -376,10 +376,11 @@ inline int eval_rhs(detail::Real<S> t, const State<S> &x, const Inputs<S> &r, co
 }
 
 /* Reaction forces along the auxiliary speeds (Kane's u_auxiliary), NA: u' from
- * the right-hand side, then F_aux reactions = -g_aux (ERR_SINGULAR_REACTIONS
- * when F_aux is singular); with no unknown force along them (all declared
- * inputs) the values of the auxiliary equations at the inputs given; NA == 0:
- * nothing written. */
+ * the right-hand side, then F_aux reactions = -g_aux; reactions that enter the
+ * motion come with u' from one linear system (ERR_SINGULAR_REACTIONS when
+ * either solve is singular); with no unknown force along them (all declared
+ * inputs) the force each direction still needs, -g_aux at the inputs given; NA
+ * == 0: nothing written. */
 template <typename S>
 inline int eval_auxiliary_forces(detail::Real<S> t, const State<S> &x, const Inputs<S> &r, const Params<S> &p, AuxiliaryForces<S> &F) noexcept
 {
