@@ -170,7 +170,7 @@ def attach_hybrid(model, hybrid):
                          f"{{name: gen.Impact(...) or gen.Reset(...)}}, got {hybrid!r}")
     if getattr(model, "aux_G", None) is not None and any(
             isinstance(d, Impact) for d in hybrid.values()):
-        names = ", ".join(str(x) for x in model.reaction_orig)
+        names = ", ".join(_label(x) for x in model.reaction_orig)
         raise ModelError(f"model '{model.name}': gen.Impact on a model whose reactions ({names}) "
                          f"enter its motion is not supported (the impulse and the held contact "
                          f"would leave out the coupled reaction solve); gen.Reset is")

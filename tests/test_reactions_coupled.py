@@ -363,3 +363,18 @@ def test_reaction_the_auxiliary_equations_never_determine_is_refused():
     with pytest.raises(gen.ModelError, match=r"reaction force\(s\) R enter the equations of "
                                              r"motion but .* do not determine them"):
         gen.Model.from_kanes(km, constants={g: 9.81}, name="undet")
+
+
+def test_impact_on_a_coupled_reaction_model_is_refused_naming_the_reaction():
+    """gen.Impact's impulse and held contact solve with M and f alone; on a
+    model whose reaction N enters the motion they would drop N's coupling, so
+    the declaration is refused with N named (a Reset, a pure state map, is
+    taken)."""
+    km, consts, F, _ = bead_kane("vertical")
+    th = km.q[0]
+    with pytest.raises(gen.ModelError, match=r"reactions \(N\).*gen.Impact|gen.Impact.*\(N\)"):
+        gen.Model.from_kanes(km, constants=consts, inputs=[F], name="bead_hit",
+                             hybrid={"stop": gen.Impact(1 - th, restitution=0.5)})
+    model = gen.Model.from_kanes(km, constants=consts, inputs=[F], name="bead_reset",
+                                 hybrid={"wrap": gen.Reset(th - 3, {th: th - 6})})
+    assert [d.name for d in model.hybrid] == ["wrap"]
