@@ -5,7 +5,7 @@ casadi backend (gen/backends.py) to render the library and by gen.casadi to
 load it; it imports no stage of the pipeline."""
 from __future__ import annotations
 
-__all__ = ["NAMES", "function_specs", "block_specs", "sizes", "derivative_kernels",
+__all__ = ["NAMES", "function_specs", "sizes", "derivative_kernels",
            "kernel_context"]
 
 #: the functions, in the order of the dict functions() returns
@@ -15,13 +15,6 @@ NAMES = ("rhs", "implicit", "step", "outputs", "constraints")
 def _dense(m, n):
     """CasADi's compressed column storage of a dense m x n matrix."""
     return [m, n, *[j * m for j in range(n + 1)], *[i for _ in range(n) for i in range(m)]]
-
-
-def block_specs(model):
-    """The functions whose Jacobian comes from the runtime's step
-    sensitivities (x and r only): step of a constrained model (its
-    projection has no derivative kernels)."""
-    return [{"name": "step"}] if (model.mc or model.mv) else []
 
 
 def _zero(m, n):
@@ -64,11 +57,11 @@ def function_specs(model):
     jac_jac_<f>, jac_fwd1_<f> and jac_adj1_<f> (their Jacobians: the second
     derivatives CasADi's Hessians are built from). "base", "mode",
     "blocks" (input index, offset among the differentiable inputs,
-    columns), "nodiff" and "fill" (what each output of a second-derivative
+    columns) and "fill" (what each output of a second-derivative
     function holds) are what the template's code needs. step of a
-    constrained model has first derivatives for x and r only (the
-    runtime's step sensitivities: the projection has no derivative
-    kernels)."""
+    constrained model has no derivatives (its projection has no
+    derivative kernels).
+    """
     m = model
     p = m.name
     nx, nr, np_, mc, mv, ny = m.nx, m.nr, m.np, m.mc, m.mv, len(m.output_names)
@@ -92,20 +85,18 @@ def function_specs(model):
         specs.append({"sym": f"{p}_{n}", "kind": n, "name": n,
                       "ins": [(a, _dense(k, 1), d) for a, k, d in ins],
                       "outs": [(a, _dense(k, 1)) for a, k in outs],
-                      "sz_w": 0, "sz_out": sz_out, "nodiff": []})
+                      "sz_w": 0, "sz_out": sz_out})
         nrow = outs[0][1]
-        legacy = n == "step" and bool(mc or mv)
-        # the differentiable inputs, side by side: (input index, offset, columns)
-        offs, blocks, nodiff_in = 0, [], []
+        if n == "step" and (mc or mv):
+            continue        # the projection has no derivative kernels: no derivatives
+        # the inputs, side by side: (input index, offset, columns)
+        offs, blocks = 0, []
         for i, (a, k, _) in enumerate(ins):
-            if legacy and a in ("p", "t", "h"):
-                nodiff_in.append((i, k))
-            else:
-                blocks.append((i, offs, k))
-                offs += nrow * k if legacy else k     # legacy: row-major blocks side by side
+            blocks.append((i, offs, k))
+            offs += k
         nv = offs
         common = {"base": n, "nrow": nrow, "nv": nv, "sz_out": sz_out, "sz_w": sz["sz_w"],
-                  "legacy": legacy, "cmap": _cmap(m, n)}
+                  "cmap": _cmap(m, n)}
         nin, nout = len(ins), len(outs)
         yname = outs[0][0]
         nom = [(a, _dense(k, 1), 0) for a, k, _ in ins] + [(f"out_{a}", _dense(k, 1), 0)
@@ -114,22 +105,19 @@ def function_specs(model):
         # jac_<f>: the blocks jac_<out>_<in> (one output: block i is input i)
         specs.append({**common, "sym": f"jac_{p}_{n}", "kind": f"jac_{n}", "name": f"jac_{n}",
                       "mode": "jac", "ins": nom, "outs": jac_outs,
-                      "nodiff": [i for i, _ in nodiff_in], "blocks": blocks})
+                      "blocks": blocks})
         # fwd1_<f>: J times the forward seeds of the inputs
         fwd_ins = nom + [(f"fwd_{a}", _dense(k, 1), 0) for a, k, _ in ins]
         fwd_outs = [(f"fwd_{yname}", _dense(nrow, 1))]
         specs.append({**common, "sym": f"fwd1_{p}_{n}", "kind": f"fwd1_{n}", "name": f"fwd1_{n}",
                       "mode": "fwd", "ins": fwd_ins, "outs": fwd_outs,
-                      "nodiff": [(nin + nout + i, k) for i, k in nodiff_in],
-                      "blocks": [(nin + nout + i, off, k) for i, off, k in blocks]})
+                                            "blocks": [(nin + nout + i, off, k) for i, off, k in blocks]})
         # adj1_<f>: J^T times the adjoint seed of the output
         adj_ins = nom + [(f"adj_{yname}", _dense(nrow, 1), 0)]
         adj_outs = [(f"adj_{a}", _dense(k, 1)) for a, k, _ in ins]
         specs.append({**common, "sym": f"adj1_{p}_{n}", "kind": f"adj1_{n}", "name": f"adj1_{n}",
                       "mode": "adj", "ins": adj_ins, "outs": adj_outs,
-                      "nodiff": nodiff_in, "blocks": blocks, "seed": nin + nout})
-        if legacy:
-            continue
+                      "blocks": blocks, "seed": nin + nout})
         # second derivatives: the Jacobians of jac_, fwd1_ and adj1_ (their
         # outputs w.r.t. their inputs; CasADi's names), from the tensor
         # T[a][b][c] = d2 out_a / dv_b dv_c or, for adj1_, the Hessian of
@@ -146,7 +134,7 @@ def function_specs(model):
                     fill.append(("zero",))
                     outs2.append((f"jac_{oname}_{a}", _zero(nrow * on, sp_[1])))
         specs.append({**common, "sym": f"jac_jac_{p}_{n}", "kind": f"jac_jac_{n}",
-                      "name": f"jac_jac_{n}", "mode": "jj", "blocks": blocks, "nodiff": [],
+                      "name": f"jac_jac_{n}", "mode": "jj", "blocks": blocks,
                       "ins": nom + [(f"out_{a}", sp_, 0) for a, sp_ in jac_outs],
                       "outs": outs2, "fill": fill})
         fill, outs2 = [], []
@@ -162,7 +150,7 @@ def function_specs(model):
                 fill.append(("zero",))
                 outs2.append((nm, _zero(nrow, sp_[0])))
         specs.append({**common, "sym": f"jac_fwd1_{p}_{n}", "kind": f"jac_fwd1_{n}",
-                      "name": f"jac_fwd1_{n}", "mode": "jf", "blocks": blocks, "nodiff": [],
+                      "name": f"jac_fwd1_{n}", "mode": "jf", "blocks": blocks,
                       "ins": fwd_ins + [(f"out_{a}", sp_, 0) for a, sp_ in fwd_outs],
                       "outs": outs2, "fill": fill, "seeds": [(nin + nout + i, off, k)
                                                               for i, off, k in blocks]})
@@ -180,7 +168,7 @@ def function_specs(model):
                     fill.append(("zero",))
                     outs2.append((nm, _zero(blk[i][1], sp_[0])))
         specs.append({**common, "sym": f"jac_adj1_{p}_{n}", "kind": f"jac_adj1_{n}",
-                      "name": f"jac_adj1_{n}", "mode": "ja", "blocks": blocks, "nodiff": [],
+                      "name": f"jac_adj1_{n}", "mode": "ja", "blocks": blocks,
                       "ins": adj_ins + [(f"out_{a}", sp_, 0) for a, sp_ in adj_outs],
                       "outs": outs2, "fill": fill, "seed": nin + nout})
     return specs

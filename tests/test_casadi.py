@@ -213,25 +213,25 @@ def test_map_threads_same_bits(cart_model):
 def test_bad_use(cart_model, kane_model, monkeypatch):
     F = gc.functions(cart_model)
     x, p = np.array([0.1, 0.5, 0.2, -0.3]), np.array(cart_model.p_values)
-    # the model has an input: a call without r fails (r's default is NaN), never zeros
-    with pytest.raises(RuntimeError, match="cart_pole_rhs"):
-        F["rhs"](x=x, p=p, t=0)
-    with pytest.raises(RuntimeError, match="cart_pole_step"):
-        F["step"](x=x, r=0.3, p=p, t=0)            # no h
     # wrong sizes: CasADi names the input
     with pytest.raises(RuntimeError, match=r"Input 0 \(x\) has mismatching shape"):
         F["rhs"](np.ones(3), 0.7, p, 0)
     with pytest.raises(RuntimeError, match=r"Input 2 \(p\) has mismatching shape"):
         F["rhs"](x, 0.7, p[:2], 0)
-    # no derivative w.r.t. the constants: an error, never a silent zero
-    P = ca.MX.sym("P", p.size)
-    Jp = ca.Function("Jp", [P], [ca.jacobian(F["rhs"](x, 0.7, P, 0), P)])
-    with pytest.raises(RuntimeError):
-        Jp(p)
-    # constrained model: no Jacobian for step (it would need the projection's)
+    # a failing numeric call names what failed (CasADi itself says "Evaluation failed");
+    # the model has an input: a call without r fails (r's default is NaN), never zeros
+    with pytest.raises(gen.InputError, match=r"cart_pole_rhs\(x, r, p, t\): r is missing"):
+        F["rhs"](x=x, p=p, t=0)
+    with pytest.raises(gen.InputError, match=r"cart_pole_step\(x, r, p, t, h\): h is missing"):
+        F["step"].call({"x": x, "r": 0.3, "p": p, "t": 0})
+    with pytest.raises(gen.InputError, match=r"x\[1\] = nan"):
+        F["rhs"](np.array([0.1, np.nan, 0, 0]), 0.7, p, 0)
+    with pytest.raises(gen.SingularError, match=r"cart_pole_rhs.*ERR_SINGULAR.*x = \[ ?0.1"):
+        F["rhs"](x, 0.7, np.r_[0.0, 0.0, p[2:]], 0)          # massless: singular M
+    # constrained model: no derivatives for step (they would need the projection's)
     Fk = gc.functions(kane_model)
     Xk = ca.MX.sym("X", 4)
-    with pytest.raises(RuntimeError):
+    with pytest.raises(RuntimeError, match="pendulum_kane_step"):
         ca.Function("J", [Xk], [ca.jacobian(Fk["step"](Xk, [], kane_model.p_values, 0, 0.01),
                                             Xk)])(np.ones(4))
     with pytest.raises(gen.ModelError, match="gen.casadi"):
