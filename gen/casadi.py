@@ -109,6 +109,11 @@ def _checked_class(ca):
 
 _CHECKED = None
 
+# forward products through jac_<f>: CasADi would otherwise call fwd1_<f> (the
+# whole Jacobian each time) once per seed column; reverse products and the
+# Hessians keep adj1_<f> and jac_adj1_<f> (one adjoint sweep)
+_OPTIONS = {"enable_forward": False}
+
 
 def _explain(F, args, kwargs, err):
     """Raise the gen error of a failed numeric call of F: a missing r, p or
@@ -215,7 +220,7 @@ def functions(model, verbose=False):
     for s in function_specs(model):
         if s["kind"] not in NAMES:
             continue
-        out[s["name"]] = _checked_class(ca)(ca.external(s["sym"], path), path, model)
+        out[s["name"]] = _checked_class(ca)(ca.external(s["sym"], path, _OPTIONS), path, model)
     if not out:
         raise ModelError(f"model {model.name!r} gave no CasADi functions")
     return out

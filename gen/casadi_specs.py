@@ -32,7 +32,8 @@ def sizes(model):
     mr = max(1, nx + m.mc + m.mv, ny)
     nv = nz + nx
     wk = (2 * nw * nw + 3 * nw * nz + 3 * nz * nz + 4 * nw + 2 * nz + mr * nz
-          + 4 * nx * nv + 4 * nx * nv * nv + 2 * nz * nv + 4 * nx + 16)
+          + 4 * nx * nv + 4 * nx * nv * nv + 2 * nz * nv + 4 * nx + 16
+          + 4 * (nz + nw + nw * nw + nw * nz + nz * nv + nx * nv))     # step's adjoint sweep
     return {"nw": nw, "nz": nz, "mr": mr, "nv": nv, "wk": wk,
             "sz_w": mr * nv + nv * nv + mr * nv * nv + nv + wk}
 
