@@ -1,4 +1,4 @@
-"""The model inside CasADi: external functions with their Jacobians.
+"""The model inside CasADi: external functions with exact first and second derivatives.
 
     F = gen.casadi.functions(model)          # {"rhs": casadi.Function, ...}
     xdot = F["rhs"](x, r, p, t)
@@ -17,18 +17,22 @@ the model's, ``<model>_rhs``; the dict's keys are the short names):
     outputs(x, r, p, t) -> y                     <p>_eval_outputs (models with outputs)
     constraints(x, p, t) -> c                    [f_c(q); f_v(q, u)] (constrained models)
 
-The Jacobians, found by CasADi by name (``jac_<model>_<f>``), come from the
-generated derivative kernels (``<p>_jacobian``, ``<p>_linearize_outputs``)
-and the runtime's step sensitivities (``<p>_step_sensitivity``): blocks for
-x (and xdot) and r. The model library has no derivative with respect to the
-constants p, the time t or the step h: a Jacobian block for one of them
-fails when requested (CasADi raises), it is never a silent zero. For a
-constrained model only rhs has a Jacobian (the others' would need
-d f_v/dq and the projection's derivative, which the library lacks).
+The derivatives, found by CasADi by name in the same library: jac_<f>,
+fwd1_<f>, adj1_<f> (every input: x, xdot, r, p, t, h) and their Jacobians
+jac_jac_<f>, jac_fwd1_<f>, jac_adj1_<f> (the second derivatives CasADi
+forms exact Hessians from), computed by kernels generated from the model's
+expressions (gen/casadi_specs.py derivative_kernels: the second-order
+adjoint of the equations x' solves; RK4 differentiated stage by stage for
+step). step of a constrained model has no derivatives (its projection has
+none). The externals are loaded with enable_forward=False: forward products
+through jac_<f> (one Jacobian, not one per seed column).
 
 A missing r, p or h (a call by keyword without it) is NaN, so the call
 fails instead of computing with zeros: pass ``p=model.p_values`` for the
-model's own constants.
+model's own constants. The values are GenFunction (a casadi.Function): a
+numeric call that fails raises gen.InputError (the missing or non-finite
+input) or the library's status as gen.SolverError/SingularError, where
+CasADi says only "Evaluation failed".
 """
 from __future__ import annotations
 
@@ -41,7 +45,7 @@ from .ir import plan as make_plan
 from .model import require_model
 from .render import render
 
-__all__ = ["functions", "library", "function_specs", "NAMES"]
+__all__ = ["functions", "library", "function_specs", "NAMES", "GenFunction"]
 
 from .casadi_specs import NAMES, function_specs  # noqa: E402,F401
 
@@ -108,6 +112,14 @@ def _checked_class(ca):
 
 
 _CHECKED = None
+
+
+def __getattr__(name):
+    # gen.casadi.GenFunction: the class of functions()' values (made once
+    # casadi is imported)
+    if name == "GenFunction":
+        return _checked_class(_casadi())
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 # forward products through jac_<f>: CasADi would otherwise call fwd1_<f> (the
 # whole Jacobian each time) once per seed column; reverse products and the
