@@ -62,10 +62,19 @@ def library(model, verbose=False):
     """The path of the model's CasADi shared library (built into the cache
     on first use): the file ``casadi.external(name, path)`` loads."""
     require_model(model, "gen.casadi")
+    key = model.fingerprint()
+    path = _LIBRARIES.get(key)
+    if path is not None and path.exists():
+        return path        # this process built it (rendering the Hessian kernels is the cost)
     b = get_backend("casadi")
     plan = make_plan(model, lin=b.lin, derivatives=True)
     rendered = render(plan, real="double", backend=b, project=False)
-    return build(rendered, verbose=verbose).path
+    path = _LIBRARIES[key] = build(rendered, verbose=verbose).path
+    return path
+
+
+#: model fingerprint -> library path, for this process
+_LIBRARIES = {}
 
 
 def _checked_class(ca):
