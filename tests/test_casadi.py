@@ -162,7 +162,8 @@ def test_cart_jacobians(cart_model, cart_sim):
 def test_derivatives_against_casadi_finite_differences(cart_model, name):
     """jac_/fwd1_/adj1_ against the same external function with CasADi's own
     central differences (enable_fd, its derivative functions disabled):
-    the FD forward derivative, one seed per column of x and r."""
+    the FD forward derivative, one seed per column of every input (x, xdot,
+    r, p, t, h)."""
     path = str(gc.library(cart_model))
     sym = f"{cart_model.name}_{name}"
     exact = ca.external(sym, path)
@@ -186,6 +187,15 @@ def test_derivatives_against_casadi_finite_differences(cart_model, name):
     for a, b in [(Jx, fd_x), (Jr, fd_r), (fwd.ravel(), fd_x @ v), (adj.ravel(), fd_x.T @ w)]:
         np.testing.assert_allclose(a, b, rtol=1e-6, atol=1e-7)
     assert np.abs(Jx).max() > 0.5                   # not a trivial Jacobian
+    # every other input (p, t, h, xdot): the Jacobian w.r.t. all inputs stacked
+    vals = _inputs({name: exact}, name, cart_model, x, r, p, 0.3, 0.02)
+    _, Jall, _ = _derivs(exact, vals, np.ones(exact.nnz_out(0)))
+    at = dict(zip(exact.name_in(), vals))
+    at.update({f"out_{k}": val for k, val in fd.call(at).items()})
+    at.update({f"fwd_{k}": 0 * ca.DM(val) for k, val in zip(exact.name_in(), vals)})
+    cols = [np.array(f1.call({**at, f"fwd_{n}": e}).popitem()[1].full()).ravel()
+            for i, n in enumerate(exact.name_in()) for e in np.eye(vals[i].size)]
+    np.testing.assert_allclose(Jall, np.column_stack(cols), rtol=1e-6, atol=1e-7)
 
 
 def test_map_threads_same_bits(cart_model):
