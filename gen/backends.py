@@ -377,8 +377,10 @@ class CasadiBackend(CBackend):
     tag = "_casadi"
 
     def context(self, model, kernels):
-        from .casadi_specs import block_specs, function_specs
-        return {"cs_functions": function_specs(model), "cs_blocks": block_specs(model),
+        from .casadi_specs import function_specs, kernel_context, sizes
+        return {"cs_functions": function_specs(model),
+                "cs_kernels": kernel_context(model, lambda s: self.printer(s, "double")),
+                "cs": sizes(model),
                 "ny": len(model.output_names),
                 "sz_nx": max(1, model.nx)}
 

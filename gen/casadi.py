@@ -1,4 +1,4 @@
-"""The model inside CasADi: external functions with their Jacobians.
+"""The model inside CasADi: external functions with exact first and second derivatives.
 
     F = gen.casadi.functions(model)          # {"rhs": casadi.Function, ...}
     xdot = F["rhs"](x, r, p, t)
@@ -17,18 +17,22 @@ the model's, ``<model>_rhs``; the dict's keys are the short names):
     outputs(x, r, p, t) -> y                     <p>_eval_outputs (models with outputs)
     constraints(x, p, t) -> c                    [f_c(q); f_v(q, u)] (constrained models)
 
-The Jacobians, found by CasADi by name (``jac_<model>_<f>``), come from the
-generated derivative kernels (``<p>_jacobian``, ``<p>_linearize_outputs``)
-and the runtime's step sensitivities (``<p>_step_sensitivity``): blocks for
-x (and xdot) and r. The model library has no derivative with respect to the
-constants p, the time t or the step h: a Jacobian block for one of them
-fails when requested (CasADi raises), it is never a silent zero. For a
-constrained model only rhs has a Jacobian (the others' would need
-d f_v/dq and the projection's derivative, which the library lacks).
+The derivatives, found by CasADi by name in the same library: jac_<f>,
+fwd1_<f>, adj1_<f> (every input: x, xdot, r, p, t, h) and their Jacobians
+jac_jac_<f>, jac_fwd1_<f>, jac_adj1_<f> (the second derivatives CasADi
+forms exact Hessians from), computed by kernels generated from the model's
+expressions (gen/casadi_specs.py derivative_kernels: the second-order
+adjoint of the equations x' solves; RK4 differentiated stage by stage for
+step). step of a constrained model has no derivatives (its projection has
+none). The externals are loaded with enable_forward=False: forward products
+through jac_<f> (one Jacobian, not one per seed column).
 
 A missing r, p or h (a call by keyword without it) is NaN, so the call
 fails instead of computing with zeros: pass ``p=model.p_values`` for the
-model's own constants.
+model's own constants. The values are GenFunction (a casadi.Function): a
+numeric call that fails raises gen.InputError (the missing or non-finite
+input) or the library's status as gen.SolverError/SingularError, where
+CasADi says only "Evaluation failed".
 """
 from __future__ import annotations
 
@@ -41,9 +45,9 @@ from .ir import plan as make_plan
 from .model import require_model
 from .render import render
 
-__all__ = ["functions", "library", "function_specs", "block_specs", "NAMES"]
+__all__ = ["functions", "library", "function_specs", "NAMES", "GenFunction"]
 
-from .casadi_specs import NAMES, block_specs, function_specs  # noqa: E402,F401
+from .casadi_specs import NAMES, function_specs  # noqa: E402,F401
 
 def _casadi():
     try:
@@ -58,10 +62,146 @@ def library(model, verbose=False):
     """The path of the model's CasADi shared library (built into the cache
     on first use): the file ``casadi.external(name, path)`` loads."""
     require_model(model, "gen.casadi")
+    key = model.fingerprint()
+    path = _LIBRARIES.get(key)
+    if path is not None and path.exists():
+        return path        # this process built it (rendering the Hessian kernels is the cost)
     b = get_backend("casadi")
     plan = make_plan(model, lin=b.lin, derivatives=True)
     rendered = render(plan, real="double", backend=b, project=False)
-    return build(rendered, verbose=verbose).path
+    path = _LIBRARIES[key] = build(rendered, verbose=verbose).path
+    return path
+
+
+#: model fingerprint -> library path, for this process
+_LIBRARIES = {}
+
+
+def _checked_class(ca):
+    """casadi.Function with a clear error for a failing numeric call (the
+    class is made once casadi is imported)."""
+    global _CHECKED
+    if _CHECKED is not None:
+        return _CHECKED
+
+    class GenFunction(ca.Function):
+        """A casadi.Function of the model's library: everything CasADi's
+        has; a numeric call that fails (CasADi says only "Evaluation
+        failed") raises a gen error that names the input or the status."""
+
+        def __init__(self, f, path, model):
+            ca.Function.__init__(self, f)
+            self._gen = (path, model)
+
+        def __call__(self, *args, **kwargs):
+            try:
+                return ca.Function.__call__(self, *args, **kwargs)
+            except RuntimeError as e:
+                if "Evaluation failed" not in str(e):
+                    raise
+                _explain(self, args, kwargs, e)
+                raise
+
+        def call(self, *args, **kwargs):
+            try:
+                return ca.Function.call(self, *args, **kwargs)
+            except RuntimeError as e:
+                if "Evaluation failed" not in str(e):
+                    raise
+                a = args[0] if args else kwargs.get("arg", ())
+                if isinstance(a, dict):
+                    _explain(self, (), a, e)
+                else:
+                    _explain(self, tuple(a), {}, e)
+                raise
+
+    GenFunction.__module__, GenFunction.__qualname__ = __name__, "GenFunction"
+    _CHECKED = GenFunction
+    return GenFunction
+
+
+_CHECKED = None
+
+
+def __getattr__(name):
+    # gen.casadi.GenFunction: the class of functions()' values (made once
+    # casadi is imported)
+    if name == "GenFunction":
+        return _checked_class(_casadi())
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+# forward products through jac_<f>: CasADi would otherwise call fwd1_<f> (the
+# whole Jacobian each time) once per seed column; reverse products and the
+# Hessians keep adj1_<f> and jac_adj1_<f> (one adjoint sweep)
+_OPTIONS = {"enable_forward": False}
+
+
+def _explain(F, args, kwargs, err):
+    """Raise the gen error of a failed numeric call of F: a missing r, p or
+    h; a NaN or infinite input entry; or the library's status (its name and
+    message, from the same C function called again through ctypes)."""
+    import ctypes
+
+    import numpy as np
+
+    from .abi import status_message, status_name
+    from .bindings import EXCEPTIONS
+    from .errors import InputError, SolverError
+    path, model = F._gen
+    names = F.name_in()
+    try:
+        vals = {}
+        for i, a in enumerate(args):
+            vals[names[i]] = a
+        vals.update(kwargs)
+        arrays = []
+        for i, n in enumerate(names):
+            k = F.nnz_in(i)
+            if n in vals:
+                v = np.asarray(np.asarray(vals[n], dtype=float).ravel(order="F"), dtype=float)
+            else:
+                v = None
+            arrays.append((n, k, v))
+    except (TypeError, ValueError):
+        return                      # symbolic or odd arguments: CasADi's error stands
+    fname = F.name()
+    sig = f"{fname}({', '.join(names)})"
+    for n, k, v in arrays:
+        if v is None and k and n in ("r", "p", "h"):
+            what = {"r": f"the model's inputs {list(model.input_names)}",
+                    "p": "the constants (p=model.p_values for the model's own)",
+                    "h": "the step size"}[n]
+            raise InputError(f"{sig}: {n} is missing ({what}): it defaults to NaN so "
+                             f"that the call fails instead of computing with zeros") from err
+        if v is not None and v.size == k and not np.all(np.isfinite(v)):
+            i = int(np.flatnonzero(~np.isfinite(v))[0])
+            raise InputError(f"{sig}: {n}[{i}] = {v[i]}: the inputs must be finite") from err
+    # the status of the library's function at these inputs
+    lib = ctypes.CDLL(str(path))
+    dp = ctypes.POINTER(ctypes.c_double)
+    fn = getattr(lib, F.name())
+    fn.restype = ctypes.c_int
+    fn.argtypes = [ctypes.POINTER(dp), ctypes.POINTER(dp), ctypes.POINTER(ctypes.c_longlong), dp,
+                   ctypes.c_int]
+    work = getattr(lib, F.name() + "_work")
+    sz = [ctypes.c_longlong() for _ in range(4)]
+    work(*[ctypes.byref(s) for s in sz])
+    keep = [np.ascontiguousarray(v if v is not None else np.zeros(k)) for _, k, v in arrays]
+    outs = [np.zeros(max(1, F.nnz_out(i))) for i in range(F.n_out())]
+    arg = (dp * max(1, sz[0].value))(*[a.ctypes.data_as(dp) for a in keep])
+    res = (dp * max(1, sz[1].value))(*[o.ctypes.data_as(dp) for o in outs])
+    w = np.zeros(max(1, sz[3].value))
+    iw = (ctypes.c_longlong * max(1, sz[2].value))()
+    st = fn(arg, res, iw, w.ctypes.data_as(dp), 0)
+    if st == 0:
+        return
+    name = status_name(st)
+    state = dict(zip(names, keep))
+    at = ", ".join(f"{n} = {np.array2string(v, precision=6, separator=', ')}" if v.size > 1
+                   else f"{n} = {float(v[0]):g}" for n, v in state.items() if n in ("x", "t", "h"))
+    cls = EXCEPTIONS.get(name, SolverError)
+    raise cls(f"{sig} failed with {name}: {status_message(st)} (at {at})", status=st,
+              status_name=name) from err
 
 
 def functions(model, verbose=False):
@@ -101,7 +241,7 @@ def functions(model, verbose=False):
     for s in function_specs(model):
         if s["kind"] not in NAMES:
             continue
-        out[s["name"]] = ca.external(s["sym"], path)
+        out[s["name"]] = _checked_class(ca)(ca.external(s["sym"], path, _OPTIONS), path, model)
     if not out:
         raise ModelError(f"model {model.name!r} gave no CasADi functions")
     return out
