@@ -213,7 +213,7 @@ def _symbol_map(model, kernels):
     return sm_
 
 
-def _fmt_real(v, real):
+def fmt_real(v, real):
     s = repr(float(v))
     if "e" not in s and "." not in s and "inf" not in s and "nan" not in s:
         s += ".0"
@@ -225,7 +225,7 @@ def _field_default(f, real):
     if f.default == "eps16":
         return "16 * GEN_RT_EPS"
     if f.ctype == "real":
-        return _fmt_real(f.default, real)
+        return fmt_real(f.default, real)
     return f"{int(f.default)}L" if f.ctype == "long" else str(int(f.default))
 
 
@@ -282,7 +282,7 @@ def build_context(plan, iface, timings=None, backend="c"):
         "inputs_doc": [(i, n + (f"  ({lab[2:]})" if lab else ""))
                        for i, n in enumerate(m.input_names)
                        for lab in [_comment_label(m.input_names, m.input_labels, i)]],
-        "params_doc": [(i, n, _fmt_real(v, "double")
+        "params_doc": [(i, n, fmt_real(v, "double")
                         + _comment_label(m.constant_names, m.constant_labels, i))
                        for i, (n, v) in enumerate(zip(m.constant_names, m.p_values))],
         "ind_doc": list(enumerate(m.independent_state_names)),
@@ -302,8 +302,8 @@ def build_context(plan, iface, timings=None, backend="c"):
         "jvp_outputs": ([o.name for o in kernels["lin_jvp"].outputs] if "lin_jvp" in kernels
                         else []),
         "has_sqd": "lin_jvp" in kernels and len(kernels["lin_jvp"].args[-1].symbols) > 0,
-        "p_default": [_fmt_real(v, real) for v in m.p_values],
-        "p_default_double": [_fmt_real(v, "double") for v in m.p_values],
+        "p_default": [fmt_real(v, real) for v in m.p_values],
+        "p_default_double": [fmt_real(v, "double") for v in m.p_values],
         "defaults": {f.name: _field_default(f, real) for f in opts.fields},
         # the solver choice (made by the plan) as the runtime's constant, and
         # the arguments of the runtime's work-size macros
@@ -352,8 +352,8 @@ def _hybrid_context(m, real):
         "names": [d.name for d in decls],
         "kind": [d.kind for d in decls],
         "direction": [d.direction for d in decls],
-        "restitution": [_fmt_real(d.restitution, real) for d in decls],
-        "rest_speed": [_fmt_real(d.rest_speed, real) for d in decls],
+        "restitution": [fmt_real(d.restitution, real) for d in decls],
+        "rest_speed": [fmt_real(d.rest_speed, real) for d in decls],
         # the row block of each declaration in hybrid_reset's output (-1: none)
         "reset_index": [resets.index(i) if i in resets else -1 for i in range(len(decls))],
         "has_reset": bool(resets),

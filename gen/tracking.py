@@ -239,7 +239,7 @@ class TrajectoryTracker(LinearFeedback):
         """
         from . import __version__
         from .names import validate_name
-        from .render import _fmt_real, template_env
+        from .render import fmt_real, template_env
         try:
             validate_name(name)
         except Exception as e:
@@ -256,7 +256,7 @@ class TrajectoryTracker(LinearFeedback):
         huge = "HUGE_VALF" if real == "float" else "HUGE_VAL"
 
         def lit(v):
-            return _fmt_real(v, real) if np.isfinite(v) else ("-" if v < 0 else "") + huge
+            return fmt_real(v, real) if np.isfinite(v) else ("-" if v < 0 else "") + huge
 
         def rows(a, per):
             flat = [lit(v) for v in np.asarray(a, dtype=float).ravel()]
@@ -264,8 +264,8 @@ class TrajectoryTracker(LinearFeedback):
 
         ctx = {"name": name, "N": name.upper(), "p": self.sim.name, "P": self.sim.name.upper(),
                "version": __version__, "model": self.sim.name, "real": real,
-               "n_gain": self.n_gain, "t0": _fmt_real(self.t_gain, real),
-               "period": _fmt_real(self.period, real),
+               "n_gain": self.n_gain, "t0": fmt_real(self.t_gain, real),
+               "period": fmt_real(self.period, real),
                "period_text": repr(float(self.period)), "t0_text": repr(float(self.t_gain)),
                "terminal": self.terminal, "ind_names": list(self.sim.independent_state_names),
                "K_rows": rows(K, self.sim.ns), "x_rows": rows(x_op, self.sim.nx),
