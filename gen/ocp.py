@@ -277,12 +277,14 @@ class _Layout:
             self.X.append(take(nx))
             self.R.append(take(nr))
             if node_pt(k):
-                self.node_point[k] = (take(nx), take(mv), take(mc))
+                self.node_point[k] = (take(nx), take(mv), take(0))
             if k < N - 1 and mid_pt:
                 if method == "hermite-simpson":
                     self.XM.append(take(nx))
                     self.RM.append(take(nr))
-                self.mid_point[k] = (take(nx), take(mv), take(mc))
+                # (slopes, multipliers, the midpoint's velocity correction)
+                self.mid_point[k] = (take(nx), take(mv),
+                                     take(mc if method == "hermite-simpson" else 0))
         self.P = take(npf)
         self.T = int(take(1)[0])
         self.n = n
@@ -370,6 +372,23 @@ class OptimalControl:
         if method not in METHODS:
             raise InputError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
         self.method = method
+        if m.mc or m.mv:
+            # the transcription below (velocity and acceleration constraints at
+            # the nodes, a velocity correction at the midpoints) is written and
+            # its derivatives checked, but IPOPT does not yet converge on the
+            # nonminimal pendulum's swing-up: refused until it does
+            raise InputError(
+                f"model {m.name!r} has {m.mc} configuration and {m.mv} velocity constraints: "
+                "gen.OptimalControl does not support constrained models yet; use minimal "
+                "coordinates")
+        if m.mc and method != "hermite-simpson":
+            raise InputError(
+                f"model {m.name!r} has configuration constraints: its transcription keeps "
+                "them at every node with a velocity correction at the midpoints, which only "
+                "method='hermite-simpson' has (got {method!r})".replace("{method!r}", repr(method)))
+        if m.mc and any(m.t in e.free_symbols for e in m.fc):
+            raise InputError(f"model {m.name!r}: time-dependent configuration constraints are "
+                             "not supported by gen.OptimalControl yet")
         if not isinstance(nodes, (int, np.integer)) or nodes < 2:
             raise InputError(f"nodes must be an integer >= 2, got {nodes!r}")
         self.nodes = int(nodes)
@@ -516,19 +535,22 @@ class OptimalControl:
         N = self.nodes
         fams = []
         # the point equations
-        kin_qd = sm.Matrix(qd)
-        if mc:
-            Jc = m.fc.jacobian(q)
-            kin_qd = kin_qd - Jc.T * sm.Matrix(mu)
-        kin = m.Kqd * kin_qd + m.Ku * sm.Matrix(u) + m.kf
+        kin = m.Kqd * sm.Matrix(qd) + m.Ku * sm.Matrix(u) + m.kf
         dyn = m.M * sm.Matrix(ud) - m.f
         if mv:
             dyn = dyn - m.A.T * sm.Matrix(lam)
-        fams.append(_Family("point", q + u + qd + ud + lam + mu + r + pf + [t],
+        fams.append(_Family("point", q + u + qd + ud + lam + r + pf + [t],
                             list(kin) + list(dyn)))
-        if mc + mv:
-            fams.append(_Family("manifold", q + u + pf + [t],
-                                list(m.fc) + list(m.A * sm.Matrix(u) + m.b)))
+        if mv:
+            fams.append(_Family("velocity", q + u + pf + [t], list(m.A * sm.Matrix(u) + m.b)))
+        if mc:
+            fams.append(_Family("holonomic", q + pf + [t], list(m.fc)))
+        if mv and self.method == "hermite-simpson":
+            # the acceleration constraints at the nodes (the node multipliers'
+            # equations; the midpoints' follow from the defects), OpenSim
+            # Moco's form of Hermite-Simpson with kinematic constraints
+            acc = m.A * sm.Matrix(ud) + m.a.xreplace(dict(zip(list(m.qd), qd)))
+            fams.append(_Family("acceleration", q + u + qd + ud + pf + [t], list(acc)))
         nx = nq + nu
         xa = [sm.Dummy(f"xa{i}") for i in range(nx)]
         xb = [sm.Dummy(f"xb{i}") for i in range(nx)]
@@ -550,6 +572,14 @@ class OptimalControl:
             dl = xa + xb + sa + sb + xm + sm_ + [T]
             de = ([xm[i] - (xa[i] + xb[i]) / 2 - h / 8 * (sa[i] - sb[i]) for i in range(nx)]
                   + [xb[i] - xa[i] - h / 6 * (sa[i] + 4 * sm_[i] + sb[i]) for i in range(nx)])
+            if mc:
+                # the velocity correction of the midpoint's coordinates (Posa,
+                # Kuindersma and Tedrake 2016; OpenSim Moco): zero for the DAE
+                Jm = m.fc.jacobian(q).xreplace(dict(zip(q, xm[:nq])))
+                corr = Jm.T * sm.Matrix(mu)
+                for i in range(nq):
+                    de[i] -= corr[i]
+                dl = dl + mu
         fams.append(_Family("defect", dl, de))
         x = q + u
         if self._L is not None:
@@ -578,7 +608,9 @@ class OptimalControl:
         parts = [__version__, m.fingerprint(), self.method, str(self.nodes), repr(self._pf),
                  repr(self._fit_keys), (csrc_dir() / "gen_rt_ocp.c").read_text(),
                  (csrc_dir() / "gen_rt_ocp.h").read_text(),
-                 (templates_dir() / "ocp" / "ocp.c.j2").read_text()]
+                 (templates_dir() / "ocp" / "ocp.c.j2").read_text(),
+                 # the transcription itself (the families are defined here)
+                 open(__file__, encoding="utf-8").read()]
         sub = {s: sm.Symbol(f"_s{i}") for i, s in
                enumerate(list(m.q) + list(m.u) + list(m.r) + list(m.p) + [m.t])}
         for e in [self._L, self._phi, *self._path, *self._instance]:
@@ -722,8 +754,6 @@ class OptimalControl:
                     g.append([(int(s[i]), 1.0)])
                 elif role == "lam":
                     g.append([(int(lam[i]), 1.0)])
-                elif role == "mu":
-                    g.append([(int(mu[i]), 1.0)])
                 elif role == "pf":
                     g.append([(int(lay.P[i]), 1.0)])
                 elif role == "t":
@@ -739,14 +769,22 @@ class OptimalControl:
         for xs, rs, s, lam, mu, c, own in lay.points:
             b = block("point")
             b.add(gather(pt, xs, rs, c, s, lam, mu), row0=con_rows(pt))
-        if "manifold" in fams:
-            mf = fams["manifold"][1]
+        for name, own in (("velocity", []), ("holonomic", [])):
+            if name not in fams:
+                continue
+            mf = fams[name][1]
             for k in range(N):
-                block("manifold").add(gather(mf, [(lay.X[k], 1.0)], [], k / (N - 1)),
-                                      row0=con_rows(mf))
-            for k in range(len(lay.XM)):
-                block("manifold").add(gather(mf, [(lay.XM[k], 1.0)], [], (k + .5) / (N - 1)),
-                                      row0=con_rows(mf))
+                block(name).add(gather(mf, [(lay.X[k], 1.0)], [], k / (N - 1)),
+                                row0=con_rows(mf))
+            for k in range(len(own)):
+                block(name).add(gather(mf, [(own[k], 1.0)], [], (k + .5) / (N - 1)),
+                                row0=con_rows(mf))
+        if "acceleration" in fams:
+            af = fams["acceleration"][1]
+            for k in range(N):
+                block("acceleration").add(
+                    gather(af, [(lay.X[k], 1.0)], [], k / (N - 1), lay.node_point[k][0]),
+                    row0=con_rows(af))
         # defects
         df = fams["defect"][1]
         for k in range(N - 1):
@@ -762,6 +800,9 @@ class OptimalControl:
                     ex[("sm", i)] = [(int(lay.mid_point[k][0][i]), 1.0)]
                 if lay.XM:
                     ex[("xm", i)] = [(int(lay.XM[k][i]), 1.0)]
+            if k in lay.mid_point:
+                for i, g in enumerate(lay.mid_point[k][2]):
+                    ex[("mu", i)] = [(int(g), 1.0)]
             block("defect").add(gather(df, [], [], 0.0, extra=ex), row0=con_rows(df))
         # running cost: the method's quadrature weights (times h, in the kernel)
         if "cost" in fams:
