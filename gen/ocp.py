@@ -1255,7 +1255,8 @@ class OptimalSolution:
         s._S = S
         s._SM = np.array([z[lay.mid_point[k][0]] for k in range(N - 1)]) if lay.mid_point else None
         s._XM = np.array([z[X] for X in lay.XM]) if lay.XM else None
-        s._RM = np.array([z[R] for R in lay.RM]).reshape(-1, ocp.model.nr) if lay.RM else None
+        s._RM = (np.array([z[R] for R in lay.RM]).reshape(len(lay.RM), ocp.model.nr)
+                  if lay.RM else None)
         return s
 
     def __iter__(self):

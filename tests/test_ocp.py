@@ -255,3 +255,60 @@ def test_constrained_models_are_refused_with_a_reason():
     m = sp_.kane_model()
     with pytest.raises(gen.InputError, match="constrained"):
         gen.OptimalControl(m, 11, 1.0, objective=sm.Symbol("m"))
+
+
+# ----------------------------------------------------------- identification
+def test_identification_of_a_damped_pendulum():
+    """g and the damping c of a pendulum from 101 noisy samples of theta
+    (sigma = 0.01): the estimate is within 4 standard errors (Gauss-Newton
+    covariance sigma^2 (J^T J)^-1, J by differences of the simulator) of the
+    truth, and equals SciPy's nonlinear least squares on the simulator to a
+    small fraction of a standard error."""
+    from scipy.optimize import least_squares
+    from sympy.physics import mechanics as me
+    th, om = me.dynamicsymbols("theta omega")
+    c, g, l, m = sm.symbols("c g l m")
+    N = me.ReferenceFrame("N")
+    A = N.orientnew("A", "axis", [th, N.z])
+    A.set_ang_vel(N, om * N.z)
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", l * A.x)
+    P.v2pt_theory(O, N, A)
+    km = me.KanesMethod(N, [th], [om], kd_eqs=[th.diff() - om])
+    km.kanes_equations([me.Particle("p", P, m)], [(P, m * g * N.x), (A, -c * om * N.z)])
+    truth = {m: 1.0, l: 1.0, g: 9.81, c: 0.3}
+    model = gen.Model.from_kanes(km, constants=dict(truth), name="damped_pendulum_ocp")
+    sim = gen.compile(model)
+    T, x0, sigma = 5.0, [1.0, 0.0], 0.01
+    td = np.linspace(0, T, 101)
+    ig, ic = model.p_orig.index(g), model.p_orig.index(c)
+
+    def theta_of(q):
+        p = np.array(model.p_values, float)
+        p[ig], p[ic] = q
+        run = sim.simulate(x0, T, T / 100, p=p, method="dopri5", rtol=1e-12, atol=1e-12)
+        return np.interp(td, run.t, run.x[:, 0])
+    y = theta_of([9.81, 0.3]) + np.random.default_rng(0).normal(0, sigma, td.size)
+    ocp = gen.OptimalControl(model, 201, T, fit={th: (td, y)}, parameters=[g, c],
+                             initial={th: x0[0], om: x0[1]}, bounds={g: (5, 15), c: (0, 2)})
+    sol = ocp.solve(tol=1e-12)
+    assert sol.status == 0, sol.message
+    est = sol.p
+    J = np.zeros((td.size, 2))
+    for j in range(2):
+        e = np.zeros(2)
+        e[j] = 1e-6 * max(1, abs(est[j]))
+        J[:, j] = (theta_of(est + e) - theta_of(est - e)) / (2 * e[j])
+    se = np.sqrt(np.diag(sigma ** 2 * np.linalg.inv(J.T @ J)))
+    assert np.all(np.abs(est - [9.81, 0.3]) < 4 * se), (est, se)
+    ls = least_squares(lambda q: theta_of(q) - y, [9.0, 0.5], xtol=1e-14, ftol=1e-14)
+    assert np.all(np.abs(est - ls.x) < 0.01 * se), (est, ls.x, se)
+    # the misfit is the objective: sum of squared residuals at the estimate
+    assert sol.objective == pytest.approx(np.sum((theta_of(est) - y) ** 2), rel=1e-4)
+    # new data, no rebuild
+    lib = ocp._lib_path
+    ocp.fit = {th: (td, theta_of([9.81, 0.3]))}
+    exact = ocp.solve(tol=1e-12)
+    assert ocp._lib_path == lib
+    np.testing.assert_allclose(exact.p, [9.81, 0.3], rtol=1e-6)
