@@ -358,6 +358,18 @@ class OptimalControl:
     ``bounds``, ``initial``, ``final``, ``constants``, ``duration`` (within
     fixed or free), ``path_bounds`` and ``fit`` are attributes that can be
     changed between solves without rebuilding the C.
+
+    Raises
+    ------
+    gen.InputError
+        A non-differentiable objective, a symbol that is not the model's, a
+        key of bounds that is not a state, input or parameter to identify, a
+        bad duration or method (before anything is built).
+    gen.ModelError
+        When ``model`` is not a gen.Model, or has constraints or auxiliary
+        speeds (not supported yet).
+    gen.BuildError
+        When the compiler fails.
     """
 
     def __init__(self, model, nodes, duration, objective=None, terminal_cost=None,
@@ -1114,6 +1126,15 @@ class OptimalControl:
         Returns
         -------
         gen.OptimalSolution
+            IPOPT's outcome is ``status``/``message``; a failed solve is
+            returned, not raised.
+
+        Raises
+        ------
+        gen.MissingDependencyError
+            When cyipopt is not installed (``pip install eomgen[ocp]``).
+        gen.InputError
+            A bad option, guess, bound, boundary value or fit data.
         """
         cyipopt = _cyipopt()
         if hessian not in ("exact", "limited-memory"):
@@ -1193,9 +1214,21 @@ class OptimalControl:
         return self._sim
 
     def evaluate(self, z, what):
-        """The problem's functions at the unknowns z (what: "objective",
-        "gradient", "constraints", "jacobian" (values at jacobian_structure),
-        "hessian" (with multipliers ones, sigma 1)): for checks."""
+        """The problem's functions, in C, at the unknowns z (after a solve
+        or its assembly): for checks.
+
+        Parameters
+        ----------
+        z : ndarray
+            The vector of unknowns.
+        what : str
+            "objective", "gradient", "constraints", "jacobian" (the nonzeros)
+            or "hessian" (the lower triangle's nonzeros, multipliers 1, objective factor 1).
+
+        Returns
+        -------
+        ndarray
+        """
         codes = {"objective": (0, 1), "gradient": (1, self._lay.n),
                  "constraints": (2, self._m_rows), "jacobian": (3, len(self._jrows))}
         if what == "hessian":
@@ -1296,7 +1329,16 @@ class OptimalSolution:
 
     def input(self, t):
         """The inputs at times t: linear between nodes; quadratic through
-        the node and midpoint inputs for Hermite-Simpson."""
+        the node and midpoint inputs for Hermite-Simpson.
+
+        Parameters
+        ----------
+        t : float or array_like
+
+        Returns
+        -------
+        ndarray, shape (..., nr)
+        """
         t, k, tau, h = self._locate(t)
         u = (tau / h)[..., None]
         R = self.r
@@ -1307,8 +1349,22 @@ class OptimalSolution:
 
     def replay(self, dt=None, method="dopri5", **options):
         """The optimal inputs replayed through the model's simulator
-        (``sim.simulate``, the inputs from :meth:`input` at every stage):
-        a gen.Solution whose final state measures the transcription's error."""
+        (``sim.simulate``, the inputs from :meth:`input` at every stage).
+
+        Parameters
+        ----------
+        dt : float, optional
+            The output interval (default: the node spacing).
+        method : str, optional
+            The simulator's method (default "dopri5").
+        **options
+            More ``simulate`` keywords (``rtol``, ``atol``).
+
+        Returns
+        -------
+        gen.Solution
+            Its final state against ``x[-1]`` measures the transcription's error.
+        """
         sim = self._ocp.simulator
         x0 = self.x[0]
         p = self._ocp._pvec()
@@ -1319,7 +1375,19 @@ class OptimalSolution:
                             p=p, method=method, input_period=0, **options)
 
     def tracker(self, Q, R, period):
-        """A time-varying LQR along this trajectory (gen.tracking)."""
+        """A time-varying LQR along this trajectory (gen.tracking).
+
+        Parameters
+        ----------
+        Q, R : array_like
+            State and input weights.
+        period : float
+            The sampling period of the discrete Riccati recursion.
+
+        Returns
+        -------
+        gen.tracking.TrajectoryTracker
+        """
         from .tracking import TrajectoryTracker
         return TrajectoryTracker(self._ocp.simulator, self.t, self.x, self.r, Q, R, period,
                                  p=self._ocp._pvec())
