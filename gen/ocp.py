@@ -264,7 +264,7 @@ class _Layout:
 
         def take(k):
             nonlocal n
-            a = np.arange(n, n + k)
+            a = list(range(n, n + k))      # plain ints: assembly indexes them often
             n += k
             return a
         node_pt = {"backward-euler": lambda k: k > 0, "midpoint": lambda k: False,
