@@ -312,3 +312,19 @@ def test_identification_of_a_damped_pendulum():
     exact = ocp.solve(tol=1e-12)
     assert ocp._lib_path == lib
     np.testing.assert_allclose(exact.p, [9.81, 0.3], rtol=1e-6)
+
+
+def test_generated_c_is_strict_clean(cart, tmp_path):
+    """The generated kernels and the runtime's node loop compile clean with
+    the strict flags (-std=c99 -Wall -Wextra -Werror -pedantic)."""
+    import subprocess
+    from gen.backends import STRICT_FLAGS, c_compiler
+    _, s, model = cart
+    o = swing_up(model, s, 11, "hermite-simpson")
+    src = Path(o._lib_path).parent / "src"
+    files = sorted(p.name for p in src.glob("*.c"))
+    assert "gen_rt_ocp.c" in files and len(files) == 2
+    for f in files:
+        proc = subprocess.run([c_compiler(), *STRICT_FLAGS, "-c", f, "-o", str(tmp_path / "x.o")],
+                              cwd=src, capture_output=True, text=True)
+        assert proc.returncode == 0 and not proc.stderr.strip(), proc.stderr
