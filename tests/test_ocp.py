@@ -59,7 +59,9 @@ def _dense(o, z, vals, rows, cols, shape):
     return sp.coo_matrix((vals, (rows, cols)), shape).toarray()
 
 
-@pytest.mark.parametrize("method", gen.ocp.METHODS)
+@pytest.mark.parametrize("method", ["backward-euler", "hermite-simpson",
+                                    pytest.param("midpoint", marks=pytest.mark.slow),
+                                    pytest.param("trapezoidal", marks=pytest.mark.slow)])
 def test_derivatives_against_finite_differences(cart, method):
     """Jacobian, gradient and the exact Hessian of the Lagrangian (the
     generated kernels, scattered by the C loop) against central differences
