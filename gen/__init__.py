@@ -9,6 +9,7 @@ verified C simulators.
     res = sim.ensemble(x0, 5.0, 1e-3, p=gen.Sampler(1).draw(10**5, m=("uniform", 0.8, 1.2)))
     A, B = gen.linearize_symbolic(model, {q1: L, q2: 0})   # sympy matrices
     gen.export_fmu(model, "pend.fmu", fmi_version="3.0")   # FMI 2.0/3.0, ME and CS
+    sol = gen.OptimalControl(model, 101, 2.0, objective=F**2, ...).solve()   # IPOPT
 """
 from ._version import __version__
 
@@ -27,12 +28,13 @@ from .tracking import TrajectoryTracker  # noqa: E402
 from .fmu import export_fmu  # noqa: E402
 from .ensemble import At, EnsembleResult, Final, Max, Mean, Min, Sampler  # noqa: E402
 from .hybrid import Impact, Reset  # noqa: E402
+from .ocp import OptimalControl, OptimalSolution  # noqa: E402
 
 __all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "EomgenError",
            "ModelError", "BuildError", "InputError", "MissingDependencyError",
            "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "UnusedInputWarning", "MasslessSpeedWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
            "TrajectoryTracker", "export_fmu", "Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult",
-           "Impact", "Reset", "__version__"]
+           "Impact", "Reset", "OptimalControl", "OptimalSolution", "__version__"]
 
 
 def __getattr__(name):

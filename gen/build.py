@@ -37,7 +37,7 @@ from .backends import (C_FLAGS, C_LIN_FLAGS, RUNTIME_FLAGS, RUNTIME_HEADERS, RUN
 from .cache import cache_dir, cache_error, new_build_dir, publish, write_marker
 from .errors import BuildError
 
-__all__ = ["build", "build_derivatives", "Built", "compile_units", "link_library"]
+__all__ = ["build", "build_derivatives", "build_plain", "Built", "compile_units", "link_library"]
 
 
 @dataclass
@@ -321,3 +321,41 @@ def compile_units(src: Path, objdir: Path, units, backend, name):
             if all((rt_folder / Path(o).name).is_file() for o in runtime):
                 runtime = [rt_folder / Path(o).name for o in runtime]
     return results[:n_own], runtime
+
+
+def build_plain(modname, render, sources=None):
+    """A plain C library built from files that need none of a model
+    backend's glue (gen.ocp): render() -> (files {name: text}, the C files
+    to compile), called only when the cache (keyed by modname, which the
+    caller derives from the content) has no such library. Returns (the cache
+    folder, the library's path); the rendered files are kept in <folder>/src."""
+    _check_platform()
+    root = cache_dir()
+    final = root / modname
+    libfile = f"lib{modname}.so"
+    lib = _find_library(final, libfile)
+    if lib is not None:
+        return final, lib
+    files, csources = render()
+    tmp = new_build_dir(root, modname)
+    try:
+        src = tmp / "src"
+        try:
+            src.mkdir()
+            for fname, text in files.items():
+                (src / fname).write_text(text)
+            (tmp / "obj").mkdir()
+        except OSError as e:
+            raise cache_error(e, root, "write the sources") from None
+        cc = c_compiler()
+        flags = [*C_FLAGS, "-fPIC"]
+        objs = [_cc_object(cc, src, f, tmp / "obj" / (Path(f).stem + ".o"), flags)
+                for f in csources]
+        so = link_library(objs, tmp / libfile)
+        _store(tmp, final, so, src, keep_objects=False)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    lib = _find_library(final, libfile)
+    if lib is None:
+        raise BuildError(f"the built library {modname} is missing from {final}")
+    return final, lib

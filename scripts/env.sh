@@ -13,11 +13,14 @@ _eomgen_env() {
     if [ ! -x "$venv/bin/python" ]; then
         python3 -m venv "$venv" || { echo "env.sh: could not create the venv $venv" >&2; return 1; }
     fi
-    # quiet, idempotent install (editable: the checkout is the package)
-    if ! "$venv/bin/python" -c "import gen, scipy, pytest, xdist, sympy, cffi, jinja2, matplotlib, hypothesis, fmpy, distributed, tqdm, pyarrow, pandas, sphinx, sphinx_gallery, myst_parser, furo" 2>/dev/null \
+    # quiet, idempotent install (editable: the checkout is the package); opty
+    # (the peer of gen.OptimalControl) after cyipopt-wheels, without its
+    # dependencies: its cyipopt requirement is a source build that needs IPOPT
+    if ! "$venv/bin/python" -c "import gen, cyipopt, opty, scipy, pytest, xdist, sympy, cffi, jinja2, matplotlib, hypothesis, fmpy, distributed, tqdm, pyarrow, pandas, sphinx, sphinx_gallery, myst_parser, furo" 2>/dev/null \
        || [ "$root/pyproject.toml" -nt "$venv/.eomgen-installed" ]; then
         { "$venv/bin/python" -m pip install -q --upgrade pip \
           && "$venv/bin/python" -m pip install -q -e "$root[test,docs]" \
+          && "$venv/bin/python" -m pip install -q --no-deps "opty==1.5.0" \
           && touch "$venv/.eomgen-installed"; } \
           || { echo "env.sh: installing eomgen into $venv failed" >&2; return 1; }
     fi

@@ -1,0 +1,332 @@
+"""gen.OptimalControl (issue 34): direct collocation on the implicit
+equations, generated kernels, IPOPT through cyipopt.
+
+References: central finite differences of the C's own values (Jacobian,
+gradient, exact Hessian of the Lagrangian), IPOPT's limited-memory
+solution, opty 1.5 on the same problem (slow tier), and the model's
+simulator replaying the optimal inputs (the order of Hermite-Simpson).
+"""
+import importlib.util
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import sympy as sm
+
+import gen
+
+try:
+    import cyipopt  # noqa: F401
+except ImportError:  # pragma: no cover - the CI installs it (the test extra)
+    cyipopt = None
+
+if cyipopt is None:
+    if os.environ.get("CI") == "true":
+        pytest.fail("cyipopt is required under CI=true (pip install eomgen[ocp])", pytrace=False)
+    pytestmark = pytest.mark.skip(reason="cyipopt not installed (pip install eomgen[ocp])")
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+PAR = {"mc": 1.0, "mp": 0.1, "l": 0.5, "g": 9.81}
+
+
+def _cart_pole():
+    spec = importlib.util.spec_from_file_location("cart_pole_for_ocp", EXAMPLES / "cart_pole.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    km, s = mod.derive()
+    model = gen.Model.from_kanes(km, constants={s[k]: v for k, v in PAR.items()},
+                                 inputs=[s["F"]], name="cart_pole_ocp")
+    return km, s, model
+
+
+@pytest.fixture(scope="module")
+def cart():
+    return _cart_pole()
+
+
+def swing_up(model, s, nodes, method, duration=2.0, fmax=20.0):
+    x, th, v, om, F = (s[k] for k in ("x", "theta", "v", "omega", "F"))
+    return gen.OptimalControl(model, nodes, duration, objective=F**2, method=method,
+                              bounds={F: (-fmax, fmax), x: (-1.5, 1.5)},
+                              initial={x: 0, th: sm.pi, v: 0, om: 0},
+                              final={x: 0, th: 0, v: 0, om: 0})
+
+
+def _dense(o, z, vals, rows, cols, shape):
+    return sp.coo_matrix((vals, (rows, cols)), shape).toarray()
+
+
+@pytest.mark.parametrize("method", ["backward-euler", "hermite-simpson",
+                                    pytest.param("midpoint", marks=pytest.mark.slow),
+                                    pytest.param("trapezoidal", marks=pytest.mark.slow)])
+def test_derivatives_against_finite_differences(cart, method):
+    """Jacobian, gradient and the exact Hessian of the Lagrangian (the
+    generated kernels, scattered by the C loop) against central differences
+    of the C's values, with a free final time, a parameter to identify, a
+    terminal cost, a path constraint and a time-dependent cost."""
+    _, s, model = cart
+    x, th, v, om, F = (s[k] for k in ("x", "theta", "v", "omega", "F"))
+    t = sm.Symbol("t")
+    o = gen.OptimalControl(model, 5, (1.0, 3.0), objective=F**2 * sm.cos(th) + x**2 * t,
+                           terminal_cost=v * om + sm.sin(th), method=method,
+                           parameters=[s["mp"]], path=[(x * v + F, -5, 5)],
+                           constraints=[th.func(0) - sm.pi], initial={x: 0})
+    o._assemble()
+    o._p = o._pvec()
+    rng = np.random.default_rng(1)
+    n, m = o._lay.n, o._m_rows
+    z = rng.uniform(0.5, 1.5, n)
+    J = _dense(o, z, o.evaluate(z, "jacobian"), o._jrows, o._jcols, (m, n))
+    g = o.evaluate(z, "gradient")
+    lam = rng.normal(size=m)
+    H = _dense(o, z, o._call(4, z, len(o._hrows), lam, 0.7), o._hrows, o._hcols, (n, n))
+    H = H + np.tril(H, -1).T
+    eps = 1e-6
+    Jfd, gfd, Hfd = np.zeros((m, n)), np.zeros(n), np.zeros((n, n))
+
+    def lagrangian_gradient(zz):
+        Jz = _dense(o, zz, o.evaluate(zz, "jacobian"), o._jrows, o._jcols, (m, n))
+        return 0.7 * o.evaluate(zz, "gradient") + Jz.T @ lam
+    for j in range(n):
+        e = np.zeros(n)
+        e[j] = eps
+        Jfd[:, j] = (o.evaluate(z + e, "constraints") - o.evaluate(z - e, "constraints")) / (2 * eps)
+        gfd[j] = (o.evaluate(z + e, "objective")[0] - o.evaluate(z - e, "objective")[0]) / (2 * eps)
+        Hfd[:, j] = (lagrangian_gradient(z + e) - lagrangian_gradient(z - e)) / (2 * eps)
+    assert np.abs(J - Jfd).max() < 1e-7 * max(1, np.abs(Jfd).max())
+    assert np.abs(g - gfd).max() < 1e-7 * max(1, np.abs(gfd).max())
+    assert np.abs(H - Hfd).max() < 1e-6 * max(1, np.abs(Hfd).max())
+    assert np.abs(Hfd).max() > 0.1          # a Hessian that is there
+
+
+def test_swing_up_exact_and_limited_memory_agree(cart):
+    """The same optimum from the exact Hessian and from L-BFGS; the
+    solution meets its bounds and boundary values; fewer iterations with the
+    exact Hessian."""
+    _, s, model = cart
+    o = swing_up(model, s, 51, "backward-euler")
+    a = o.solve(tol=1e-10)
+    b = o.solve(hessian="limited-memory", tol=1e-10)
+    assert a.status == 0 and b.status == 0, (a.message, b.message)
+    assert a.objective == pytest.approx(b.objective, rel=1e-7)
+    assert a.iterations < b.iterations
+    np.testing.assert_allclose(a.x[0], [0, np.pi, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(a.x[-1], [0, 0, 0, 0], atol=1e-12)
+    assert np.abs(a.r).max() <= 20 + 1e-6 and np.abs(a.x[:, 0]).max() <= 1.5 + 1e-6
+    # backward Euler's own quadrature of the cost, from the returned inputs
+    h = a.t[1] - a.t[0]
+    assert a.objective == pytest.approx(h * np.sum(a.r[1:, 0] ** 2), rel=1e-12)
+    # changing a bound needs no rebuild: a tighter force bound costs more
+    lib = o._lib_path
+    o.bounds = {s["F"]: (-15, 15), s["x"]: (-1.5, 1.5)}
+    c = o.solve(a, tol=1e-10)
+    assert o._lib_path == lib and c.status == 0
+    assert c.objective > a.objective and np.abs(c.r).max() <= 15 + 1e-6
+
+
+def _replay_error(sol):
+    rep = sol.replay(dt=sol.t[-1] / 200, method="dopri5", rtol=1e-12, atol=1e-12)
+    return np.abs(rep.x[-1] - sol.x[-1]).max()
+
+
+@pytest.mark.slow
+def test_hermite_simpson_order(cart):
+    """Hermite-Simpson with 101 nodes replays at least as accurately as
+    midpoint with 401 (the optimal inputs, interpolated as each method
+    does, through the simulator at tight tolerance)."""
+    _, s, model = cart
+    hs = swing_up(model, s, 101, "hermite-simpson").solve(tol=1e-10)
+    mp = swing_up(model, s, 401, "midpoint").solve(tol=1e-10)
+    assert hs.status == 0 and mp.status == 0
+    e_hs, e_mp = _replay_error(hs), _replay_error(mp)
+    assert e_hs <= e_mp, (e_hs, e_mp)
+    # and the objectives converge to the same value
+    assert hs.objective == pytest.approx(mp.objective, rel=1e-3)
+
+
+def test_interpolant_matches_nodes(cart):
+    _, s, model = cart
+    for method in gen.ocp.METHODS:
+        sol = swing_up(model, s, 21, method).solve(tol=1e-9)
+        assert sol.status == 0, (method, sol.message)
+        np.testing.assert_allclose(sol(sol.t), sol.x, atol=1e-9, err_msg=method)
+        np.testing.assert_allclose(sol.input(sol.t), sol.r, atol=1e-9, err_msg=method)
+
+
+def _opty(km, s, N, method):
+    from opty.direct_collocation import Problem
+    x, th, v, om, F = (s[k] for k in ("x", "theta", "v", "omega", "F"))
+    states = (x, th, v, om)
+    eom = km.mass_matrix_full * sm.Matrix([q.diff() for q in states]) - km.forcing_full
+    T = 2.0
+    h = T / (N - 1)
+
+    def obj(f):
+        Fv = f[4 * N:5 * N]
+        if method == "backward euler":
+            return h * np.sum(Fv[1:] ** 2)
+        return h * np.sum(((Fv[:-1] + Fv[1:]) / 2) ** 2)
+
+    def grad(f):
+        g = np.zeros_like(f)
+        Fv = f[4 * N:5 * N]
+        if method == "backward euler":
+            g[4 * N + 1:5 * N] = 2 * h * Fv[1:]
+        else:
+            a = (Fv[:-1] + Fv[1:]) / 2
+            g[4 * N:5 * N - 1] += h * a
+            g[4 * N + 1:5 * N] += h * a
+        return g
+    inst = (x.func(0.0), th.func(0.0) - np.pi, v.func(0.0), om.func(0.0),
+            x.func(T), th.func(T), v.func(T), om.func(T))
+    prob = Problem(obj, grad, eom, states, N, h,
+                   known_parameter_map={s[k]: val for k, val in PAR.items()},
+                   instance_constraints=inst, bounds={F: (-20.0, 20.0), x: (-1.5, 1.5)},
+                   integration_method=method)
+    prob.add_option("print_level", 0)
+    prob.add_option("tol", 1e-10)
+    g0 = np.zeros(5 * N)
+    g0[N:2 * N] = np.linspace(np.pi, 0, N)
+    _, info = prob.solve(g0)
+    return info
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("method", ["backward-euler", "midpoint"])
+def test_same_optimum_as_opty(cart, method):
+    """Cart-pole swing-up, N = 201: our objective equals opty 1.5's, its
+    transcription (backward Euler, midpoint) and quadrature the same."""
+    try:
+        import opty  # noqa: F401
+    except ImportError:
+        if os.environ.get("CI") == "true":
+            pytest.fail("opty is required under CI=true (scripts/env.sh installs it)")
+        pytest.skip("opty not installed (pip install --no-deps opty==1.5.0)")
+    km, s, model = cart
+    ours = swing_up(model, s, 201, method).solve(tol=1e-10)
+    info = _opty(km, s, 201, method.replace("-", " "))
+    assert ours.status == 0 and info["status"] in (0, 1)
+    assert ours.objective == pytest.approx(info["obj_val"], rel=1e-6)
+
+
+# ----------------------------------------------------------- bad input
+def test_bad_input_is_refused_before_building(cart, monkeypatch):
+    _, s, model = cart
+    x, th, F = s["x"], s["theta"], s["F"]
+
+    def no_build(*a, **k):
+        raise AssertionError("built despite the error")
+    monkeypatch.setattr(gen.build, "build_plain", no_build)
+    for bad in (sm.Abs(F), sm.Max(F, 0), sm.Piecewise((F, x > 0), (0, True))):
+        with pytest.raises(gen.InputError, match="not differentiable"):
+            gen.OptimalControl(model, 11, 1.0, objective=bad)
+    zeta = sm.Symbol("zeta")
+    with pytest.raises(gen.InputError, match="zeta"):
+        gen.OptimalControl(model, 11, 1.0, objective=F**2, bounds={zeta: (0, 1)})
+    with pytest.raises(gen.InputError, match="m_p"):
+        gen.OptimalControl(model, 11, 1.0, objective=F**2, bounds={s["mp"]: (0, 1)})
+    with pytest.raises(gen.InputError, match="zeta"):
+        gen.OptimalControl(model, 11, 1.0, objective=F**2 + zeta)
+    with pytest.raises(gen.InputError, match="method"):
+        gen.OptimalControl(model, 11, 1.0, objective=F**2, method="rk4")
+    with pytest.raises(gen.InputError, match="duration"):
+        gen.OptimalControl(model, 11, -1.0, objective=F**2)
+    with pytest.raises(gen.InputError, match="nothing to minimise"):
+        gen.OptimalControl(model, 11, 1.0)
+
+
+def test_infeasible_problem_status_in_words(cart):
+    """A swing-up that |F| <= 0.5 cannot do in 0.5 s: IPOPT's status and
+    its meaning reach the solution."""
+    _, s, model = cart
+    sol = swing_up(model, s, 21, "trapezoidal", duration=0.5, fmax=0.5).solve(max_iter=300)
+    assert not sol.success
+    assert sol.status in (2, -2, -1)
+    assert ("infeasible" in sol.message) or ("maximum number of iterations" in sol.message)
+
+
+def test_constrained_models_are_refused_with_a_reason():
+    sys.path.insert(0, str(EXAMPLES))
+    try:
+        import seed_pendulum as sp_
+    finally:
+        sys.path.remove(str(EXAMPLES))
+    m = sp_.kane_model()
+    with pytest.raises(gen.InputError, match="constrained"):
+        gen.OptimalControl(m, 11, 1.0, objective=sm.Symbol("m"))
+
+
+# ----------------------------------------------------------- identification
+def test_identification_of_a_damped_pendulum():
+    """g and the damping c of a pendulum from 101 noisy samples of theta
+    (sigma = 0.01): the estimate is within 4 standard errors (Gauss-Newton
+    covariance sigma^2 (J^T J)^-1, J by differences of the simulator) of the
+    truth, and equals SciPy's nonlinear least squares on the simulator to a
+    small fraction of a standard error."""
+    from scipy.optimize import least_squares
+    from sympy.physics import mechanics as me
+    th, om = me.dynamicsymbols("theta omega")
+    c, g, l, m = sm.symbols("c g l m")
+    N = me.ReferenceFrame("N")
+    A = N.orientnew("A", "axis", [th, N.z])
+    A.set_ang_vel(N, om * N.z)
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", l * A.x)
+    P.v2pt_theory(O, N, A)
+    km = me.KanesMethod(N, [th], [om], kd_eqs=[th.diff() - om])
+    km.kanes_equations([me.Particle("p", P, m)], [(P, m * g * N.x), (A, -c * om * N.z)])
+    truth = {m: 1.0, l: 1.0, g: 9.81, c: 0.3}
+    model = gen.Model.from_kanes(km, constants=dict(truth), name="damped_pendulum_ocp")
+    sim = gen.compile(model)
+    T, x0, sigma = 5.0, [1.0, 0.0], 0.01
+    td = np.linspace(0, T, 101)
+    ig, ic = model.p_orig.index(g), model.p_orig.index(c)
+
+    def theta_of(q):
+        p = np.array(model.p_values, float)
+        p[ig], p[ic] = q
+        run = sim.simulate(x0, T, T / 100, p=p, method="dopri5", rtol=1e-12, atol=1e-12)
+        return np.interp(td, run.t, run.x[:, 0])
+    y = theta_of([9.81, 0.3]) + np.random.default_rng(0).normal(0, sigma, td.size)
+    ocp = gen.OptimalControl(model, 201, T, fit={th: (td, y)}, parameters=[g, c],
+                             initial={th: x0[0], om: x0[1]}, bounds={g: (5, 15), c: (0, 2)})
+    sol = ocp.solve(tol=1e-12)
+    assert sol.status == 0, sol.message
+    est = sol.p
+    J = np.zeros((td.size, 2))
+    for j in range(2):
+        e = np.zeros(2)
+        e[j] = 1e-6 * max(1, abs(est[j]))
+        J[:, j] = (theta_of(est + e) - theta_of(est - e)) / (2 * e[j])
+    se = np.sqrt(np.diag(sigma ** 2 * np.linalg.inv(J.T @ J)))
+    assert np.all(np.abs(est - [9.81, 0.3]) < 4 * se), (est, se)
+    ls = least_squares(lambda q: theta_of(q) - y, [9.0, 0.5], xtol=1e-14, ftol=1e-14)
+    assert np.all(np.abs(est - ls.x) < 0.01 * se), (est, ls.x, se)
+    # the misfit is the objective: sum of squared residuals at the estimate
+    assert sol.objective == pytest.approx(np.sum((theta_of(est) - y) ** 2), rel=1e-4)
+    # new data, no rebuild
+    lib = ocp._lib_path
+    ocp.fit = {th: (td, theta_of([9.81, 0.3]))}
+    exact = ocp.solve(tol=1e-12)
+    assert ocp._lib_path == lib
+    np.testing.assert_allclose(exact.p, [9.81, 0.3], rtol=1e-6)
+
+
+def test_generated_c_is_strict_clean(cart, tmp_path):
+    """The generated kernels and the runtime's node loop compile clean with
+    the strict flags (-std=c99 -Wall -Wextra -Werror -pedantic)."""
+    import subprocess
+    from gen.backends import STRICT_FLAGS, c_compiler
+    _, s, model = cart
+    o = swing_up(model, s, 11, "hermite-simpson")
+    src = Path(o._lib_path).parent / "src"
+    files = sorted(p.name for p in src.glob("*.c"))
+    assert "gen_rt_ocp.c" in files and len(files) == 2
+    for f in files:
+        proc = subprocess.run([c_compiler(), *STRICT_FLAGS, "-c", f, "-o", str(tmp_path / "x.o")],
+                              cwd=src, capture_output=True, text=True)
+        assert proc.returncode == 0 and not proc.stderr.strip(), proc.stderr
