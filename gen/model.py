@@ -436,7 +436,7 @@ class Model:
         sub.update({s: sm.Symbol(f"_qd{i}") for i, s in enumerate(self.qd)})
         # (a follows from A, b and the kinematics)
         for mat in (self.Kqd, self.Ku, self.kf, self.M, self.f, self.A, self.b, self.fc):
-            parts.append(sm.srepr(mat.xreplace(sub)))
+            parts.append(_srepr(mat, sub))
         if self.energy is not None:
             parts.append(sm.srepr(self.energy.xreplace(sub)))
         if self.ny:
@@ -986,13 +986,11 @@ class Model:
             reactions, aux_of = list(aux[1]), list(aux[3] if len(aux) > 3 else aux[1])
 
         # ---- constants that no expression uses: a warning naming them ----
-        used = set()
-        for mat in (Kqd_, Ku_, kf_, M_, f_, A_, b_, fc_, Y_) + (
-                (aux_F_, aux_g_) if aux_F_ is not None else ()):
-            for e in mat:
-                used |= e.free_symbols
-        if E_ is not None:
-            used |= E_.free_symbols
+        # (one walk over every distinct subexpression: the recursive
+        # formulation's matrices share theirs, gen.recursive)
+        used = _scan([e for mat in (Kqd_, Ku_, kf_, M_, f_, A_, b_, fc_, Y_) + (
+            (aux_F_, aux_g_) if aux_F_ is not None else ()) for e in mat]
+            + ([E_] if E_ is not None else []))[0]
         from .errors import UnusedConstantWarning, UnusedInputWarning
         _warn_unused(UnusedConstantWarning, name, "constant",
                      [str(c) for c, d in zip(constants, P) if d not in used],
@@ -1009,7 +1007,7 @@ class Model:
             raise ModelError(f"mass matrix has shape {M_.shape}, expected ({nu}, {nu})")
         if f_.shape != (nu, 1):
             raise ModelError(f"forcing has shape {f_.shape}, expected ({nu}, 1)")
-        if any(e.has(*U) for e in M_):
+        if any(_has_any(M_, U)):
             raise ModelError("the mass matrix depends on the speeds; such models are not supported")
         # a speed whose row of M is identically zero (and that no velocity
         # constraint involves) has no acceleration equation: M (or the
@@ -1037,12 +1035,12 @@ class Model:
                 stacklevel=_user_stacklevel())
         for mat, what in ((Kqd_, "kinematic q' coefficients"), (Ku_, "kinematic u coefficients"),
                           (A_, "velocity-constraint matrix")):
-            if any(e.has(*U) for e in mat) or any(e.has(*R) for e in mat):
+            if any(_has_any(mat, U)) or any(_has_any(mat, R)):
                 raise ModelError(f"the {what} depend on speeds or inputs; the kinematic "
                                  "equations and velocity constraints must be linear in the speeds")
-        if any(e.has(*U) or e.has(*R) for e in fc_):
+        if any(_has_any(fc_, U + R)):
             raise ModelError("the configuration constraints depend on speeds or inputs")
-        if any(e.has(*R) for e in list(kf_) + list(b_)):
+        if any(_has_any(list(kf_) + list(b_), R)):
             raise ModelError("the kinematic equations or velocity constraints depend on inputs; not supported")
 
         # explicit q' when Kqd is diagonal (the usual q' = u)
@@ -1389,6 +1387,79 @@ def _scan(mat):
             undef.add(e)
         stack.extend(a for a in e.args if isinstance(a, sm.Basic))
     return free, derivs, undef
+
+
+def _srepr(mat, sub):
+    """sm.srepr(mat.xreplace(sub)); for matrices holding gen.recursive's
+    shared opaque nodes (UnevaluatedExpr), whose trees unfolded grow far
+    faster than their graphs, the graph instead: one line per distinct
+    subexpression, its arguments by number."""
+    if not any(_has_kind(list(mat), sm.UnevaluatedExpr)):
+        return sm.srepr(mat.xreplace(sub))
+    ids, lines = {}, []
+    for root in mat:
+        stack = [(root, False)]
+        while stack:
+            e, done = stack.pop()
+            if e in ids:
+                continue
+            if done or not e.args:
+                ids[e] = len(ids)
+                lines.append(sm.srepr(sub.get(e, e)) if not e.args else
+                             f"{type(e).__name__}({','.join(str(ids[a]) for a in e.args)})")
+                continue
+            stack.append((e, True))
+            stack.extend((a, False) for a in reversed(e.args) if a not in ids)
+        lines.append(f"={ids[root]}")
+    return f"{mat.shape}" + ";".join(lines)
+
+
+def _has_kind(exprs, kind):
+    """[whether e holds a node of class kind for e in exprs], each distinct
+    subexpression visited once."""
+    memo, out = {}, []
+    for root in exprs:
+        stack = [(root, False)]
+        while stack:
+            e, done = stack.pop()
+            if done:
+                memo[e] = any(memo[a] for a in e.args)
+                continue
+            if e in memo:
+                continue
+            if isinstance(e, kind) or not e.args:
+                memo[e] = isinstance(e, kind)
+                continue
+            stack.append((e, True))
+            stack.extend((a, False) for a in e.args if a not in memo)
+        out.append(memo[root])
+    return out
+
+
+def _has_any(exprs, targets):
+    """[e.has(*targets) for e in exprs] for atomic targets (symbols), each
+    distinct subexpression visited once (sympy's has walks a shared
+    subexpression every time it appears)."""
+    targets = set(targets)
+    if not targets:
+        return [False for _ in exprs]
+    memo, out = {}, []
+    for root in exprs:
+        stack = [(root, False)]
+        while stack:
+            e, done = stack.pop()
+            if done:
+                memo[e] = any(memo[a] for a in e.args)
+                continue
+            if e in memo:
+                continue
+            if not e.args:
+                memo[e] = e in targets
+                continue
+            stack.append((e, True))
+            stack.extend((a, False) for a in e.args if a not in memo)
+        out.append(memo[root])
+    return out
 
 
 def _check_expressions(mat, what, allowed, inputs=()):

@@ -82,6 +82,25 @@ def _skew(a):
     return sm.Matrix([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
 
 
+_UE = sm.UnevaluatedExpr
+
+
+def _keep(e):
+    """e as one opaque node (``UnevaluatedExpr``): sums and products built
+    on it keep it as one argument instead of flattening its terms into
+    theirs, so each body's quantities stay a few nodes over its parent's
+    (a DAG linear in the bodies), where flattened they grow with the depth.
+    ``gen.ir`` unwraps the nodes after its CSE."""
+    if e.is_Atom or isinstance(e, _UE) or (e.is_Mul and len(e.args) == 2
+                                           and e.args[0].is_Number and e.args[1].is_Atom):
+        return e
+    return _UE(e)
+
+
+def _kept(mat):
+    return mat.applyfunc(_keep)
+
+
 def _is_zero(e):
     e = sm.expand(e)
     if e == 0:
@@ -225,6 +244,7 @@ def equations_of_tree(system):
     nu = len(tree.u)
     qset = set(tree.q)
 
+    udots = [s.diff(_T) for s in tree.u]
     # ---- per joint: E, r, S and the velocity-product part of d/dt [w_rel; v_rel]
     for n in tree.order:
         j, child, parent = n.joint, n.body, n.joint.parent
@@ -250,7 +270,7 @@ def equations_of_tree(system):
                 f"joint {_name(j)!r}: the child's motion relative to the parent is not "
                 "linear and homogeneous in the joint's speeds (an explicitly time-"
                 "dependent joint): formulation='recursive' does not take it")
-        if any(e.has(*[s.diff(_T) for s in tree.u]) for e in S):
+        if any(e.has(*udots) for e in S):
             raise ModelError(f"joint {_name(j)!r}: the joint's motion holds speed derivatives")
         qs = sorted((S.atoms(sm.Function) & qset), key=sm.default_sort_key)
         if qs:
@@ -363,7 +383,7 @@ def equations_of_tree(system):
     zero = sm.zeros(3, 1)
     for n in tree.order:
         R = n.R
-        n.Sw = sm.Matrix.vstack(R * n.S[:3, :], R * n.S[3:, :]) if n.S.shape[1] \
+        n.Sw = _kept(sm.Matrix.vstack(R * n.S[:3, :], R * n.S[3:, :])) if n.S.shape[1] \
             else sm.zeros(6, 0)
         rel = n.Sw * _col(n.joint.speeds)
         w_rel, v_rel = rel[:3, :], rel[3:, :]
@@ -373,19 +393,19 @@ def equations_of_tree(system):
         else:
             w_p, v_p, al_p, a_p = n.parent.w, n.parent.v, n.parent.al, n.parent.a
             Rp = n.parent.R
-        r = Rp * n.r_pp + R * n.r_cc
+        r = _kept(Rp * n.r_pp + R * n.r_cc)
         n.rw = r
-        n.w = w_p + w_rel
-        n.v = v_p + _cross(w_p, r) + v_rel
+        n.w = _kept(w_p + w_rel)
+        n.v = _kept(v_p + _cross(w_p, r) + v_rel)
         al = al_p + _cross(w_p, w_rel)
         a = a_p + _cross(al_p, r) + _cross(w_p, _cross(w_p, r)) \
             + _cross(2 * w_p, v_rel) + _cross(w_rel, v_rel)
         if n.rel_bias is not None:
             al += R * n.rel_bias[:3, :]
             a += R * n.rel_bias[3:, :]
-        n.al, n.a = al, a
+        n.al, n.a = _kept(al), _kept(a)
         b = n.body
-        n.Iw = R * b.central_inertia.to_matrix(b.frame) * R.T
+        n.Iw = _kept(R * b.central_inertia.to_matrix(b.frame) * R.T)
     # forces in: each body's F - m a and T - I al - w x I w, plus its
     # children's (formed with their signs: negating a large sum would make
     # sympy distribute the -1 over every term)
@@ -397,7 +417,7 @@ def equations_of_tree(system):
         for c in n.children:
             Fi += c.Ftot
             Ni += c.Ntot + _cross(c.rw, c.Ftot)
-        n.Ftot, n.Ntot = Fi, Ni
+        n.Ftot, n.Ntot = Fi, Ni = _kept(Fi), _kept(Ni)
         tau = n.Sw.T * sm.Matrix.vstack(Ni, Fi)
         for k, idx in enumerate(n.speed_idx):
             f[idx] = tau[k]
@@ -415,19 +435,19 @@ def equations_of_tree(system):
             mt += c.mt
             h += c.h + c.mt * d
             J += c.J + (ht * ndt + ndt * ht) + c.mt * (dt_ * ndt)
-        n.mt, n.h, n.J = mt, h, J
+        n.mt, n.h, n.J = _keep(mt), _kept(h), _kept(J)
     for n in tree.order:
         nj = n.Sw.shape[1]
         if not nj:
             continue
         ht = _skew(n.h)
         sw, sv = n.Sw[:3, :], n.Sw[3:, :]
-        L = n.J * sw + ht * sv
-        P = n.mt * sv + sm.Matrix.hstack(*[_cross(sw[:, k], n.h) for k in range(nj)])
+        L = _kept(n.J * sw + ht * sv)
+        P = _kept(n.mt * sv + sm.Matrix.hstack(*[_cross(sw[:, k], n.h) for k in range(nj)]))
         m = n
         while m is not None:
             if m is not n:
-                L = L + sm.Matrix.hstack(*[_cross(prev.rw, P[:, k]) for k in range(nj)])
+                L = _kept(L + sm.Matrix.hstack(*[_cross(prev.rw, P[:, k]) for k in range(nj)]))
             blk = m.Sw.T * sm.Matrix.vstack(L, P)    # rows: m's speeds, columns: n's
             for a_, ia in enumerate(m.speed_idx):
                 for b_, ib in enumerate(n.speed_idx):
@@ -477,9 +497,10 @@ def _orientation(n, tree):
     if rep is None:
         Rp = A * (_rot(k, th) if k is not None else sm.eye(3)) * B
         rep = (Rp * ET, None, sm.S.Zero, sm.eye(3))
-    n.rep = rep
     A, k, th, B = rep
-    n.R = A * (_rot(k, th) if k is not None else sm.eye(3)) * B
+    n.rep = rep = (_kept(A), k, _keep(th), B)
+    A, k, th, B = rep
+    n.R = _kept(A * (_rot(k, th) if k is not None else sm.eye(3)) * B)
 
 
 def _same(X, Y, q):
