@@ -765,10 +765,11 @@ class Model:
                 raise ModelError(
                     f"unknown argument(s) {', '.join(sorted(partition))} for "
                     "Model.from_system with formulation='recursive': accepted are none")
-            from .recursive import equations_of_tree
+            from .recursive import constraints_of_tree, equations_of_tree
             M, f, q, u, kdes = equations_of_tree(obj)
             return cls.from_matrices(M, f, q, u, kdes, constants=constants, inputs=inputs,
-                                     name=name, energy=energy, outputs=outputs)
+                                     name=name, energy=energy, outputs=outputs,
+                                     _constraints=constraints_of_tree(obj))
         if formulation != "kane":
             raise ModelError(f"formulation={formulation!r} for Model.from_system: "
                              "accepted are 'kane' and 'recursive'")
@@ -806,7 +807,8 @@ class Model:
     # ---- from matrices (gen.pydy: PyDy's forms; any M, f and kinematics) ----
     @classmethod
     def from_matrices(cls, mass_matrix, forcing, coordinates, speeds, kinematics,
-                      constants=None, inputs=None, name="model", energy=None, outputs=None):
+                      constants=None, inputs=None, name="model", energy=None, outputs=None,
+                      _constraints=None):
         """Build from the equations themselves, without a formed method.
 
         ``mass_matrix * speeds' = forcing``, with the kinematic equations
@@ -877,11 +879,16 @@ class Model:
                 and all(Kqd[i, i] != 0 for i in range(nq)):
             qdot_map = {qd_: -(Ku[i, :].dot(sm.Matrix(u)) + kf[i]) / Kqd[i, i]
                         for i, qd_ in enumerate(qdots)}
+        # (gen.recursive: a System's constraints as a Kane model's, the
+        # dependent coordinates and speeds last)
+        fc, A, b, nqd, nud = _constraints or (sm.zeros(0, 1), sm.zeros(0, nu), sm.zeros(0, 1),
+                                              0, 0)
         return cls._finish(
             name=name, method="kane", t=t, q=q, u=u, qdots=qdots,
-            udots=[ui.diff(t) for ui in u], q_ind=list(range(nq)), q_dep=[],
-            u_ind=list(range(nu)), u_dep=[], Kqd=Kqd, Ku=Ku, kf=kf, M=M, f=f,
-            A=sm.zeros(0, nu), b=sm.zeros(0, 1), fc=sm.zeros(0, 1), qdot_subs=qdot_map,
+            udots=[ui.diff(t) for ui in u], q_ind=list(range(nq - nqd)),
+            q_dep=list(range(nq - nqd, nq)), u_ind=list(range(nu - nud)),
+            u_dep=list(range(nu - nud, nu)), Kqd=Kqd, Ku=Ku, kf=kf, M=M, f=f,
+            A=A, b=b, fc=fc, qdot_subs=qdot_map,
             constants=constants, inputs=inputs, energy=energy,
             speed_names=[_sym_name(x) for x in u], outputs=outputs)
 

@@ -55,7 +55,7 @@ import sympy.physics.mechanics as me
 
 from .errors import ModelError
 
-__all__ = ["equations_of_tree", "SUPPORTED_JOINTS"]
+__all__ = ["equations_of_tree", "constraints_of_tree", "SUPPORTED_JOINTS"]
 
 SUPPORTED_JOINTS = ("PinJoint", "PrismaticJoint", "CylindricalJoint", "PlanarJoint",
                     "SphericalJoint", "WeldJoint")
@@ -127,19 +127,21 @@ class _Tree:
                 f"formulation='recursive' needs a sympy System, got {type(system).__name__}")
         self.system = system
         self.N = system.frame
-        cons = []
-        if len(system.holonomic_constraints):
-            cons.append(f"{len(system.holonomic_constraints)} holonomic constraint(s)")
-        if len(system.nonholonomic_constraints):
-            cons.append(f"{len(system.nonholonomic_constraints)} nonholonomic constraint(s)")
-        if len(system.q_dep) or len(system.u_dep):
-            cons.append("dependent coordinates or speeds")
         if len(system.u_aux):
-            cons.append(f"auxiliary speeds {list(system.u_aux)}")
-        if cons:
             raise ModelError(
-                f"formulation='recursive' takes open joint trees only; the System has "
-                f"{', '.join(cons)}: use formulation='kane'")
+                f"formulation='recursive' does not take auxiliary speeds (the System has "
+                f"{list(system.u_aux)}): use formulation='kane'")
+        nh, nn = len(system.holonomic_constraints), len(system.nonholonomic_constraints)
+        if len(system.q_dep) != nh:
+            raise ModelError(
+                f"the System has {nh} holonomic constraint(s) and {len(system.q_dep)} "
+                "dependent coordinate(s) (q_dep): formulation='recursive' needs one "
+                "dependent coordinate per holonomic constraint")
+        if len(system.u_dep) != nh + nn:
+            raise ModelError(
+                f"the System has {nh} holonomic and {nn} nonholonomic constraint(s) and "
+                f"{len(system.u_dep)} dependent speed(s) (u_dep): formulation='recursive' "
+                "needs one dependent speed per constraint")
         self.q = list(system.q)
         self.u = list(system.u)
         child_of = {}
@@ -157,8 +159,10 @@ class _Tree:
             if j.child in child_of:
                 raise ModelError(
                     f"body {_name(j.child)!r} is the child of joints {_name(child_of[j.child])!r} "
-                    f"and {_name(j)!r}: a closed loop, which formulation='recursive' does not "
-                    "take (use formulation='kane')")
+                    f"and {_name(j)!r}: formulation='recursive' takes the joints of a tree; "
+                    "close a loop with holonomic constraints on the tree instead "
+                    "(System.add_holonomic_constraints, with the dependent coordinates "
+                    "and speeds in q_dep and u_dep)")
             child_of[j.child] = j
         # the root: the body (or bodies) whose frame is the System's frame
         self.ground = set()
@@ -237,7 +241,10 @@ def equations_of_tree(system):
     -------
     (M, f, q, u, kdes) : sympy Matrix (nu, nu), Matrix (nu, 1), list, list, Matrix (nq, 1)
         ``M u' = f`` in the System's speed order, and the System's kinematic
-        equations (``kdes = 0``).
+        equations (``kdes = 0``). With constraints, M and f are the tree's
+        equations for all its speeds (independent, then dependent: the
+        System's order), without the constraint forces, as a Kane model's
+        are; see :func:`constraints_of_tree`.
     """
     tree = _Tree(system)
     N = tree.N
@@ -405,7 +412,7 @@ def equations_of_tree(system):
             a += R * n.rel_bias[3:, :]
         n.al, n.a = _kept(al), _kept(a)
         b = n.body
-        n.Iw = _kept(R * b.central_inertia.to_matrix(b.frame) * R.T)
+        n.Iw = _kept(R * _inertia_matrix(b) * R.T)
     # forces in: each body's F - m a and T - I al - w x I w, plus its
     # children's (formed with their signs: negating a large sum would make
     # sympy distribute the -1 over every term)
@@ -455,6 +462,53 @@ def equations_of_tree(system):
                     M[ib, ia] = blk[a_, b_]
             prev, m = m, m.parent
     return M, f, tree.q, tree.u, tree.kdes
+
+
+def _inertia_matrix(body):
+    """The body's central inertia in its own axes: read off the dyadic's
+    terms when they are all in those axes (sympy's to_matrix expresses
+    each of the nine components through dot products, the slowest step of
+    the build); to_matrix otherwise."""
+    frame, out = body.frame, sm.zeros(3, 3)
+    for coef, v1, v2 in body.central_inertia.args:
+        idx = []
+        for v in (v1, v2):
+            if len(v.args) != 1 or v.args[0][1] != frame:
+                return body.central_inertia.to_matrix(frame)
+            comps = list(v.args[0][0])
+            nz = [i for i, c in enumerate(comps) if c != 0]
+            if len(nz) != 1 or comps[nz[0]] != 1:
+                return body.central_inertia.to_matrix(frame)
+            idx.append(nz[0])
+        out[idx[0], idx[1]] += coef
+    return out
+
+
+def constraints_of_tree(system):
+    """The System's loop closures and other constraints, for the runtime's
+    constraint machinery (dependent coordinates and speeds, the constrained
+    solve, projection), as a Kane model carries them.
+
+    Returns
+    -------
+    None, or (fc, A, b, nq_dep, nu_dep)
+        ``fc(q) = 0`` (the holonomic constraints), ``A u + b = 0`` (the
+        velocity constraints: the holonomic ones differentiated and the
+        nonholonomic ones, q' replaced by the kinematic equations' solution),
+        and the numbers of dependent coordinates and speeds (last in the
+        System's q and u).
+    """
+    nh, nn = len(system.holonomic_constraints), len(system.nonholonomic_constraints)
+    if not nh and not nn:
+        return None
+    tree = _Tree(system)        # the same checks and q' map as equations_of_tree
+    vc = sm.Matrix(system.velocity_constraints).xreplace(tree.qdot)
+    A = vc.jacobian(tree.u)
+    b = vc.xreplace({s: 0 for s in tree.u})
+    fc = sm.Matrix(system.holonomic_constraints) if nh else sm.zeros(0, 1)
+    if any(e.has(*[s.diff(_T) for s in tree.u]) for e in list(A) + list(b)):
+        raise ModelError("the System's velocity constraints hold speed derivatives")
+    return fc, A, b, len(system.q_dep), len(system.u_dep)
 
 
 def _rot(k, th):
