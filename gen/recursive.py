@@ -223,7 +223,16 @@ class _Tree:
             raise ModelError(f"the System has {kd.shape[0]} kinematic equation(s) for "
                              f"{len(qd)} coordinate(s)")
         self.kdes = kd
-        K = kd.jacobian(qd)
+        # the coefficients of q' by row, over plain symbols and only for the
+        # q' a row holds (a Jacobian in every q' of every row is quadratic
+        # in n, each entry a derivative by a Derivative)
+        D = [sm.Dummy(f"qd{i}") for i in range(len(qd))]
+        kdD = kd.xreplace(dict(zip(qd, D)))
+        K = sm.zeros(len(qd), len(qd))
+        where = {d: k for k, d in enumerate(D)}
+        for i in range(len(qd)):
+            for d in kdD[i].free_symbols & set(D):
+                K[i, where[d]] = kdD[i].diff(d)
         rest = kd.xreplace({x: 0 for x in qd})
         if any(K[i, k] != 0 for i in range(len(qd)) for k in range(len(qd)) if i != k):
             sol = K.LUsolve(-rest)

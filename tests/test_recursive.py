@@ -112,6 +112,14 @@ CASES = {
                (2, "planar", "x"), (1, "prismatic", "xz")],
     "tree6": [(-1, "prismatic", "z"), (0, "pin", "y"), (1, "pin", "x"), (1, "pin", "z"),
               (3, "prismatic", "x"), (0, "pin", "xz")],
+    # 10 bodies: a chain of pins turning about changing axes, and a tree
+    # holding every joint type
+    "chain10": [(-1, "pin", "z"), (0, "pin", "x"), (1, "pin", "z"), (2, "pin", "y"),
+                (3, "prismatic", "xz"), (4, "pin", "z"), (5, "pin", "x"), (6, "pin", "z"),
+                (7, "pin", "y"), (8, "pin", "xz")],
+    "tree10": [(-1, "pin", "z"), (0, "spherical", "x"), (0, "prismatic", "y"),
+               (1, "cylindrical", "x"), (2, "pin", "x"), (3, "weld", "z"), (4, "planar", "x"),
+               (5, "pin", "y"), (1, "pin", "xz"), (8, "prismatic", "z")],
 }
 
 
@@ -165,7 +173,8 @@ def _compile(spec, name):
 # the larger trees (each > 8 s: sympy's form_eoms reference dominates) run in the
 # slow tier; pin, prismatic and weld joints keep a case in the fast one, the
 # cylindrical, planar and spherical joints are in the slow one
-SLOW_CASES = {"tree5", "spherical2", "chain3d4", "mixed5", "tree6", "planar2", "cylinder2"}
+SLOW_CASES = {"tree5", "spherical2", "chain3d4", "mixed5", "tree6", "planar2", "cylinder2",
+              "chain10", "tree10"}
 
 
 @pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.slow) if c in SLOW_CASES
