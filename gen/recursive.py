@@ -36,17 +36,21 @@ Why CRBA + RNEA rather than the articulated body algorithm: the model keeps the
 canonical ``M u' = f`` form the rest of the pipeline (linearization, implicit
 solvers, constraints) takes, with ``M`` factorized numerically by the runtime;
 ABA would put the solve into the symbolic expressions, with divisions the
-pipeline cannot see. Nothing is expanded or simplified: the pipeline's CSE
-recovers the shared sub-expressions.
+pipeline cannot see. Nothing is expanded or simplified: each body's
+quantities are kept as shared opaque nodes (``_keep``: a graph linear in the
+bodies), every walk of the pipeline visits a shared node once, and gen.ir's
+CSE makes the repeated ones temporaries (then unwraps them).
 
 Taken: trees of ``PinJoint``, ``PrismaticJoint``, ``CylindricalJoint``,
 ``PlanarJoint``, ``SphericalJoint`` and ``WeldJoint`` between rigid bodies,
 with forces on points and torques on frames the tree knows (gravity from
-``apply_uniform_gravity``, loads, actuators). Refused with a
-:class:`gen.ModelError` naming what: loop closures and other constraints,
-auxiliary speeds, particles, other joint classes, explicitly time-dependent
-joints, bodies not joined to the System's frame, loads on unknown points or
-frames.
+``apply_uniform_gravity``, loads, actuators), and the System's holonomic and
+nonholonomic constraints (loop closures) with their dependent coordinates
+and speeds, handed to the runtime's constraint machinery as a Kane model's
+(:func:`constraints_of_tree`). Refused with a :class:`gen.ModelError`
+naming what: auxiliary speeds, particles, other joint classes, explicitly
+time-dependent joints, bodies not joined to the System's frame, a body that
+is the child of two joints, loads on unknown points or frames.
 """
 from __future__ import annotations
 
