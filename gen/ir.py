@@ -112,9 +112,9 @@ def make_kernel(name, args, outputs, cse=True, jvps=()):
         flat.extend(f)
         flat.extend(sm.sympify(seeds[k]) for k in keys)
     if (cse or jvps) and flat:
-        assignments, reduced = sm.cse(flat, symbols=_Namer("w"), order="none")
+        assignments, reduced = _cse(flat, _Namer("w"))
     else:
-        assignments, reduced = [], flat
+        assignments, reduced = [], _unkept(flat)
     outs, k = [], 0
     for oname, (rows, cols) in shapes:
         outs.append(Output(oname, rows, cols, list(reduced[k:k + rows * cols])))
@@ -136,6 +136,38 @@ def make_kernel(name, args, outputs, cse=True, jvps=()):
             tang = r2[len(tsyms):]
         outs.append(Output(oname, n, 1, list(tang)))
     return prune(Kernel(name, list(args), outs, list(assignments) + extra))
+
+
+def _cse(exprs, symbols):
+    """sympy's cse, with gen.recursive's opaque nodes (UnevaluatedExpr,
+    shared subexpressions kept whole) unwrapped in what it returns: the
+    repeated ones are temporaries by then. Models without them come back
+    unchanged (the same objects)."""
+    assignments, reduced = sm.cse(exprs, symbols=symbols, order="none")
+    memo = {}
+    return ([(s, _unkept([e], memo)[0]) for s, e in assignments], _unkept(reduced, memo))
+
+
+def _unkept(exprs, memo=None):
+    """exprs with every UnevaluatedExpr replaced by its argument (each
+    distinct subexpression rebuilt once)."""
+    memo = {} if memo is None else memo
+
+    def walk(e):
+        hit = memo.get(e)
+        if hit is not None:
+            return hit
+        if isinstance(e, sm.UnevaluatedExpr):
+            out = walk(e.args[0])
+        elif not e.args:
+            out = e
+        else:
+            args = [walk(a) for a in e.args]
+            out = e.func(*args) if any(a is not b for a, b in zip(args, e.args)) else e
+        memo[e] = out
+        return out
+
+    return [walk(e) for e in exprs]
 
 
 def _closure(assignments, exprs):
@@ -395,7 +427,7 @@ def make_jvp_kernel(name, args, funcs, seeds):
         f, shp = _flatten(mat)
         shapes.append((oname, len(f)))
         flat.extend(f)
-    assignments, reduced = sm.cse(flat, symbols=_Namer("w"), order="none") if flat else ([], [])
+    assignments, reduced = _cse(flat, _Namer("w")) if flat else ([], [])
     new, outs_flat = jvp_graph(assignments, reduced, seeds)
     if new or outs_flat:
         tsyms = [s for s, _ in new]
@@ -428,7 +460,7 @@ def make_jacobian_kernel(name, args, plain, jacobians, cse_derivatives=True):
         spans.append(("jac", oname, len(flat), (len(f), len(wrt)), list(wrt)))
         flat.extend(f)
     if flat:
-        assignments, reduced = sm.cse(flat, symbols=_Namer("w"), order="none")
+        assignments, reduced = _cse(flat, _Namer("w"))
     else:
         assignments, reduced = [], []
     # one forward sweep for the union of all differentiation variables
@@ -549,6 +581,8 @@ def float_values(exprs, values):
                 v *= ev(a)
         elif e.is_Pow:
             v = ev(e.args[0]) ** ev(e.args[1])
+        elif isinstance(e, sm.UnevaluatedExpr):     # gen.recursive's opaque nodes
+            v = ev(e.args[0])
         else:
             fn = funcs.get(type(e))
             if fn is None:
@@ -565,6 +599,21 @@ def float_values(exprs, values):
         raise _NoFloat(err) from None
 
 
+def _free_symbols(exprs):
+    """The free symbols of exprs (no bound variables in a model's
+    matrices), each distinct subexpression visited once."""
+    seen, out, stack = set(), set(), list(exprs)
+    while stack:
+        e = stack.pop()
+        if e in seen:
+            continue
+        seen.add(e)
+        if e.is_Symbol:
+            out.add(e)
+        stack.extend(e.args)
+    return out
+
+
 def mass_structure(model):
     """(symmetric, nonzero): whether the mass matrix is symmetric (checked
     numerically at two random points: exact symmetry of the expressions is
@@ -576,7 +625,7 @@ def mass_structure(model):
     nonzero = [[M[i, j] != 0 for j in range(n)] for i in range(n)]
     symmetric = all(nonzero[i][j] == nonzero[j][i] for i in range(n) for j in range(i))
     rnd = random.Random(12345)
-    syms = sorted(M.free_symbols, key=str)
+    syms = sorted(_free_symbols(M), key=str)
     pairs = [(i, j) for i in range(n) for j in range(i) if nonzero[i][j]]
     for _ in range(2 if symmetric and pairs else 0):
         vals = {s: rnd.uniform(0.3, 1.3) for s in syms}

@@ -444,7 +444,7 @@ class Model:
         sub.update({s: sm.Symbol(f"_qd{i}") for i, s in enumerate(self.qd)})
         # (a follows from A, b and the kinematics)
         for mat in (self.Kqd, self.Ku, self.kf, self.M, self.f, self.A, self.b, self.fc):
-            parts.append(sm.srepr(mat.xreplace(sub)))
+            parts.append(_srepr(mat, sub))
         if self.energy is not None:
             parts.append(sm.srepr(self.energy.xreplace(sub)))
         if self.ny:
@@ -798,10 +798,11 @@ class Model:
                 raise ModelError(
                     f"unknown argument(s) {', '.join(sorted(partition))} for "
                     "Model.from_system with formulation='recursive': accepted are none")
-            from .recursive import equations_of_tree
+            from .recursive import constraints_of_tree, equations_of_tree
             M, f, q, u, kdes = equations_of_tree(obj)
             return cls.from_matrices(M, f, q, u, kdes, constants=constants, inputs=inputs,
-                                     name=name, energy=energy, outputs=outputs, hybrid=hybrid)
+                                     name=name, energy=energy, outputs=outputs, hybrid=hybrid,
+                                     _constraints=constraints_of_tree(obj))
         if formulation != "kane":
             raise ModelError(f"formulation={formulation!r} for Model.from_system: "
                              "accepted are 'kane' and 'recursive'")
@@ -841,7 +842,7 @@ class Model:
     @classmethod
     def from_matrices(cls, mass_matrix, forcing, coordinates, speeds, kinematics,
                       constants=None, inputs=None, name="model", energy=None, outputs=None,
-                      hybrid=None):
+                      hybrid=None, _constraints=None):
         """Build from the equations themselves, without a formed method.
 
         ``mass_matrix * speeds' = forcing``, with the kinematic equations
@@ -895,8 +896,8 @@ class Model:
         Qd = [sm.Dummy(f"qd{i}") for i in range(nq)]
         Ud = [sm.Dummy(f"u{i}") for i in range(nu)]
         kd_ = kd.xreplace(dict(zip(qdots, Qd))).xreplace(dict(zip(u, Ud)))
-        Kqd = kd_.jacobian(Qd)
-        Ku = kd_.jacobian(Ud)
+        Kqd = _row_jacobian(kd_, Qd)
+        Ku = _row_jacobian(kd_, Ud)
         kf = kd_.xreplace({s: 0 for s in Qd + Ud})
         for i in range(nq):
             if any(e.has(*Qd, *Ud) for e in list(Kqd[i, :]) + list(Ku[i, :])):
@@ -912,11 +913,16 @@ class Model:
                 and all(Kqd[i, i] != 0 for i in range(nq)):
             qdot_map = {qd_: -(Ku[i, :].dot(sm.Matrix(u)) + kf[i]) / Kqd[i, i]
                         for i, qd_ in enumerate(qdots)}
+        # (gen.recursive: a System's constraints as a Kane model's, the
+        # dependent coordinates and speeds last)
+        fc, A, b, nqd, nud = _constraints or (sm.zeros(0, 1), sm.zeros(0, nu), sm.zeros(0, 1),
+                                              0, 0)
         return attach_hybrid(cls._finish(
             name=name, method="kane", t=t, q=q, u=u, qdots=qdots,
-            udots=[ui.diff(t) for ui in u], q_ind=list(range(nq)), q_dep=[],
-            u_ind=list(range(nu)), u_dep=[], Kqd=Kqd, Ku=Ku, kf=kf, M=M, f=f,
-            A=sm.zeros(0, nu), b=sm.zeros(0, 1), fc=sm.zeros(0, 1), qdot_subs=qdot_map,
+            udots=[ui.diff(t) for ui in u], q_ind=list(range(nq - nqd)),
+            q_dep=list(range(nq - nqd, nq)), u_ind=list(range(nu - nud)),
+            u_dep=list(range(nu - nud, nu)), Kqd=Kqd, Ku=Ku, kf=kf, M=M, f=f,
+            A=A, b=b, fc=fc, qdot_subs=qdot_map,
             constants=constants, inputs=inputs, energy=energy,
             speed_names=[_sym_name(x) for x in u], outputs=outputs), hybrid)
 
@@ -1024,14 +1030,12 @@ class Model:
             reactions, aux_of = list(aux[1]), list(aux[3] if len(aux) > 3 else aux[1])
 
         # ---- constants that no expression uses: a warning naming them ----
-        used = set()
-        for mat in (Kqd_, Ku_, kf_, M_, f_, A_, b_, fc_, Y_) + (
-                (aux_F_, aux_g_) if aux_F_ is not None else ()) + (
-                (aux_G_,) if aux_G_ is not None else ()):
-            for e in mat:
-                used |= e.free_symbols
-        if E_ is not None:
-            used |= E_.free_symbols
+        # (one walk over every distinct subexpression: the recursive
+        # formulation's matrices share theirs, gen.recursive)
+        used = _scan([e for mat in (Kqd_, Ku_, kf_, M_, f_, A_, b_, fc_, Y_) + (
+            (aux_F_, aux_g_) if aux_F_ is not None else ()) + (
+            (aux_G_,) if aux_G_ is not None else ()) for e in mat]
+            + ([E_] if E_ is not None else []))[0]
         from .errors import UnusedConstantWarning, UnusedInputWarning
         _warn_unused(UnusedConstantWarning, name, "constant",
                      [str(c) for c, d in zip(constants, P) if d not in used],
@@ -1048,7 +1052,7 @@ class Model:
             raise ModelError(f"mass matrix has shape {M_.shape}, expected ({nu}, {nu})")
         if f_.shape != (nu, 1):
             raise ModelError(f"forcing has shape {f_.shape}, expected ({nu}, 1)")
-        if any(e.has(*U) for e in M_):
+        if any(_has_any(M_, U)):
             raise ModelError("the mass matrix depends on the speeds; such models are not supported")
         # a speed whose row of M is identically zero (and that no velocity
         # constraint involves) has no acceleration equation: M (or the
@@ -1076,12 +1080,12 @@ class Model:
                 stacklevel=_user_stacklevel())
         for mat, what in ((Kqd_, "kinematic q' coefficients"), (Ku_, "kinematic u coefficients"),
                           (A_, "velocity-constraint matrix")):
-            if any(e.has(*U) for e in mat) or any(e.has(*R) for e in mat):
+            if any(_has_any(mat, U)) or any(_has_any(mat, R)):
                 raise ModelError(f"the {what} depend on speeds or inputs; the kinematic "
                                  "equations and velocity constraints must be linear in the speeds")
-        if any(e.has(*U) or e.has(*R) for e in fc_):
+        if any(_has_any(fc_, U + R)):
             raise ModelError("the configuration constraints depend on speeds or inputs")
-        if any(e.has(*R) for e in list(kf_) + list(b_)):
+        if any(_has_any(list(kf_) + list(b_), R)):
             raise ModelError("the kinematic equations or velocity constraints depend on inputs; not supported")
 
         # explicit q' when Kqd is diagonal (the usual q' = u)
@@ -1468,6 +1472,93 @@ def _scan(mat):
             undef.add(e)
         stack.extend(a for a in e.args if isinstance(a, sm.Basic))
     return free, derivs, undef
+
+
+def _row_jacobian(col, syms):
+    """col.jacobian(syms) for a column over plain symbols, each row
+    differentiated only by the symbols it holds (the same matrix; the
+    kinematics of n coordinates, one q' per row, in O(n) derivatives
+    instead of n^2)."""
+    where = {s: k for k, s in enumerate(syms)}
+    out = sm.zeros(col.shape[0], len(syms))
+    for i in range(col.shape[0]):
+        for s in col[i].free_symbols:
+            if s in where:
+                out[i, where[s]] = col[i].diff(s)
+    return out
+
+
+def _srepr(mat, sub):
+    """sm.srepr(mat.xreplace(sub)); for matrices holding gen.recursive's
+    shared opaque nodes (UnevaluatedExpr), whose trees unfolded grow far
+    faster than their graphs, the graph instead: one line per distinct
+    subexpression, its arguments by number."""
+    if not any(_has_kind(list(mat), sm.UnevaluatedExpr)):
+        return sm.srepr(mat.xreplace(sub))
+    ids, lines = {}, []
+    for root in mat:
+        stack = [(root, False)]
+        while stack:
+            e, done = stack.pop()
+            if e in ids:
+                continue
+            if done or not e.args:
+                ids[e] = len(ids)
+                lines.append(sm.srepr(sub.get(e, e)) if not e.args else
+                             f"{type(e).__name__}({','.join(str(ids[a]) for a in e.args)})")
+                continue
+            stack.append((e, True))
+            stack.extend((a, False) for a in reversed(e.args) if a not in ids)
+        lines.append(f"={ids[root]}")
+    return f"{mat.shape}" + ";".join(lines)
+
+
+def _has_kind(exprs, kind):
+    """[whether e holds a node of class kind for e in exprs], each distinct
+    subexpression visited once."""
+    memo, out = {}, []
+    for root in exprs:
+        stack = [(root, False)]
+        while stack:
+            e, done = stack.pop()
+            if done:
+                memo[e] = any(memo[a] for a in e.args)
+                continue
+            if e in memo:
+                continue
+            if isinstance(e, kind) or not e.args:
+                memo[e] = isinstance(e, kind)
+                continue
+            stack.append((e, True))
+            stack.extend((a, False) for a in e.args if a not in memo)
+        out.append(memo[root])
+    return out
+
+
+def _has_any(exprs, targets):
+    """[e.has(*targets) for e in exprs] for atomic targets (symbols), each
+    distinct subexpression visited once (sympy's has walks a shared
+    subexpression every time it appears)."""
+    targets = set(targets)
+    if not targets:
+        return [False for _ in exprs]
+    memo, out = {}, []
+    for root in exprs:
+        stack = [(root, False)]
+        while stack:
+            e, done = stack.pop()
+            if done:
+                memo[e] = any(memo[a] for a in e.args)
+                continue
+            if e in memo:
+                continue
+            if not e.args:
+                memo[e] = e in targets
+                continue
+            stack.append((e, True))
+            stack.extend((a, False) for a in e.args if a not in memo)
+        out.append(memo[root])
+    return out
 
 
 def _check_expressions(mat, what, allowed, inputs=()):

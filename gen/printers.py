@@ -232,7 +232,8 @@ class ModelCxxPrinter(ModelCPrinter):
 # ------------------------------------------------------------------ check
 # nodes printed by the printers' own structure (operators, ternaries)
 _STRUCTURAL = (sm.Add, sm.Mul, sm.Pow, sm.Piecewise, sm.core.relational.Relational,
-               sm.And, sm.Or, sm.Not, BooleanAtom, sm.Symbol, sm.NumberSymbol)
+               sm.And, sm.Or, sm.Not, BooleanAtom, sm.Symbol, sm.NumberSymbol,
+               sm.UnevaluatedExpr)     # gen.recursive's opaque nodes, unwrapped after CSE
 _node_cache = {}
 
 

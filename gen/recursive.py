@@ -36,17 +36,21 @@ Why CRBA + RNEA rather than the articulated body algorithm: the model keeps the
 canonical ``M u' = f`` form the rest of the pipeline (linearization, implicit
 solvers, constraints) takes, with ``M`` factorized numerically by the runtime;
 ABA would put the solve into the symbolic expressions, with divisions the
-pipeline cannot see. Nothing is expanded or simplified: the pipeline's CSE
-recovers the shared sub-expressions.
+pipeline cannot see. Nothing is expanded or simplified: each body's
+quantities are kept as shared opaque nodes (``_keep``: a graph linear in the
+bodies), every walk of the pipeline visits a shared node once, and gen.ir's
+CSE makes the repeated ones temporaries (then unwraps them).
 
 Taken: trees of ``PinJoint``, ``PrismaticJoint``, ``CylindricalJoint``,
 ``PlanarJoint``, ``SphericalJoint`` and ``WeldJoint`` between rigid bodies,
 with forces on points and torques on frames the tree knows (gravity from
-``apply_uniform_gravity``, loads, actuators). Refused with a
-:class:`gen.ModelError` naming what: loop closures and other constraints,
-auxiliary speeds, particles, other joint classes, explicitly time-dependent
-joints, bodies not joined to the System's frame, loads on unknown points or
-frames.
+``apply_uniform_gravity``, loads, actuators), and the System's holonomic and
+nonholonomic constraints (loop closures) with their dependent coordinates
+and speeds, handed to the runtime's constraint machinery as a Kane model's
+(:func:`constraints_of_tree`). Refused with a :class:`gen.ModelError`
+naming what: auxiliary speeds, particles, other joint classes, explicitly
+time-dependent joints, bodies not joined to the System's frame, a body that
+is the child of two joints, loads on unknown points or frames.
 """
 from __future__ import annotations
 
@@ -55,7 +59,7 @@ import sympy.physics.mechanics as me
 
 from .errors import ModelError
 
-__all__ = ["equations_of_tree", "SUPPORTED_JOINTS"]
+__all__ = ["equations_of_tree", "constraints_of_tree", "SUPPORTED_JOINTS"]
 
 SUPPORTED_JOINTS = ("PinJoint", "PrismaticJoint", "CylindricalJoint", "PlanarJoint",
                     "SphericalJoint", "WeldJoint")
@@ -80,6 +84,25 @@ def _col(xs):
 
 def _skew(a):
     return sm.Matrix([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+
+
+_UE = sm.UnevaluatedExpr
+
+
+def _keep(e):
+    """e as one opaque node (``UnevaluatedExpr``): sums and products built
+    on it keep it as one argument instead of flattening its terms into
+    theirs, so each body's quantities stay a few nodes over its parent's
+    (a DAG linear in the bodies), where flattened they grow with the depth.
+    ``gen.ir`` unwraps the nodes after its CSE."""
+    if e.is_Atom or isinstance(e, _UE) or (e.is_Mul and len(e.args) == 2
+                                           and e.args[0].is_Number and e.args[1].is_Atom):
+        return e
+    return _UE(e)
+
+
+def _kept(mat):
+    return mat.applyfunc(_keep)
 
 
 def _is_zero(e):
@@ -108,19 +131,21 @@ class _Tree:
                 f"formulation='recursive' needs a sympy System, got {type(system).__name__}")
         self.system = system
         self.N = system.frame
-        cons = []
-        if len(system.holonomic_constraints):
-            cons.append(f"{len(system.holonomic_constraints)} holonomic constraint(s)")
-        if len(system.nonholonomic_constraints):
-            cons.append(f"{len(system.nonholonomic_constraints)} nonholonomic constraint(s)")
-        if len(system.q_dep) or len(system.u_dep):
-            cons.append("dependent coordinates or speeds")
         if len(system.u_aux):
-            cons.append(f"auxiliary speeds {list(system.u_aux)}")
-        if cons:
             raise ModelError(
-                f"formulation='recursive' takes open joint trees only; the System has "
-                f"{', '.join(cons)}: use formulation='kane'")
+                f"formulation='recursive' does not take auxiliary speeds (the System has "
+                f"{list(system.u_aux)}): use formulation='kane'")
+        nh, nn = len(system.holonomic_constraints), len(system.nonholonomic_constraints)
+        if len(system.q_dep) != nh:
+            raise ModelError(
+                f"the System has {nh} holonomic constraint(s) and {len(system.q_dep)} "
+                "dependent coordinate(s) (q_dep): formulation='recursive' needs one "
+                "dependent coordinate per holonomic constraint")
+        if len(system.u_dep) != nh + nn:
+            raise ModelError(
+                f"the System has {nh} holonomic and {nn} nonholonomic constraint(s) and "
+                f"{len(system.u_dep)} dependent speed(s) (u_dep): formulation='recursive' "
+                "needs one dependent speed per constraint")
         self.q = list(system.q)
         self.u = list(system.u)
         child_of = {}
@@ -138,8 +163,10 @@ class _Tree:
             if j.child in child_of:
                 raise ModelError(
                     f"body {_name(j.child)!r} is the child of joints {_name(child_of[j.child])!r} "
-                    f"and {_name(j)!r}: a closed loop, which formulation='recursive' does not "
-                    "take (use formulation='kane')")
+                    f"and {_name(j)!r}: formulation='recursive' takes the joints of a tree; "
+                    "close a loop with holonomic constraints on the tree instead "
+                    "(System.add_holonomic_constraints, with the dependent coordinates "
+                    "and speeds in q_dep and u_dep)")
             child_of[j.child] = j
         # the root: the body (or bodies) whose frame is the System's frame
         self.ground = set()
@@ -200,7 +227,16 @@ class _Tree:
             raise ModelError(f"the System has {kd.shape[0]} kinematic equation(s) for "
                              f"{len(qd)} coordinate(s)")
         self.kdes = kd
-        K = kd.jacobian(qd)
+        # the coefficients of q' by row, over plain symbols and only for the
+        # q' a row holds (a Jacobian in every q' of every row is quadratic
+        # in n, each entry a derivative by a Derivative)
+        D = [sm.Dummy(f"qd{i}") for i in range(len(qd))]
+        kdD = kd.xreplace(dict(zip(qd, D)))
+        K = sm.zeros(len(qd), len(qd))
+        where = {d: k for k, d in enumerate(D)}
+        for i in range(len(qd)):
+            for d in kdD[i].free_symbols & set(D):
+                K[i, where[d]] = kdD[i].diff(d)
         rest = kd.xreplace({x: 0 for x in qd})
         if any(K[i, k] != 0 for i in range(len(qd)) for k in range(len(qd)) if i != k):
             sol = K.LUsolve(-rest)
@@ -218,13 +254,17 @@ def equations_of_tree(system):
     -------
     (M, f, q, u, kdes) : sympy Matrix (nu, nu), Matrix (nu, 1), list, list, Matrix (nq, 1)
         ``M u' = f`` in the System's speed order, and the System's kinematic
-        equations (``kdes = 0``).
+        equations (``kdes = 0``). With constraints, M and f are the tree's
+        equations for all its speeds (independent, then dependent: the
+        System's order), without the constraint forces, as a Kane model's
+        are; see :func:`constraints_of_tree`.
     """
     tree = _Tree(system)
     N = tree.N
     nu = len(tree.u)
     qset = set(tree.q)
 
+    udots = [s.diff(_T) for s in tree.u]
     # ---- per joint: E, r, S and the velocity-product part of d/dt [w_rel; v_rel]
     for n in tree.order:
         j, child, parent = n.joint, n.body, n.joint.parent
@@ -250,7 +290,7 @@ def equations_of_tree(system):
                 f"joint {_name(j)!r}: the child's motion relative to the parent is not "
                 "linear and homogeneous in the joint's speeds (an explicitly time-"
                 "dependent joint): formulation='recursive' does not take it")
-        if any(e.has(*[s.diff(_T) for s in tree.u]) for e in S):
+        if any(e.has(*udots) for e in S):
             raise ModelError(f"joint {_name(j)!r}: the joint's motion holds speed derivatives")
         qs = sorted((S.atoms(sm.Function) & qset), key=sm.default_sort_key)
         if qs:
@@ -363,7 +403,7 @@ def equations_of_tree(system):
     zero = sm.zeros(3, 1)
     for n in tree.order:
         R = n.R
-        n.Sw = sm.Matrix.vstack(R * n.S[:3, :], R * n.S[3:, :]) if n.S.shape[1] \
+        n.Sw = _kept(sm.Matrix.vstack(R * n.S[:3, :], R * n.S[3:, :])) if n.S.shape[1] \
             else sm.zeros(6, 0)
         rel = n.Sw * _col(n.joint.speeds)
         w_rel, v_rel = rel[:3, :], rel[3:, :]
@@ -373,19 +413,19 @@ def equations_of_tree(system):
         else:
             w_p, v_p, al_p, a_p = n.parent.w, n.parent.v, n.parent.al, n.parent.a
             Rp = n.parent.R
-        r = Rp * n.r_pp + R * n.r_cc
+        r = _kept(Rp * n.r_pp + R * n.r_cc)
         n.rw = r
-        n.w = w_p + w_rel
-        n.v = v_p + _cross(w_p, r) + v_rel
+        n.w = _kept(w_p + w_rel)
+        n.v = _kept(v_p + _cross(w_p, r) + v_rel)
         al = al_p + _cross(w_p, w_rel)
         a = a_p + _cross(al_p, r) + _cross(w_p, _cross(w_p, r)) \
             + _cross(2 * w_p, v_rel) + _cross(w_rel, v_rel)
         if n.rel_bias is not None:
             al += R * n.rel_bias[:3, :]
             a += R * n.rel_bias[3:, :]
-        n.al, n.a = al, a
+        n.al, n.a = _kept(al), _kept(a)
         b = n.body
-        n.Iw = R * b.central_inertia.to_matrix(b.frame) * R.T
+        n.Iw = _kept(R * _inertia_matrix(b) * R.T)
     # forces in: each body's F - m a and T - I al - w x I w, plus its
     # children's (formed with their signs: negating a large sum would make
     # sympy distribute the -1 over every term)
@@ -397,7 +437,7 @@ def equations_of_tree(system):
         for c in n.children:
             Fi += c.Ftot
             Ni += c.Ntot + _cross(c.rw, c.Ftot)
-        n.Ftot, n.Ntot = Fi, Ni
+        n.Ftot, n.Ntot = Fi, Ni = _kept(Fi), _kept(Ni)
         tau = n.Sw.T * sm.Matrix.vstack(Ni, Fi)
         for k, idx in enumerate(n.speed_idx):
             f[idx] = tau[k]
@@ -415,19 +455,19 @@ def equations_of_tree(system):
             mt += c.mt
             h += c.h + c.mt * d
             J += c.J + (ht * ndt + ndt * ht) + c.mt * (dt_ * ndt)
-        n.mt, n.h, n.J = mt, h, J
+        n.mt, n.h, n.J = _keep(mt), _kept(h), _kept(J)
     for n in tree.order:
         nj = n.Sw.shape[1]
         if not nj:
             continue
         ht = _skew(n.h)
         sw, sv = n.Sw[:3, :], n.Sw[3:, :]
-        L = n.J * sw + ht * sv
-        P = n.mt * sv + sm.Matrix.hstack(*[_cross(sw[:, k], n.h) for k in range(nj)])
+        L = _kept(n.J * sw + ht * sv)
+        P = _kept(n.mt * sv + sm.Matrix.hstack(*[_cross(sw[:, k], n.h) for k in range(nj)]))
         m = n
         while m is not None:
             if m is not n:
-                L = L + sm.Matrix.hstack(*[_cross(prev.rw, P[:, k]) for k in range(nj)])
+                L = _kept(L + sm.Matrix.hstack(*[_cross(prev.rw, P[:, k]) for k in range(nj)]))
             blk = m.Sw.T * sm.Matrix.vstack(L, P)    # rows: m's speeds, columns: n's
             for a_, ia in enumerate(m.speed_idx):
                 for b_, ib in enumerate(n.speed_idx):
@@ -435,6 +475,53 @@ def equations_of_tree(system):
                     M[ib, ia] = blk[a_, b_]
             prev, m = m, m.parent
     return M, f, tree.q, tree.u, tree.kdes
+
+
+def _inertia_matrix(body):
+    """The body's central inertia in its own axes: read off the dyadic's
+    terms when they are all in those axes (sympy's to_matrix expresses
+    each of the nine components through dot products, the slowest step of
+    the build); to_matrix otherwise."""
+    frame, out = body.frame, sm.zeros(3, 3)
+    for coef, v1, v2 in body.central_inertia.args:
+        idx = []
+        for v in (v1, v2):
+            if len(v.args) != 1 or v.args[0][1] != frame:
+                return body.central_inertia.to_matrix(frame)
+            comps = list(v.args[0][0])
+            nz = [i for i, c in enumerate(comps) if c != 0]
+            if len(nz) != 1 or comps[nz[0]] != 1:
+                return body.central_inertia.to_matrix(frame)
+            idx.append(nz[0])
+        out[idx[0], idx[1]] += coef
+    return out
+
+
+def constraints_of_tree(system):
+    """The System's loop closures and other constraints, for the runtime's
+    constraint machinery (dependent coordinates and speeds, the constrained
+    solve, projection), as a Kane model carries them.
+
+    Returns
+    -------
+    None, or (fc, A, b, nq_dep, nu_dep)
+        ``fc(q) = 0`` (the holonomic constraints), ``A u + b = 0`` (the
+        velocity constraints: the holonomic ones differentiated and the
+        nonholonomic ones, q' replaced by the kinematic equations' solution),
+        and the numbers of dependent coordinates and speeds (last in the
+        System's q and u).
+    """
+    nh, nn = len(system.holonomic_constraints), len(system.nonholonomic_constraints)
+    if not nh and not nn:
+        return None
+    tree = _Tree(system)        # the same checks and q' map as equations_of_tree
+    vc = sm.Matrix(system.velocity_constraints).xreplace(tree.qdot)
+    A = vc.jacobian(tree.u)
+    b = vc.xreplace({s: 0 for s in tree.u})
+    fc = sm.Matrix(system.holonomic_constraints) if nh else sm.zeros(0, 1)
+    if any(e.has(*[s.diff(_T) for s in tree.u]) for e in list(A) + list(b)):
+        raise ModelError("the System's velocity constraints hold speed derivatives")
+    return fc, A, b, len(system.q_dep), len(system.u_dep)
 
 
 def _rot(k, th):
@@ -477,9 +564,10 @@ def _orientation(n, tree):
     if rep is None:
         Rp = A * (_rot(k, th) if k is not None else sm.eye(3)) * B
         rep = (Rp * ET, None, sm.S.Zero, sm.eye(3))
-    n.rep = rep
     A, k, th, B = rep
-    n.R = A * (_rot(k, th) if k is not None else sm.eye(3)) * B
+    n.rep = rep = (_kept(A), k, _keep(th), B)
+    A, k, th, B = rep
+    n.R = _kept(A * (_rot(k, th) if k is not None else sm.eye(3)) * B)
 
 
 def _same(X, Y, q):
