@@ -111,14 +111,7 @@ def build(rendered, verbose=False, timings=None):
         return _derived(built) or built
     tmp = new_build_dir(root, modname)
     try:
-        src = tmp / "src"
-        try:
-            src.mkdir()
-            for fname, text in files.items():
-                (src / fname).write_text(text)
-            (tmp / "obj").mkdir()
-        except OSError as e:
-            raise cache_error(e, root, "write the sources") from None
+        src = _write_sources(tmp, root, files)
         units = backend.units(name, files, rendered.derivatives, includes)
         own, runtime = compile_units(src, tmp / "obj", units, backend, name)
         so = link_library(backend.link_order(own, runtime), tmp / libfile, cxx=backend.link_cxx)
@@ -323,6 +316,20 @@ def compile_units(src: Path, objdir: Path, units, backend, name):
     return results[:n_own], runtime
 
 
+
+def _write_sources(tmp, root, files):
+    """Write files {name: text} into tmp/src and make tmp/obj; the source
+    folder. An OS error is the cache's (cache_error, naming root)."""
+    src = tmp / "src"
+    try:
+        src.mkdir()
+        for fname, text in files.items():
+            (src / fname).write_text(text)
+        (tmp / "obj").mkdir()
+    except OSError as e:
+        raise cache_error(e, root, "write the sources") from None
+    return src
+
 def build_plain(modname, render, sources=None):
     """A plain C library built from files that need none of a model
     backend's glue (gen.ocp): render() -> (files {name: text}, the C files
@@ -339,14 +346,7 @@ def build_plain(modname, render, sources=None):
     files, csources = render()
     tmp = new_build_dir(root, modname)
     try:
-        src = tmp / "src"
-        try:
-            src.mkdir()
-            for fname, text in files.items():
-                (src / fname).write_text(text)
-            (tmp / "obj").mkdir()
-        except OSError as e:
-            raise cache_error(e, root, "write the sources") from None
+        src = _write_sources(tmp, root, files)
         cc = c_compiler()
         flags = [*C_FLAGS, "-fPIC"]
         objs = [_cc_object(cc, src, f, tmp / "obj" / (Path(f).stem + ".o"), flags)

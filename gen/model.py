@@ -1513,9 +1513,11 @@ def _srepr(mat, sub):
     return f"{mat.shape}" + ";".join(lines)
 
 
-def _has_kind(exprs, kind):
-    """[whether e holds a node of class kind for e in exprs], each distinct
-    subexpression visited once."""
+def _memo_any(exprs, leaf):
+    """[whether e holds a node for which leaf(node) is True, for e in exprs]:
+    leaf returns True or False to decide a node, None to look inside it;
+    each distinct subexpression visited once (sympy's has walks a shared
+    subexpression every time it appears)."""
     memo, out = {}, []
     for root in exprs:
         stack = [(root, False)]
@@ -1526,39 +1528,28 @@ def _has_kind(exprs, kind):
                 continue
             if e in memo:
                 continue
-            if isinstance(e, kind) or not e.args:
-                memo[e] = isinstance(e, kind)
+            hit = leaf(e)
+            if hit is not None:
+                memo[e] = hit
                 continue
             stack.append((e, True))
             stack.extend((a, False) for a in e.args if a not in memo)
         out.append(memo[root])
     return out
+
+
+def _has_kind(exprs, kind):
+    """[whether e holds a node of class kind for e in exprs]."""
+    return _memo_any(exprs, lambda e: True if isinstance(e, kind) else
+                     (False if not e.args else None))
 
 
 def _has_any(exprs, targets):
-    """[e.has(*targets) for e in exprs] for atomic targets (symbols), each
-    distinct subexpression visited once (sympy's has walks a shared
-    subexpression every time it appears)."""
+    """[e.has(*targets) for e in exprs] for atomic targets (symbols)."""
     targets = set(targets)
     if not targets:
         return [False for _ in exprs]
-    memo, out = {}, []
-    for root in exprs:
-        stack = [(root, False)]
-        while stack:
-            e, done = stack.pop()
-            if done:
-                memo[e] = any(memo[a] for a in e.args)
-                continue
-            if e in memo:
-                continue
-            if not e.args:
-                memo[e] = e in targets
-                continue
-            stack.append((e, True))
-            stack.extend((a, False) for a in e.args if a not in memo)
-        out.append(memo[root])
-    return out
+    return _memo_any(exprs, lambda e: None if e.args else e in targets)
 
 
 def _check_expressions(mat, what, allowed, inputs=()):
