@@ -180,3 +180,19 @@ def test_float_cortex_build_agrees_with_double_under_qemu(swing, tmp_path):
         assert sec["rodata"] >= fp["flash"], sec
         print(f"  tracker of the optimum (201 rows) on the Cortex-M4F, float: tables "
               f"{fp['flash']} B, object .text {sec['text']} B, .rodata {sec['rodata']} B, RAM 0 B")
+
+
+# ----------------------------------------------------------- the example
+@pytest.mark.slow
+def test_example_tracks_the_optimum_and_writes_the_c_sources(tmp_path, capsys):
+    """examples/cart_pole_tracking.py's default reference is this optimum: its
+    run ends within 1e-2 of upright at rest, the open-loop replay misses, and
+    it writes the model's sources with the tracker's 201-row tables."""
+    import cart_pole_tracking as cpt
+    sol = cpt.main(["--c-out", str(tmp_path / "cart_pole")])
+    out = capsys.readouterr().out
+    assert "optimal swing-up: " in out and "200 samples every 0.01" in out
+    assert "7236 bytes of flash in float" in out and "open loop from the same start" in out
+    assert abs(sol.t[-1] - 2.0) < 1e-12 and _miss(sol.x[-1]) < 1e-2
+    text = (tmp_path / "cart_pole" / "swingup.c").read_text()
+    assert "swingup_K[201 * CART_POLE_NR * CART_POLE_NS]" in text
