@@ -12,6 +12,7 @@ optimum's own final state (upright, at rest); the open-loop replay of the
 optimal inputs from the same start; the host's double sim.simulate for the
 float and double builds under qemu-arm.
 """
+import os
 import shutil
 import subprocess
 
@@ -26,8 +27,6 @@ try:
     import cyipopt  # noqa: F401
 except ImportError:  # pragma: no cover - the ocp extra
     cyipopt = None
-
-import os
 
 if cyipopt is None:
     if os.environ.get("CI") == "true":
