@@ -11,6 +11,23 @@ compiles its Cython), solve (IPOPT, tol 1e-8 both), iterations, the whole
 wall time and the objectives (they must agree). eomgen with the exact
 Hessian (its default) and with limited-memory (opty's only mode).
 Medians of --repeat runs; ratios are eomgen / opty. Nothing is asserted.
+
+Then opty's parameter-identification example problem (its examples-gallery
+``plot_vyasarayani.py``, from Vyasarayani et al. 2011, section 3.1): the
+pendulum y1' = y2, y2' = -p sin(y1), p = 10, y(0) = (pi/6, 0), 50 s sampled
+at 5000 nodes (odeint), noise N(0, 0.05) on y1 and N(0, 0.1) on y2;
+minimise the misfit of y1 over every node, midpoint, initial state free,
+p free, the guess the noisy measurements and a random p in [0, 100) (seeded
+here, the same for both). opty: its Problem with the objective and gradient
+written as in the example; eomgen: gen.OptimalControl(..., method="midpoint",
+parameters=[p], fit={y1: (t, y1_meas)}) on the same pendulum from
+KanesMethod (unit mass and length, gravity p). The objectives differ by the
+example's constant factor (the interval), so the minimisers are the same;
+printed: build, solve, iterations, the recovered p of each, their
+difference against the standard error of p (Gauss-Newton on the simulated
+misfit, p and the initial state free), and the ratios.
+
+    python bench/bench_ocp.py --problems ident [--ident-nodes 5000] [--seed 0]
 """
 import argparse
 import importlib.util
@@ -104,6 +121,128 @@ def opty(N, method):
                 objective=info["obj_val"], status=info["status"])
 
 
+# ---------------------------------------- opty's parameter identification
+IDENT = {"duration": 50.0, "p": 10.0, "y0": (np.pi / 6.0, 0.0), "noise": (0.05, 0.1)}
+
+
+def ident_data(N, seed):
+    """The example's data: odeint of the pendulum at N nodes, with its noise;
+    and the p guess, 100 * uniform [0, 1), all from one seeded generator."""
+    from scipy.integrate import odeint
+    rng = np.random.default_rng(seed)
+    time_ = np.linspace(0.0, IDENT["duration"], N)
+    y = odeint(lambda y, t, p: [y[1], -p * np.sin(y[0])], IDENT["y0"], time_, args=(IDENT["p"],))
+    y1 = y[:, 0] + rng.normal(scale=IDENT["noise"][0], size=N)
+    y2 = y[:, 1] + rng.normal(scale=IDENT["noise"][1], size=N)
+    return time_, y1, y2, 100.0 * rng.random()
+
+
+def ident_standard_error(time_, p):
+    """sigma / sqrt of the Gauss-Newton information of the y1 misfit, with p
+    and the initial state free (odeint sensitivities by central differences)."""
+    from scipy.integrate import odeint
+
+    def y1(th):
+        return odeint(lambda y, t, q: [y[1], -q * np.sin(y[0])], th[1:], time_, args=(th[0],),
+                      rtol=1e-11, atol=1e-11)[:, 0]
+    th0 = np.array([p, *IDENT["y0"]])
+    J = np.empty((len(time_), 3))
+    for i in range(3):
+        d = np.zeros(3)
+        d[i] = 1e-6
+        J[:, i] = (y1(th0 + d) - y1(th0 - d)) / 2e-6
+    cov = IDENT["noise"][0] ** 2 * np.linalg.inv(J.T @ J)
+    return float(np.sqrt(cov[0, 0]))
+
+
+def ident_ours(data, hessian="exact"):
+    import gen
+    from sympy.physics import mechanics as me
+    time_, y1m, y2m, p0 = data
+    N = len(time_)
+    with tempfile.TemporaryDirectory() as d:
+        os.environ["EOMGEN_CACHE"] = d
+        try:
+            t0 = time.perf_counter()
+            y1, y2 = me.dynamicsymbols("y1 y2")
+            p = sm.Symbol("p")
+            A_ = me.ReferenceFrame("N")
+            B_ = A_.orientnew("B", "axis", [y1, A_.z])
+            B_.set_ang_vel(A_, y2 * A_.z)
+            O = me.Point("O")
+            O.set_vel(A_, 0)
+            P = O.locatenew("P", B_.x)
+            P.v2pt_theory(O, A_, B_)
+            km = me.KanesMethod(A_, [y1], [y2], kd_eqs=[y1.diff() - y2])
+            km.kanes_equations([me.Particle("m", P, 1)], [(P, p * A_.x)])
+            model = gen.Model.from_kanes(km, constants={p: IDENT["p"]}, name="vyasarayani")
+            ocp = gen.OptimalControl(model, N, IDENT["duration"], method="midpoint",
+                                     parameters=[p], fit={y1: (time_, y1m)})
+            t1 = time.perf_counter()
+            sol = ocp.solve({y1: y1m, y2: y2m, p: p0}, hessian=hessian, tol=1e-8)
+            t2 = time.perf_counter()
+        finally:
+            del os.environ["EOMGEN_CACHE"]
+    return dict(build=t1 - t0, solve=t2 - t1, total=t2 - t0, iterations=sol.iterations,
+                objective=sol.objective, status=sol.status, p=float(sol.p[0]))
+
+
+def ident_opty(data):
+    from opty.direct_collocation import Problem
+    time_, y1m, y2m, p0 = data
+    N = len(time_)
+    interval = IDENT["duration"] / (N - 1)
+    p, t = sm.symbols("p, t")
+    y1, y2 = [f(t) for f in sm.symbols("y1, y2", cls=sm.Function)]
+    eom = sm.Matrix([y1, y2]).diff(t) - sm.Matrix([y2, -p * sm.sin(y1)])
+
+    def obj(free):
+        return interval * np.sum((y1m - free[:N]) ** 2)
+
+    def obj_grad(free):
+        grad = np.zeros_like(free)
+        grad[:N] = 2.0 * interval * (free[:N] - y1m)
+        return grad
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as d:
+        prob = Problem(obj, obj_grad, eom, (y1, y2), N, interval, time_symbol=t,
+                       integration_method="midpoint", tmp_dir=d)
+        t1 = time.perf_counter()
+        prob.add_option("print_level", 0)
+        prob.add_option("tol", 1e-8)
+        solution, info = prob.solve(np.hstack((y1m, y2m, p0)))
+        t2 = time.perf_counter()
+    return dict(build=t1 - t0, solve=t2 - t1, total=t2 - t0, iterations=None,
+                objective=info["obj_val"] / interval, status=info["status"],
+                p=float(solution[-1]))
+
+
+def run_ident(a):
+    data = ident_data(a.ident_nodes, a.seed)
+    se = ident_standard_error(data[0], IDENT["p"])
+    o = median([ident_opty(data) for _ in range(a.opty_repeat)])
+    e = median([ident_ours(data, "exact") for _ in range(a.repeat)])
+    lm = median([ident_ours(data, "limited-memory") for _ in range(a.repeat)])
+    print(f"\nopty's parameter identification (Vyasarayani 2011), N = {a.ident_nodes}, midpoint, "
+          f"seed {a.seed}: true p = {IDENT['p']}, guess p = {data[3]:.4f}, standard error of p "
+          f"{se:.2e}")
+    print("| | build | solve (it) | total | recovered p | p - 10 | objective (sum of squares) "
+          "| status |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name, r in (("opty 1.5", o), ("eomgen, exact Hessian", e), ("eomgen, limited-memory", lm)):
+        it = "" if r["iterations"] is None else f" ({r['iterations']})"
+        print(f"| {name} | {r['build']:.2f} s | {r['solve']:.2f} s{it} | {r['total']:.2f} s | "
+              f"{r['p']:.8f} | {r['p'] - IDENT['p']:+.2e} | {r['objective']:.8g} | "
+              f"{r['status']} |")
+    print(f"ratios eomgen (exact) / opty: build {e['build'] / o['build']:.3f}x, solve "
+          f"{e['solve'] / o['solve']:.3f}x, total {e['total'] / o['total']:.3f}x; "
+          f"|p_eomgen - p_opty| = {abs(e['p'] - o['p']):.1e} "
+          f"({abs(e['p'] - o['p']) / se:.1e} standard errors); objectives' rel. diff "
+          f"{abs(e['objective'] - o['objective']) / abs(o['objective']):.1e}")
+    return dict(N=a.ident_nodes, seed=a.seed, se=se, p_guess=data[3], opty=o, exact=e,
+                lbfgs=lm)
+
+
 def median(runs):
     out = {}
     for k in runs[0]:
@@ -118,10 +257,14 @@ def main(argv=None):
     ap.add_argument("--methods", nargs="+", default=["backward-euler", "midpoint"])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--opty-repeat", type=int, default=1)
+    ap.add_argument("--problems", nargs="+", default=["swing-up", "ident"],
+                    choices=["swing-up", "ident"])
+    ap.add_argument("--ident-nodes", type=int, default=5000)
+    ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--json")
     a = ap.parse_args(argv)
     rows = []
-    for N in a.nodes:
+    for N in (a.nodes if "swing-up" in a.problems else []):
         for method in a.methods:
             o = median([opty(N, method) for _ in range(a.opty_repeat)])
             e = median([ours(N, method, "exact") for _ in range(a.repeat)])
@@ -131,6 +274,14 @@ def main(argv=None):
                   f"obj {o['objective']:.10g} | eomgen exact build {e['build']:.2f}s solve "
                   f"{e['solve']:.2f}s it {e['iterations']} obj {e['objective']:.10g} | "
                   f"limited-memory solve {lm['solve']:.2f}s it {lm['iterations']}", flush=True)
+    if rows:
+        table(rows)
+    ident = run_ident(a) if "ident" in a.problems else None
+    if a.json:
+        Path(a.json).write_text(json.dumps({"swing_up": rows, "ident": ident}, indent=1))
+
+
+def table(rows):
     print()
     print("| N | method | opty build | opty solve | opty total | eomgen build | solve exact (it) "
           "| solve L-BFGS (it) | total exact | build ratio | total ratio | objective rel. diff |")
@@ -142,8 +293,6 @@ def main(argv=None):
               f"{lm['solve']:.2f} s ({lm['iterations']}) | {e['total']:.2f} s | "
               f"{e['build'] / o['build']:.3f}x | {e['total'] / o['total']:.3f}x | "
               f"{abs(e['objective'] - o['objective']) / abs(o['objective']):.1e} |")
-    if a.json:
-        Path(a.json).write_text(json.dumps(rows, indent=1))
 
 
 if __name__ == "__main__":

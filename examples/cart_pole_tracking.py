@@ -3,20 +3,28 @@
 
     python examples/cart_pole_tracking.py
     python examples/cart_pole_tracking.py --c-out out/cart_pole --plot docs/tracking.png
+    python examples/cart_pole_tracking.py --reference simulated
 
-The reference here is simulated: an energy-pumping swing-up (Astrom and
-Furuta 2000) from hanging, handed to an LQR near upright, sampled at
-100 Hz with a zero-order hold, so it is a trajectory of the model.
-(An optimal control's solution takes its place unchanged:
-``sol.tracker(Q, R, period)``.) The tracker linearizes the model along it
-(``sim.linearize(dt=period)``), runs the discrete Riccati recursion
-backwards from the upright LQR's cost, and closes the loop inside the
-generated C from 0.05 rad off the reference's start. ``--c-out`` writes
-the model's sources with the tracker as const tables (``swingup.c``,
-``swingup.h``): the standalone binary closed by it is
+The reference is the optimal swing-up of examples/cart_pole_swing_up.py
+(gen.OptimalControl: hanging to upright in 2 s, minimum integral of F^2,
+|F| <= 20 N, |x| <= 1.5 m, Hermite-Simpson on 101 nodes, IPOPT through
+cyipopt), and the tracker is ``sol.tracker(Q, R, period)``. It linearizes
+the model along the optimum (``sim.linearize(dt=period)``), runs the
+discrete Riccati recursion backwards from the upright LQR's cost, and closes
+the loop inside the generated C from 0.05 rad off the optimal start; the
+optimal inputs replayed open loop from the same start miss upright.
+
+Without cyipopt (``pip install eomgen[ocp]``), or with ``--reference
+simulated``, the reference is simulated instead: an energy-pumping swing-up
+(Astrom and Furuta 2000) from hanging, handed to an LQR near upright,
+sampled at 100 Hz with a zero-order hold (8 s), tracked by
+``gen.TrajectoryTracker(sim, t, x, r, Q, R, period)``.
+
+``--c-out`` writes the model's sources with the tracker as const tables
+(``swingup.c``, ``swingup.h``): the standalone binary closed by it is
 
     cd out/cart_pole && cc -O2 -DCART_POLE_TRACKER=swingup *.c -lm -o cart_pole_sim
-    ./cart_pole_sim --t-end 8 --dt 1e-3 --x0 theta=3.18159
+    ./cart_pole_sim --t-end 2 --dt 1e-3 --x0 theta=3.19159
 
 and on a microcontroller, every 10 ms: ``swingup_step(t, x, F)``.
 """
@@ -31,6 +39,10 @@ PERIOD = 0.01
 T_END = 8.0
 Q_TRACK = np.diag([10.0, 10.0, 1.0, 1.0])
 R_TRACK = np.array([[0.1]])
+# the optimum's tracker: a 2 s manoeuvre, tighter weights
+OCP_T_END = 2.0
+OCP_Q = np.diag([100.0, 100.0, 10.0, 10.0])
+OCP_R = np.array([[0.1]])
 
 
 def wrap(a):
@@ -65,26 +77,60 @@ def swing_up_reference(sim, t_end=T_END, period=PERIOD, theta0=np.pi - 0.01):
     return sol.t, sol.x, sol.r
 
 
+def optimal_reference(nodes=101):
+    """The optimal swing-up (examples/cart_pole_swing_up.py), solved: the
+    OptimalSolution and its simulator; None without cyipopt."""
+    try:
+        import cyipopt  # noqa: F401
+    except ImportError:
+        return None
+    import cart_pole_swing_up as cps
+    ocp, _ = cps.problem(nodes, "hermite-simpson")
+    sol = ocp.solve()
+    if sol.status != 0:
+        raise RuntimeError(f"the swing-up optimum was not found: {sol.message}")
+    return sol, ocp.simulator
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--reference", choices=("optimal", "simulated"), default="optimal",
+                    help="the optimal swing-up (needs cyipopt) or a simulated one")
     ap.add_argument("--c-out", help="write the model's C sources and the tracker's here")
     ap.add_argument("--plot", help="save a plot of the reference and the tracked run")
     a = ap.parse_args(argv)
-    sim = gen.compile(cp.model())
-    t, x, r = swing_up_reference(sim)
-    tracker = gen.TrajectoryTracker(sim, t, x, r, Q_TRACK, R_TRACK, PERIOD)
+    opt = optimal_reference() if a.reference == "optimal" else None
+    if a.reference == "optimal" and opt is None:
+        print("cyipopt is not installed (pip install eomgen[ocp]): tracking the simulated "
+              "swing-up instead of the optimal one")
+    if opt is not None:
+        ocp_sol, sim = opt
+        t, x, r, t_end = ocp_sol.t, ocp_sol.x, ocp_sol.r, OCP_T_END
+        print(f"optimal swing-up: {ocp_sol.iterations} IPOPT iterations, objective "
+              f"{ocp_sol.objective:.6g} N^2 s")
+        tracker = ocp_sol.tracker(OCP_Q, OCP_R, PERIOD)
+    else:
+        sim = gen.compile(cp.model())
+        t, x, r = swing_up_reference(sim)
+        t_end = T_END
+        tracker = gen.TrajectoryTracker(sim, t, x, r, Q_TRACK, R_TRACK, PERIOD)
     print(tracker)
     x0 = x[0] + np.array([0.0, 0.05, 0.0, 0.0])
-    sol = sim.simulate(x0, T_END, 1e-3, controller=tracker)
+    sol = sim.simulate(x0, t_end, 1e-3, controller=tracker)
     end = sol.x[-1]
     print(f"from {x0[1] - x[0, 1]:+.2f} rad off the reference's start: at t = {sol.t[-1]} s "
           f"max |x - x_ref(end)| = {np.max(np.abs(end - x[-1])):.2e}, "
           f"off upright {abs(wrap(end[1])):.2e} rad, cart at {end[0]:+.4f} m")
+    if opt is not None:
+        ol = sim.simulate(x0, t_end, 1e-3, r=(t, r[:, 0]))
+        print(f"the optimal inputs open loop from the same start: max |x - x_ref(end)| = "
+              f"{np.max(np.abs(ol.x[-1] - x[-1])):.2e}, off upright "
+              f"{abs(wrap(ol.x[-1, 1])):.2e} rad")
     fp = tracker.footprint("float")
     print(f"tables ({fp['rows']} rows): {fp['flash']} bytes of flash in float, "
           f"{tracker.footprint('double')['flash']} in double, no RAM")
     if a.c_out:
-        gen.generate(cp.model(), a.c_out)
+        gen.generate(cp.model(), a.c_out)   # the same model and constants as the OCP's
         for f in tracker.to_c(a.c_out, name="swingup"):
             print("wrote", f)
     if a.plot:

@@ -294,7 +294,7 @@ def test_eigen_backend_runs_the_tracker_too(sim, swing):
 
 @pytest.mark.slow
 def test_example_runs_and_writes_the_c_sources(tmp_path, capsys):
-    sol = cpt.main(["--c-out", str(tmp_path / "cart_pole")])
+    sol = cpt.main(["--reference", "simulated", "--c-out", str(tmp_path / "cart_pole")])
     out = capsys.readouterr().out
     assert "800 samples every 0.01" in out and "28836 bytes of flash in float" in out
     assert abs(sol.x[-1, 1] - 2 * np.pi) < 1e-2
