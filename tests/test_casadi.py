@@ -808,8 +808,8 @@ def test_rodas4_step_stiff_model_large_h(stiff_model):
             except gen.SolverError:
                 blew = True
     assert blew                                     # RK4 is unstable at this h
-    assert abs(xr[0] - ref[0]) < 1e-3 * abs(ref[0]) + 1e-4, (xr, ref)   # the slow angle
-    assert abs(xr[2] - ref[2]) < 1e-2, (xr, ref)    # the slow speed
+    assert abs(ref[0]) > 0.3                        # it has swung through
+    np.testing.assert_allclose(xr, ref, rtol=0, atol=1e-6)     # measured: 2e-8
 
 
 def test_rodas4_bad_use(cart_model, kane_model):
