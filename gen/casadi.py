@@ -179,6 +179,10 @@ def _explain(F, args, kwargs, err):
         if v is not None and v.size == k and not np.all(np.isfinite(v)):
             i = int(np.flatnonzero(~np.isfinite(v))[0])
             raise InputError(f"{sig}: {n}[{i}] = {v[i]}: the inputs must be finite") from err
+        if n == "h" and fname.endswith("_step_rodas4") and v is not None and v.size == 1 \
+                and v[0] == 0:
+            raise InputError(f"{sig}: h = 0: a RODAS4 step needs a nonzero step size "
+                             f"(its stages divide by h)") from err
     # the status of the library's function at these inputs
     lib = ctypes.CDLL(str(path))
     dp = ctypes.POINTER(ctypes.c_double)
@@ -203,8 +207,12 @@ def _explain(F, args, kwargs, err):
     at = ", ".join(f"{n} = {np.array2string(v, precision=6, separator=', ')}" if v.size > 1
                    else f"{n} = {float(v[0]):g}" for n, v in state.items() if n in ("x", "t", "h"))
     cls = EXCEPTIONS.get(name, SolverError)
-    raise cls(f"{sig} failed with {name}: {status_message(st)} (at {at})", status=st,
-              status_name=name) from err
+    msg = f"{sig} failed with {name}: {status_message(st)} (at {at})"
+    try:
+        exc = cls(msg, status=st, status_name=name)
+    except TypeError:           # an error class without a status (InputError)
+        exc = cls(msg)
+    raise exc from err
 
 
 def functions(model, verbose=False, step="rk4"):

@@ -822,6 +822,8 @@ def test_rodas4_bad_use(cart_model, kane_model):
     x, p = np.array([0.1, 0.5, 0.2, -0.3]), np.array(cart_model.p_values)
     with pytest.raises(gen.InputError, match=r"cart_pole_step_rodas4\(x, r, p, t, h\): h is missing"):
         F["step"].call({"x": x, "r": 0.3, "p": p, "t": 0})
+    with pytest.raises(gen.InputError, match=r"step_rodas4\(x, r, p, t, h\): h = 0"):
+        F["step"](x, 0.3, p, 0, 0.0)
     # no second derivatives: CasADi says it cannot differentiate the adjoint
     X = ca.MX.sym("X", 4)
     y = F["step"](X, 0.3, p, 0, 0.01)
