@@ -59,6 +59,16 @@ def _cmap(model, name):
     return list(range(nz))
 
 
+def _holds_t(model):
+    """Whether the model's equations hold the time explicitly (then
+    step_rodas4 needs df/dt; otherwise it is zero)."""
+    m = model
+    mats = [m.Kqd, m.Ku, m.kf, m.M, m.f]
+    if m.mv:
+        mats += [m.A, m.a]
+    return any(m.t in getattr(e, "free_symbols", ()) for e in mats)
+
+
 def function_specs(model):
     """The functions of a model's CasADi library, as the template's data:
     [{"sym", "kind", "ins": [(name, sparsity, default)], "outs": [(name,
@@ -99,7 +109,8 @@ def function_specs(model):
         specs.append({"sym": f"{p}_{n}", "kind": n, "name": n,
                       "ins": [(a, _dense(k, 1), d) for a, k, d in ins],
                       "outs": [(a, _dense(k, 1)) for a, k in outs],
-                      "sz_w": sz["sz_w"] if n == "step_rodas4" else 0, "sz_out": sz_out})
+                      "sz_w": sz["sz_w"] if n == "step_rodas4" else 0, "sz_out": sz_out,
+                      "t_dep": n == "step_rodas4" and _holds_t(m)})
         nrow = outs[0][1]
         if n == "step" and (mc or mv):
             continue        # the projection has no derivative kernels: no derivatives

@@ -259,7 +259,7 @@ def test_bad_use(cart_model, kane_model, monkeypatch):
         gc.functions(cart_model)
 
 
-@pytest.mark.parametrize("which", ["kane", "cart"])
+@pytest.mark.parametrize("which", ["kane", "cart", "forced"])
 def test_wrappers_compile_strict(request, which):
     """The generated <name>_casadi.c is clean under the project's strict
     flags (-std=c99 -Wall -Wextra -Werror -pedantic)."""
