@@ -341,7 +341,7 @@ def test_opti_swing_up_equals_pure_sx(cart_model, cart_sim):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("which", ["cart", "kane"])
+@pytest.mark.parametrize("which", ["cart", "kane", "forced"])
 def test_sanitizers_every_entry_point(request, which, tmp_path):
     """Every function of the library, called through CasADi's convention
     from C (the work sizes it reports, NULL inputs as zeros, NULL outputs
@@ -425,6 +425,10 @@ def test_sanitizers_every_entry_point(request, which, tmp_path):
     np.testing.assert_array_equal(got[f"{cart_model.name}_rhs"], _v(F["rhs"](x, r, p, 0.3)))
     np.testing.assert_array_equal(got[f"{cart_model.name}_step"],
                                   _v(F["step"](x, r, p, 0.3, 0.02)))
+    if f"{cart_model.name}_step_rodas4" in got:      # unconstrained: the RODAS4 step too
+        Fr = gc.functions(cart_model, step="rodas4")["step"]
+        np.testing.assert_array_equal(got[f"{cart_model.name}_step_rodas4"],
+                                      _v(Fr(x, r, p, 0.3, 0.02)))
     # and a second derivative: the Hessian blocks jac_adj1_rhs wrote are CasADi's
     ja = F["rhs"].reverse(1).jacobian()
     vals = ja(x, r, p, 0.3, *[np.linspace(0.1, 0.4, 4)] * 2, *[0] * 4)
