@@ -80,7 +80,9 @@ def function_specs(model):
     columns) and "fill" (what each output of a second-derivative
     function holds) are what the template's code needs. step of a
     constrained model has no derivatives (its projection has no
-    derivative kernels).
+    derivative kernels). An unconstrained model also has step_rodas4 (one
+    RODAS4 step of the runtime, functions(model, step="rodas4")) with
+    jac_, fwd1_ and adj1_ only; "t_dep" says whether its value needs df/dt.
     """
     m = model
     p = m.name
