@@ -13,7 +13,10 @@ the model's, ``<model>_rhs``; the dict's keys are the short names):
 
     rhs(x, r, p, t) -> xdot                      <p>_eval_rhs
     implicit(x, xdot, r, p, t) -> residual       xdot - rhs, then f_c(q), f_v(q, u)
-    step(x, r, p, t, h) -> x_next                <p>_step_rk4 with projection
+    step(x, r, p, t, h) -> x_next                <p>_step_rk4 with projection, or with
+                                                 step="rodas4" one RODAS4 step of the
+                                                 runtime (gen_rt_rodas4_trial; CasADi
+                                                 name <p>_step_rodas4, first derivatives)
     outputs(x, r, p, t) -> y                     <p>_eval_outputs (models with outputs)
     constraints(x, p, t) -> c                    [f_c(q); f_v(q, u)] (constrained models)
 
@@ -47,7 +50,7 @@ from .render import render
 
 __all__ = ["functions", "library", "function_specs", "NAMES", "GenFunction"]
 
-from .casadi_specs import NAMES, function_specs  # noqa: E402,F401
+from .casadi_specs import NAMES, STEP_METHODS, function_specs  # noqa: E402,F401
 
 def _casadi():
     try:
@@ -176,6 +179,10 @@ def _explain(F, args, kwargs, err):
         if v is not None and v.size == k and not np.all(np.isfinite(v)):
             i = int(np.flatnonzero(~np.isfinite(v))[0])
             raise InputError(f"{sig}: {n}[{i}] = {v[i]}: the inputs must be finite") from err
+        if n == "h" and fname.endswith("_step_rodas4") and v is not None and v.size == 1 \
+                and v[0] == 0:
+            raise InputError(f"{sig}: h = 0: a RODAS4 step needs a nonzero step size "
+                             f"(its stages divide by h)") from err
     # the status of the library's function at these inputs
     lib = ctypes.CDLL(str(path))
     dp = ctypes.POINTER(ctypes.c_double)
@@ -200,11 +207,15 @@ def _explain(F, args, kwargs, err):
     at = ", ".join(f"{n} = {np.array2string(v, precision=6, separator=', ')}" if v.size > 1
                    else f"{n} = {float(v[0]):g}" for n, v in state.items() if n in ("x", "t", "h"))
     cls = EXCEPTIONS.get(name, SolverError)
-    raise cls(f"{sig} failed with {name}: {status_message(st)} (at {at})", status=st,
-              status_name=name) from err
+    msg = f"{sig} failed with {name}: {status_message(st)} (at {at})"
+    try:
+        exc = cls(msg, status=st, status_name=name)
+    except TypeError:           # an error class without a status (InputError)
+        exc = cls(msg)
+    raise exc from err
 
 
-def functions(model, verbose=False):
+def functions(model, verbose=False, step="rk4"):
     """The model as CasADi functions, loaded with ``casadi.external`` from
     one generated shared library (:func:`library`).
 
@@ -214,6 +225,14 @@ def functions(model, verbose=False):
         The model.
     verbose : bool, optional
         Print the compiler's commands.
+    step : {"rk4", "rodas4"}, optional
+        The method of ``step``: one classic RK4 step with the projection
+        (``<model>_step_rk4``; exact first and second derivatives), or one
+        RODAS4 step of the runtime (``gen_rt_rodas4_trial``, the adaptive
+        RODAS4's trial step: linearly implicit, L-stable, for stiff models
+        and large h; unconstrained models; exact first derivatives, no
+        second derivatives). The dict's key is ``step`` either way; the
+        CasADi name is ``<model>_step`` or ``<model>_step_rodas4``.
 
     Returns
     -------
@@ -227,7 +246,10 @@ def functions(model, verbose=False):
     gen.MissingDependencyError
         When CasADi is not installed (``pip install eomgen[casadi]``).
     gen.ModelError
-        When ``model`` is not a gen.Model.
+        When ``model`` is not a gen.Model, or ``step="rodas4"`` for a
+        constrained model.
+    ValueError
+        When ``step`` is not one of "rk4", "rodas4".
     gen.BuildError
         When the compiler fails.
     """
@@ -236,12 +258,25 @@ def functions(model, verbose=False):
         raise MissingDependencyError("the installed casadi has no casadi.external: "
                                      "pip install --upgrade eomgen[casadi]")
     require_model(model, "gen.casadi.functions")
+    if not isinstance(step, str) or step not in STEP_METHODS:
+        raise ValueError(f"gen.casadi.functions(step={step!r}): step must be one of "
+                         f"{', '.join(repr(k) for k in STEP_METHODS)}")
+    if step == "rodas4" and (model.mc or model.mv):
+        raise ModelError(
+            f"gen.casadi.functions(step='rodas4'): model {model.name!r} has constraints "
+            f"({model.mc} holonomic, {model.mv} nonholonomic) and the RODAS4 step has no "
+            f"projection and no derivatives of one; use step='rk4' (with its projection)")
     path = str(library(model, verbose=verbose))
     out = {}
+    want = STEP_METHODS[step]
     for s in function_specs(model):
-        if s["kind"] not in NAMES:
+        if s["kind"] not in NAMES and s["kind"] != want:
             continue
-        out[s["name"]] = _checked_class(ca)(ca.external(s["sym"], path, _OPTIONS), path, model)
+        if s["kind"] == "step" and want != "step":
+            continue
+        key = "step" if s["kind"] == want else s["name"]
+        out[key] = _checked_class(ca)(ca.external(s["sym"], path, _OPTIONS), path, model)
+    out = {k: out[k] for k in NAMES if k in out}
     if not out:
         raise ModelError(f"model {model.name!r} gave no CasADi functions")
     return out

@@ -5,11 +5,15 @@ casadi backend (gen/backends.py) to render the library and by gen.casadi to
 load it; it imports no stage of the pipeline."""
 from __future__ import annotations
 
-__all__ = ["NAMES", "function_specs", "sizes", "derivative_kernels",
+__all__ = ["NAMES", "STEP_METHODS", "function_specs", "sizes", "derivative_kernels",
            "kernel_context"]
 
 #: the functions, in the order of the dict functions() returns
 NAMES = ("rhs", "implicit", "step", "outputs", "constraints")
+
+#: the methods of step (functions(model, step=...)): the library symbol of
+#: each (<model>_<symbol>); "rodas4" for unconstrained models only
+STEP_METHODS = {"rk4": "step", "rodas4": "step_rodas4"}
 
 
 def _dense(m, n):
@@ -34,6 +38,11 @@ def sizes(model):
     wk = (2 * nw * nw + 3 * nw * nz + 3 * nz * nz + 4 * nw + 2 * nz + mr * nz
           + 4 * nx * nv + 4 * nx * nv * nv + 2 * nz * nv + 4 * nx + 16
           + 4 * (nz + nw + nw * nw + nw * nz + nz * nv + nx * nv))     # step's adjoint sweep
+    # step_rodas4's first derivatives: f0, Jf and the Hessians of f at z,
+    # G = I/(h gamma) - Jf_x, the six stages and their derivatives
+    wk = max(wk, 2 * nw * nw + nw * nz + 4 * nw + 2 * nz * nz + nw * nz + 16
+             + nx * nz + nx * nz * nz + nx * nx + 6 * nx + 6 * nx * nv + nz * nv
+             + nx * nv + 2 * nz + nx)
     return {"nw": nw, "nz": nz, "mr": mr, "nv": nv, "wk": wk,
             "sz_w": mr * nv + nv * nv + mr * nv * nv + nv + wk}
 
@@ -50,6 +59,16 @@ def _cmap(model, name):
     return list(range(nz))
 
 
+def _holds_t(model):
+    """Whether the model's equations hold the time explicitly (then
+    step_rodas4 needs df/dt; otherwise it is zero)."""
+    m = model
+    mats = [m.Kqd, m.Ku, m.kf, m.M, m.f]
+    if m.mv:
+        mats += [m.A, m.a]
+    return any(m.t in getattr(e, "free_symbols", ()) for e in mats)
+
+
 def function_specs(model):
     """The functions of a model's CasADi library, as the template's data:
     [{"sym", "kind", "ins": [(name, sparsity, default)], "outs": [(name,
@@ -61,7 +80,9 @@ def function_specs(model):
     columns) and "fill" (what each output of a second-derivative
     function holds) are what the template's code needs. step of a
     constrained model has no derivatives (its projection has no
-    derivative kernels).
+    derivative kernels). An unconstrained model also has step_rodas4 (one
+    RODAS4 step of the runtime, functions(model, step="rodas4")) with
+    jac_, fwd1_ and adj1_ only; "t_dep" says whether its value needs df/dt.
     """
     m = model
     p = m.name
@@ -78,6 +99,10 @@ def function_specs(model):
         "constraints": ([x_, p_, t_], [("c", mc + mv)]),
     }
     have = [n for n in NAMES if (n != "outputs" or ny) and (n != "constraints" or mc + mv)]
+    if not (mc or mv):
+        # one RODAS4 step (gen_rt_rodas4_trial), first derivatives only
+        base["step_rodas4"] = base["step"]
+        have.append("step_rodas4")
     sz = sizes(m)
     sz_out = max(1, nx + mc + mv, ny)
     specs = []
@@ -86,7 +111,8 @@ def function_specs(model):
         specs.append({"sym": f"{p}_{n}", "kind": n, "name": n,
                       "ins": [(a, _dense(k, 1), d) for a, k, d in ins],
                       "outs": [(a, _dense(k, 1)) for a, k in outs],
-                      "sz_w": 0, "sz_out": sz_out})
+                      "sz_w": sz["sz_w"] if n == "step_rodas4" else 0, "sz_out": sz_out,
+                      "t_dep": n == "step_rodas4" and _holds_t(m)})
         nrow = outs[0][1]
         if n == "step" and (mc or mv):
             continue        # the projection has no derivative kernels: no derivatives
@@ -119,6 +145,8 @@ def function_specs(model):
         specs.append({**common, "sym": f"adj1_{p}_{n}", "kind": f"adj1_{n}", "name": f"adj1_{n}",
                       "mode": "adj", "ins": adj_ins, "outs": adj_outs,
                       "blocks": blocks, "seed": nin + nout})
+        if n == "step_rodas4":
+            continue        # no second derivatives: CasADi says it cannot differentiate adj1_
         # second derivatives: the Jacobians of jac_, fwd1_ and adj1_ (their
         # outputs w.r.t. their inputs; CasADi's names), from the tensor
         # T[a][b][c] = d2 out_a / dv_b dv_c or, for adj1_, the Hessian of

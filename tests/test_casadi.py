@@ -259,7 +259,7 @@ def test_bad_use(cart_model, kane_model, monkeypatch):
         gc.functions(cart_model)
 
 
-@pytest.mark.parametrize("which", ["kane", "cart"])
+@pytest.mark.parametrize("which", ["kane", "cart", "forced"])
 def test_wrappers_compile_strict(request, which):
     """The generated <name>_casadi.c is clean under the project's strict
     flags (-std=c99 -Wall -Wextra -Werror -pedantic)."""
@@ -288,7 +288,7 @@ def _cart_rhs_sx(x, u, p):
     return ca.vertcat(v, w, (m22 * f1 - m12 * f2) / det, (m11 * f2 - m12 * f1) / det)
 
 
-def _swing_up(step_all, N, h):
+def _swing_up(step_all, N, h, hess="exact"):
     """Minimum-effort swing-up of the cart-pole from hanging to upright in
     N h seconds, by multiple shooting in casadi.Opti (IPOPT); step_all maps
     (X[:, :-1], U) to the next states. (objective, U, iterations, seconds)."""
@@ -306,7 +306,7 @@ def _swing_up(step_all, N, h):
     # IPOPT's exact Hessian, through CasADi (jac_adj1_/jac_jac_ of step), for both
     opti.solver("ipopt", {"print_time": False},
                 {"print_level": 0, "sb": "yes", "tol": 1e-10, "max_iter": 500,
-                 "hessian_approximation": "exact"})
+                 "hessian_approximation": hess})
     t0 = time.perf_counter()
     sol = opti.solve()
     dt = time.perf_counter() - t0
@@ -341,7 +341,7 @@ def test_opti_swing_up_equals_pure_sx(cart_model, cart_sim):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("which", ["cart", "kane"])
+@pytest.mark.parametrize("which", ["cart", "kane", "forced"])
 def test_sanitizers_every_entry_point(request, which, tmp_path):
     """Every function of the library, called through CasADi's convention
     from C (the work sizes it reports, NULL inputs as zeros, NULL outputs
@@ -425,6 +425,10 @@ def test_sanitizers_every_entry_point(request, which, tmp_path):
     np.testing.assert_array_equal(got[f"{cart_model.name}_rhs"], _v(F["rhs"](x, r, p, 0.3)))
     np.testing.assert_array_equal(got[f"{cart_model.name}_step"],
                                   _v(F["step"](x, r, p, 0.3, 0.02)))
+    if f"{cart_model.name}_step_rodas4" in got:      # unconstrained: the RODAS4 step too
+        Fr = gc.functions(cart_model, step="rodas4")["step"]
+        np.testing.assert_array_equal(got[f"{cart_model.name}_step_rodas4"],
+                                      _v(Fr(x, r, p, 0.3, 0.02)))
     # and a second derivative: the Hessian blocks jac_adj1_rhs wrote are CasADi's
     ja = F["rhs"].reverse(1).jacobian()
     vals = ja(x, r, p, 0.3, *[np.linspace(0.1, 0.4, 4)] * 2, *[0] * 4)
@@ -612,3 +616,242 @@ def test_cart_hessians_equal_pure_sx(cart_model):
         for u, v in zip(a, b):
             np.testing.assert_allclose(u, v, rtol=0, atol=1e-10 * max(1, np.abs(v).max()),
                                        err_msg=name)
+
+
+# ---------------------------------------------------------------------------
+# step="rodas4": one RODAS4 step of the runtime (gen_rt_rodas4_trial) with
+# exact first derivatives (the stage equations differentiated, d(Jf)/dv from
+# the rhs Hessian kernels); no second derivatives.
+
+# the tableau of csrc/gen_rt_rodas4.h, written out again for the reference
+_RD = dict(
+    GAMMA=0.25, ALPHA2=0.386, ALPHA3=0.21, ALPHA4=0.63,
+    GAMMA2=-0.1043, GAMMA3=0.1035, GAMMA4=-0.3620000000000023E-01,
+    A21=0.1544000000000000E+01, A31=0.9466785280815826, A32=0.2557011698983284,
+    A41=0.3314825187068521E+01, A42=0.2896124015972201E+01, A43=0.9986419139977817,
+    A51=0.1221224509226641E+01, A52=0.6019134481288629E+01, A53=0.1253708332932087E+02,
+    A54=-0.6878860361058950,
+    C21=-0.5668800000000000E+01, C31=-0.2430093356833875E+01, C32=-0.2063599157091915,
+    C41=-0.1073529058151375, C42=-0.9594562251023355E+01, C43=-0.2047028614809616E+02,
+    C51=0.7496443313967647E+01, C52=-0.1024680431464352E+02, C53=-0.3399990352819905E+02,
+    C54=0.1170890893206160E+02,
+    C61=0.8083246795921522E+01, C62=-0.7981132988064893E+01, C63=-0.3152159432874371E+02,
+    C64=0.1631930543123136E+02, C65=-0.6058818238834054E+01)
+
+
+def _rodas4_numpy(f, Jx, dfdt, t, x, h):
+    """One RODAS4 step (Hairer-Wanner VI.4, the form of gen_rt_rodas4.h) in
+    numpy: f(t, x), the Jacobian Jx and df/dt at (t, x)."""
+    c = _RD
+    n = len(x)
+    G = np.eye(n) / (h * c["GAMMA"]) - Jx
+    A = [[], [c["A21"]], [c["A31"], c["A32"]], [c["A41"], c["A42"], c["A43"]],
+         [c["A51"], c["A52"], c["A53"], c["A54"]],
+         [c["A51"], c["A52"], c["A53"], c["A54"], 1.0]]
+    C = [[], [c["C21"]], [c["C31"], c["C32"]], [c["C41"], c["C42"], c["C43"]],
+         [c["C51"], c["C52"], c["C53"], c["C54"]],
+         [c["C61"], c["C62"], c["C63"], c["C64"], c["C65"]]]
+    al = [0, c["ALPHA2"], c["ALPHA3"], c["ALPHA4"], 1, 1]
+    ga = [c["GAMMA"], c["GAMMA2"], c["GAMMA3"], c["GAMMA4"], 0, 0]
+    K = []
+    for s in range(6):
+        y = x + sum(a * k for a, k in zip(A[s], K))
+        rhs = f(t + al[s] * h, y) + sum(cc / h * k for cc, k in zip(C[s], K)) + h * ga[s] * dfdt
+        K.append(np.linalg.solve(G, rhs))
+    return x + sum(a * k for a, k in zip(A[5], K)) + K[5]
+
+
+@pytest.fixture(scope="module")
+def forced_model():
+    """A small nonautonomous model with an input (from_matrices): two
+    coupled oscillators, a q-dependent mass matrix, a stiff-ish spring and
+    a drive a sin(w t) + r, so that df/dt and d(Jf)/dv are not zero."""
+    import sympy as sm
+    t = sm.Symbol("t")
+    q1, q2, u1, u2 = [sm.Function(n)(t) for n in ("q1", "q2", "u1", "u2")]
+    k1, k2, c1, a, w = sm.symbols("k1 k2 c1 a w")
+    r0 = sm.Function("F")(t)
+    M = sm.Matrix([[2 + sm.cos(q2), sm.Rational(1, 2)], [sm.Rational(1, 2), 1]])
+    f = sm.Matrix([-k1 * sm.sin(q1) - c1 * u1 + a * sm.sin(w * t) + r0,
+                   -k2 * q2 - c1 * u2 + u1 ** 2 * sm.sin(q2)])
+    kd = sm.Matrix([q1.diff(t) - u1, q2.diff(t) - u2])
+    return gen.Model.from_matrices(M, f, [q1, q2], [u1, u2], kd,
+                                   constants={k1: 3.0, k2: 400.0, c1: 0.3, a: 2.0, w: 5.0},
+                                   inputs=[r0], name="forced_cs")
+
+
+def _rodas4_case(request, which):
+    model = request.getfixturevalue(f"{which}_model")
+    F = gc.functions(model, step="rodas4")
+    rng = np.random.default_rng(360)
+    x = rng.uniform(-0.6, 0.6, model.nx)
+    r = rng.uniform(-1, 1, model.nr)
+    p = np.array(model.p_values, float) * 1.1
+    return model, F, x, r, p
+
+
+@pytest.fixture(scope="module")
+def stiff_model():
+    """examples/stiff_double_pendulum.py with the elbow ringing 1e3 times
+    faster than the pair swings (unconstrained, autonomous)."""
+    import stiff_double_pendulum as sdp
+    return sdp.model(name="stiff_dp_cs", ratio=1e3)
+
+
+@pytest.mark.parametrize("which", ["cart", "stiff"])
+def test_rodas4_step_same_bits_as_the_runtime(request, which):
+    """step="rodas4" is the adaptive RODAS4's trial step: a simulation with
+    method="rodas4" whose first (and only) step is h (loose tolerances,
+    t_end = h) lands on the same bits; and the numpy RODAS4 of the tableau
+    agrees to rounding."""
+    model, F, x, r, p = _rodas4_case(request, which)
+    if which == "stiff":
+        x = np.array([0.6, 0.0, 0.0, 0.0])     # at rest: the first step heuristic takes h whole
+    sim = gen.compile(model)
+    assert F["step"].name() == f"{model.name}_step_rodas4"
+    assert list(F) == [k for k in gc.NAMES if k in F]
+    rk = gc.functions(model)["step"]
+    assert rk.name() == f"{model.name}_step" and rk.name_in() == F["step"].name_in()
+    for h in (0.01, 0.03):      # steps the first-step heuristic takes whole (loose tolerances)
+        sol = sim.simulate(x, h, h, method="rodas4", rtol=1e3, atol=1e3, p=p, r=r)
+        assert sol.stats["n_steps"] == 1 and sol.t[-1] == h
+        got = _v(F["step"](x, r, p, 0.0, h))
+        assert got.tobytes() == np.asarray(sol.x)[-1].tobytes()
+        ref = _rodas4_numpy(lambda tt, y: sim.rhs(tt, y, r=r, p=p), sim.jac(0.0, x, r=r, p=p),
+                            np.zeros(model.nx), 0.0, x, h)
+        np.testing.assert_allclose(got, ref, rtol=1e-13, atol=1e-14)
+        assert np.abs(got - _v(rk(x, r, p, 0.0, h))).max() > 1e-11    # not RK4's value (both order 4)
+
+
+def _fd_jacobian(F, z, n, nr, np_, rel=1e-6):
+    def val(z):
+        return _v(F(z[:n], z[n:n + nr], z[n + nr:n + nr + np_], z[-2], z[-1]))
+    cols = []
+    for c in range(len(z)):
+        d = rel * max(1.0, abs(z[c]))
+        e = np.zeros(len(z))
+        e[c] = d
+        cols.append((val(z + e) - val(z - e)) / (2 * d))
+    return np.column_stack(cols)
+
+
+@pytest.mark.parametrize("which", ["cart", "forced"])
+def test_rodas4_step_jacobian(request, which):
+    """jac_step (every input: x, r, p, t, h) against central differences of
+    the value and CasADi's own finite differences; forward and reverse
+    products through it; the value against the numpy RODAS4 with the exact
+    df/dt (a nonautonomous model)."""
+    model, F, x, r, p = _rodas4_case(request, which)
+    S = F["step"]
+    t, h = 0.3, 0.04
+    n, nr, np_ = model.nx, model.nr, model.np
+    X, R, P = ca.SX.sym("x", n), ca.SX.sym("r", nr), ca.SX.sym("p", np_)
+    T, H = ca.SX.sym("t"), ca.SX.sym("h")
+    V = ca.vertcat(X, R, P, T, H)
+    y = S(X, R, P, T, H)
+    Jf = ca.Function("J", [X, R, P, T, H], [ca.jacobian(y, V)])
+    J = np.array(ca.densify(Jf(x, r, p, t, h)).full())
+    z = np.concatenate([x, r, p, [t, h]])
+    Jn = _fd_jacobian(S, z, n, nr, np_)
+    scale = np.abs(J).max()
+    assert np.abs(J - Jn).max() <= 1e-7 * scale, np.abs(J - Jn).max(axis=0)
+    assert np.abs(J[:, :n] - np.eye(n)).max() > 1e-2           # not a trivial step
+    if which == "forced":
+        assert np.abs(J[:, n + nr + np_]).max() > 1e-3        # df/dt's derivative is in
+    # CasADi's own central differences of the external (its derivatives disabled)
+    path = str(gc.library(model))
+    fd = ca.external(S.name(), path, {"enable_fd": True, "enable_jacobian": False,
+                                      "enable_forward": False, "enable_reverse": False,
+                                      "fd_method": "central"})
+    f1 = fd.forward(1)
+    args = {"x": x, "r": r, "p": p, "t": t, "h": h}
+    base = {**args, "out_x_next": fd.call(args)["x_next"],
+            **{f"fwd_{k}": 0 * ca.DM(val) for k, val in args.items()}}
+    Jfd = np.column_stack([_v(f1.call({**base, f"fwd_{k}": e})["fwd_x_next"])
+                           for k in args for e in np.eye(np.size(args[k]))])
+    np.testing.assert_allclose(J, Jfd, rtol=1e-6, atol=1e-6 * scale)
+    # forward and reverse products (jac_ with enable_forward=False, adj1_)
+    rng = np.random.default_rng(5)
+    sv, sw = rng.standard_normal(len(z)), rng.standard_normal(n)
+    fwd = ca.Function("f", [X, R, P, T, H], [ca.jtimes(y, V, ca.DM(sv))])
+    adj = ca.Function("a", [X, R, P, T, H], [ca.jtimes(y, V, ca.DM(sw), True)])
+    np.testing.assert_allclose(_v(fwd(x, r, p, t, h)), J @ sv, rtol=1e-12, atol=1e-12 * scale)
+    np.testing.assert_allclose(_v(adj(x, r, p, t, h)), J.T @ sw, rtol=1e-12, atol=1e-12 * scale)
+    if which == "forced":
+        # the value: the numpy RODAS4 with the exact df/dt (from jac_rhs)
+        sim = gen.compile(model)
+        dfdt = np.array(ca.Function("d", [T], [ca.jacobian(F["rhs"](x, r, p, T), T)])(t)).ravel()
+        assert np.abs(dfdt).max() > 0.1
+        ref = _rodas4_numpy(lambda tt, yy: sim.rhs(tt, yy, r=r, p=p), sim.jac(t, x, r=r, p=p),
+                            dfdt, t, x, h)
+        np.testing.assert_allclose(_v(S(x, r, p, t, h)), ref, rtol=1e-13, atol=1e-14)
+
+
+def test_rodas4_step_stiff_model_large_h(stiff_model):
+    """The point of step="rodas4": on the stiff double pendulum (its elbow
+    rings 1e3 times faster than the pair swings) a step of h = 0.02 stays on
+    the solution (compared with the adaptive RODAS4 at tight tolerances)
+    while RK4 at the same h blows up."""
+    model = stiff_model
+    sim = gen.compile(model)
+    Fr = gc.functions(model, step="rodas4")
+    Fk = gc.functions(model)
+    p = np.array(model.p_values, float)
+    x0 = np.array([0.6, 0.0, 0.0, 0.0])
+    h, N = 0.02, 50
+    ref = np.asarray(sim.simulate(x0, N * h, N * h, method="rodas4", rtol=1e-10, atol=1e-12,
+                                  p=p).x)[-1]
+    xr, xk = x0.copy(), x0.copy()
+    blew = False
+    for k in range(N):
+        xr = _v(Fr["step"](xr, [], p, k * h, h))
+        if not blew:
+            try:
+                xk = _v(Fk["step"](xk, [], p, k * h, h))
+                blew = not np.abs(xk).max() < 1e3
+            except gen.SolverError:
+                blew = True
+    assert blew                                     # RK4 is unstable at this h
+    assert abs(ref[0]) > 0.3                        # it has swung through
+    np.testing.assert_allclose(xr, ref, rtol=0, atol=1e-6)     # measured: 2e-8
+
+
+def test_rodas4_bad_use(cart_model, kane_model):
+    with pytest.raises(ValueError, match=r"step must be one of 'rk4', 'rodas4'"):
+        gc.functions(cart_model, step="rk5")
+    # a constrained model: no RODAS4 step (it would need the projection)
+    with pytest.raises(gen.ModelError, match=r"step='rodas4'.*constraints.*step='rk4'"):
+        gc.functions(kane_model, step="rodas4")
+    F = gc.functions(cart_model, step="rodas4")
+    x, p = np.array([0.1, 0.5, 0.2, -0.3]), np.array(cart_model.p_values)
+    with pytest.raises(gen.InputError, match=r"cart_pole_step_rodas4\(x, r, p, t, h\): h is missing"):
+        F["step"].call({"x": x, "r": 0.3, "p": p, "t": 0})
+    with pytest.raises(gen.InputError, match=r"step_rodas4\(x, r, p, t, h\): h = 0"):
+        F["step"](x, 0.3, p, 0, 0.0)
+    # no second derivatives: CasADi says it cannot differentiate the adjoint
+    X = ca.MX.sym("X", 4)
+    y = F["step"](X, 0.3, p, 0, 0.01)
+    g = ca.gradient(ca.sumsqr(y), X)
+    with pytest.raises(RuntimeError, match="adj1_cart_pole_step_rodas4"):
+        ca.Function("H", [X], [ca.jacobian(g, X)])(x)
+
+
+def test_rodas4_swing_up_limited_memory(cart_model, cart_sim):
+    """The swing-up by multiple shooting with step="rodas4" (first
+    derivatives only: IPOPT's limited-memory Hessian) has the optimum of the
+    RK4 problem to the two methods' difference, and its controls, replayed
+    by the adaptive RODAS4 at tight tolerances (a zero-order-hold table),
+    bring the cart-pole upright."""
+    N, h = 100, 0.02
+    p = np.array(cart_model.p_values, float)
+    tk = (np.arange(N) * h).reshape(1, -1)
+    Sr = gc.functions(cart_model, step="rodas4")["step"].map(N)
+    Sk = gc.functions(cart_model)["step"].map(N)
+    ours = _swing_up(lambda X, U: Sr(X, U, p, tk, h), N, h, hess="limited-memory")
+    ref = _swing_up(lambda X, U: Sk(X, U, p, tk, h), N, h)
+    assert ours[0] > 10
+    assert abs(ours[0] - ref[0]) <= 1e-5 * ref[0]              # measured 7e-7
+    np.testing.assert_allclose(ours[1], ref[1], rtol=0, atol=1e-3)   # measured 2e-5
+    sol = cart_sim.simulate([0, np.pi, 0, 0], N * h, h, method="rodas4", rtol=1e-11,
+                            atol=1e-12, p=p, r=(np.arange(N) * h, ours[1].reshape(-1, 1)))
+    np.testing.assert_allclose(np.asarray(sol.x)[-1], 0, atol=1e-4)  # measured 2e-6
