@@ -13,14 +13,21 @@ The transcription. Every collocation point (the nodes, the midpoints, or
 both: the method decides) carries the slopes s = [q', u'] of the state as
 unknowns, and the model's implicit equations hold there:
 
-    kinematics   Kqd(q) (q' - Jc(q)^T mu) + Ku(q) u + kf(q, t) = 0
+    kinematics   Kqd(q) q' + Ku(q) u + kf(q, t) = 0
     dynamics     M(q) u' - f(q, u, r, p, t) - A(q)^T lam = 0
 
-with lam the velocity constraints' multipliers and mu (Gear, Gupta and
-Leimkuhler's stabilisation: zero at a solution of the DAE) the
-configuration constraints' ones. The configuration and velocity
-constraints f_c(q, t) = 0 and A(q) u + b(q, t) = 0 hold at every node: a
-constrained model stays a DAE and nothing is inverted symbolically. The
+with lam the velocity constraints' multipliers (unknowns at every point;
+for Kane's method M and f are the unconstrained equations of all the
+speeds, so A^T lam is the constraint force). Constrained models
+(method "hermite-simpson" only, OpenSim Moco's form) keep the
+configuration, velocity and acceleration constraints f_c(q) = 0,
+A u + b = 0 and A u' + a = 0 at every node, and a velocity correction
+Jc(q)^T mu of the midpoint's coordinate slopes in Simpson's rule (mu zero
+for the DAE): the model stays a DAE and nothing is inverted symbolically.
+At an end node whose initial or final values give all of q (and u), the
+configuration (and velocity) rows are checked on those values and left
+out: kept, they would repeat the fixed values and IPOPT's equality
+constraints would be linearly dependent. The
 defects tie the states to the slopes, linearly (h = T/(N-1)):
 
     backward-euler   x[k+1] - x[k] - h s[k+1]                   (points: nodes 1..N-1)
@@ -364,10 +371,12 @@ class OptimalControl:
     gen.InputError
         A non-differentiable objective, a symbol that is not the model's, a
         key of bounds that is not a state, input or parameter to identify, a
-        bad duration or method (before anything is built).
+        bad duration or method, a constrained model with a method other than
+        "hermite-simpson", initial or final values that violate the model's
+        constraints (before anything is built).
     gen.ModelError
-        When ``model`` is not a gen.Model, or has constraints or auxiliary
-        speeds (not supported yet).
+        When ``model`` is not a gen.Model, or has auxiliary speeds (not
+        supported yet).
     gen.BuildError
         When the compiler fails.
     """
@@ -440,6 +449,7 @@ class OptimalControl:
         self.final = final or {}
         self.constants = {}
         self._check_runtime()
+        self._fixed_manifold_nodes()     # inconsistent initial/final values: refused now
         self._lib = None
         self._build()
         self.build_seconds = time.perf_counter() - t0
