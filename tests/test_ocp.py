@@ -493,5 +493,16 @@ def test_constrained_pendulum_swing_up_equals_minimal(kind, minimal_swing_up):
         assert hol <= 1e-10 and vel <= 1e-10, (hol, vel)
         i1 = model.state_names.index("q1")
         assert sol.x[:, i1].min() < -0.99 and sol.x[:, i1].max() > 0.99   # it swings over
+        # the multipliers are the rod's force: radial m (-L w^2) = m g cos(th) + N_r,
+        # the constraint force A^T lam = c lam (x, y) (c: 1 Kane's x u1 + y u2, 2
+        # Lagrange's derivative of x^2 + y^2 - L^2)
+        lay, z = ocp._lay, sol._z
+        lam = np.array([z[lay.node_point[k][1][0]] for k in range(nodes)])
+        i2 = model.state_names.index("q2")
+        x, y = sol.x[:, i1], sol.x[:, i2]
+        w2 = (sol.x[:, model.nq + i1]**2 + sol.x[:, model.nq + i2]**2) / PEND["L"]**2
+        c = 1.0 if kind == "kane" else 2.0
+        N_r = -PEND["m"] * PEND["L"] * w2 - PEND["m"] * PEND["g"] * x / PEND["L"]
+        assert np.abs(c * lam * PEND["L"] - N_r).max() < 1e-8 * np.abs(N_r).max()
     assert abs(gaps[101]) < 1e-6, gaps
     assert 10 < gaps[51] / gaps[101] < 25, gaps     # h^4: the same continuous optimum
