@@ -365,15 +365,21 @@ def _pendulum(kind):
     q1, q2 = dynamicsymbols("q1:3")
     P = O.locatenew("P", q1 * N.x + q2 * N.y)
     load = [(P, m * g * N.x + tau / L**2 * (-q2 * N.x + q1 * N.y))]
-    if kind == "kane":
+    if kind in ("kane", "kane_seed"):
         u1, u2 = dynamicsymbols("u1:3")
         P.set_vel(N, u1 * N.x + u2 * N.y)
+        if kind == "kane":
+            f_v = q1 * u1 + q2 * u2
+        else:       # the seed's own: P's velocity along the rod frame atan(y/x)'s x
+            A = N.orientnew("A", "axis", [sm.atan(q2 / q1), N.z])
+            f_v = sm.simplify(P.vel(N).express(A).dot(A.x))
         km = KanesMethod(N, q_ind=[q2], u_ind=[u2], q_dependent=[q1], u_dependent=[u1],
                          configuration_constraints=[sm.sqrt(q1**2 + q2**2) - L],
-                         velocity_constraints=[q1 * u1 + q2 * u2],
+                         velocity_constraints=[f_v],
                          kd_eqs=[q1.diff() - u1, q2.diff() - u2])
         km.kanes_equations([Particle("pP", P, m)], load)
-        model = gen.Model.from_kanes(km, constants=consts, inputs=[tau], name="pend_nonmin_kane_ocp")
+        model = gen.Model.from_kanes(km, constants=consts, inputs=[tau],
+                                     name=f"pend_nonmin_{kind}_ocp")
         return model, {"q1": q1, "q2": q2, "u1": u1, "u2": u2, "tau": tau}
     P.set_vel(N, P.pos_from(O).dt(N))
     lm = LagrangesMethod(Lagrangian(N, Particle("pP", P, m)), [q1, q2],
@@ -512,3 +518,33 @@ def test_constrained_pendulum_swing_up_equals_minimal(kind, minimal_swing_up):
     assert np.abs(run.x[-1] - sol.x[-1]).max() < 1e-3
     assert abs(gaps[101]) < 1e-6, gaps
     assert 10 < gaps[51] / gaps[101] < 25, gaps     # h^4: the same continuous optimum
+
+
+@pytest.mark.parametrize("kind", ["kane_seed", "lagrange"])
+def test_constrained_pendulum_one_sided_swing_with_the_seeds_constraint(kind):
+    """The seed's own Kane velocity constraint (singular at x = 0) on a swing
+    that stays on the hanging side: from rest hanging to rest at 60 degrees in
+    1 s, min integral tau^2, 41 nodes; the minimal pendulum's optimum to 1e-6
+    and the constraints to 1e-10 at every node."""
+    th1, T, nodes = np.pi / 3, 1.0, 41
+    mmod, ms = _pendulum("minimal")
+    tt = np.linspace(0, T, nodes)
+    a = th1 * tt / T
+    th, om, tau_m = ms["theta"], ms["omega"], ms["tau"]
+    ref = gen.OptimalControl(mmod, nodes, T, objective=tau_m**2, initial={th: 0, om: 0},
+                             final={th: th1, om: 0}).solve(guess={th: a, om: th1 / T},
+                                                           tol=1e-12, print_level=0)
+    assert ref.success, ref.message
+    model, s = _pendulum(kind)
+    q1, q2, u1, u2, tau = (s[k] for k in ("q1", "q2", "u1", "u2", "tau"))
+    c1, s1 = np.cos(th1), np.sin(th1)
+    ocp = gen.OptimalControl(model, nodes, T, objective=tau**2,
+                             initial={q1: 1.0, q2: 0, u1: 0, u2: 0},
+                             final={q1: c1, q2: s1, u1: 0, u2: 0})
+    w = th1 / T
+    sol = ocp.solve(guess={q1: np.cos(a), q2: np.sin(a), u1: -w * np.sin(a), u2: w * np.cos(a)},
+                    tol=1e-12, print_level=0)
+    assert sol.success, sol.message
+    assert abs(sol.objective / ref.objective - 1) < 1e-6, (sol.objective, ref.objective)
+    hol, vel = _manifold_residuals(sol, model)
+    assert hol <= 1e-10 and vel <= 1e-10, (hol, vel)
