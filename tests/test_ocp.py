@@ -449,7 +449,8 @@ def test_constrained_derivatives_against_finite_differences(kind):
     for j in range(n):
         e = np.zeros(n)
         e[j] = eps
-        Jfd[:, j] = (o.evaluate(z + e, "constraints") - o.evaluate(z - e, "constraints")) / (2 * eps)
+        Jfd[:, j] = (o.evaluate(z + e, "constraints")
+                     - o.evaluate(z - e, "constraints")) / (2 * eps)
         Hfd[:, j] = (lagrangian_gradient(z + e) - lagrangian_gradient(z - e)) / (2 * eps)
     assert np.abs(J - Jfd).max() < 1e-7 * max(1, np.abs(Jfd).max())
     assert np.abs(H - Hfd).max() < 1e-6 * max(1, np.abs(Hfd).max())
