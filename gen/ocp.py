@@ -13,14 +13,21 @@ The transcription. Every collocation point (the nodes, the midpoints, or
 both: the method decides) carries the slopes s = [q', u'] of the state as
 unknowns, and the model's implicit equations hold there:
 
-    kinematics   Kqd(q) (q' - Jc(q)^T mu) + Ku(q) u + kf(q, t) = 0
+    kinematics   Kqd(q) q' + Ku(q) u + kf(q, t) = 0
     dynamics     M(q) u' - f(q, u, r, p, t) - A(q)^T lam = 0
 
-with lam the velocity constraints' multipliers and mu (Gear, Gupta and
-Leimkuhler's stabilisation: zero at a solution of the DAE) the
-configuration constraints' ones. The configuration and velocity
-constraints f_c(q, t) = 0 and A(q) u + b(q, t) = 0 hold at every node: a
-constrained model stays a DAE and nothing is inverted symbolically. The
+with lam the velocity constraints' multipliers (unknowns at every point;
+for Kane's method M and f are the unconstrained equations of all the
+speeds, so A^T lam is the constraint force). Constrained models
+(method "hermite-simpson" only, OpenSim Moco's form) keep the
+configuration, velocity and acceleration constraints f_c(q) = 0,
+A u + b = 0 and A u' + a = 0 at every node, and a velocity correction
+Jc(q)^T mu of the midpoint's coordinate slopes in Simpson's rule (mu zero
+for the DAE): the model stays a DAE and nothing is inverted symbolically.
+At an end node whose initial or final values give all of q (and u), the
+configuration (and velocity) rows are checked on those values and left
+out: kept, they would repeat the fixed values and IPOPT's equality
+constraints would be linearly dependent. The
 defects tie the states to the slopes, linearly (h = T/(N-1)):
 
     backward-euler   x[k+1] - x[k] - h s[k+1]                   (points: nodes 1..N-1)
@@ -364,10 +371,12 @@ class OptimalControl:
     gen.InputError
         A non-differentiable objective, a symbol that is not the model's, a
         key of bounds that is not a state, input or parameter to identify, a
-        bad duration or method (before anything is built).
+        bad duration or method, a constrained model with a method other than
+        "hermite-simpson", initial or final values that violate the model's
+        constraints (before anything is built).
     gen.ModelError
-        When ``model`` is not a gen.Model, or has constraints or auxiliary
-        speeds (not supported yet).
+        When ``model`` is not a gen.Model, or has auxiliary speeds (not
+        supported yet).
     gen.BuildError
         When the compiler fails.
     """
@@ -384,20 +393,14 @@ class OptimalControl:
         if method not in METHODS:
             raise InputError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
         self.method = method
-        if m.mc or m.mv:
-            # the transcription below (velocity and acceleration constraints at
-            # the nodes, a velocity correction at the midpoints) is written and
-            # its derivatives checked, but IPOPT does not yet converge on the
-            # nonminimal pendulum's swing-up: refused until it does
+        if (m.mc or m.mv) and method != "hermite-simpson":
+            # position, velocity and acceleration constraints at the nodes with
+            # a velocity correction at the midpoints: Hermite-Simpson's form
+            # (OpenSim Moco); the other rules would over-determine the DAE
             raise InputError(
                 f"model {m.name!r} has {m.mc} configuration and {m.mv} velocity constraints: "
-                "gen.OptimalControl does not support constrained models yet; use minimal "
-                "coordinates")
-        if m.mc and method != "hermite-simpson":
-            raise InputError(
-                f"model {m.name!r} has configuration constraints: its transcription keeps "
-                "them at every node with a velocity correction at the midpoints, which only "
-                "method='hermite-simpson' has (got {method!r})".replace("{method!r}", repr(method)))
+                "gen.OptimalControl transcribes constrained models with "
+                f"method='hermite-simpson' only (got {method!r}); or use minimal coordinates")
         if m.mc and any(m.t in e.free_symbols for e in m.fc):
             raise InputError(f"model {m.name!r}: time-dependent configuration constraints are "
                              "not supported by gen.OptimalControl yet")
@@ -446,6 +449,7 @@ class OptimalControl:
         self.final = final or {}
         self.constants = {}
         self._check_runtime()
+        self._fixed_manifold_nodes()     # inconsistent initial/final values: refused now
         self._lib = None
         self._build()
         self.build_seconds = time.perf_counter() - t0
@@ -585,12 +589,16 @@ class OptimalControl:
             de = ([xm[i] - (xa[i] + xb[i]) / 2 - h / 8 * (sa[i] - sb[i]) for i in range(nx)]
                   + [xb[i] - xa[i] - h / 6 * (sa[i] + 4 * sm_[i] + sb[i]) for i in range(nx)])
             if mc:
-                # the velocity correction of the midpoint's coordinates (Posa,
-                # Kuindersma and Tedrake 2016; OpenSim Moco): zero for the DAE
+                # the velocity correction of the midpoint's coordinate slopes
+                # in Simpson's rule (Posa, Kuindersma and Tedrake 2016; OpenSim
+                # Moco): q' = u + Jc(q)^T mu at the midpoint, mu zero for the
+                # DAE. It enters times h: a correction of the interpolated
+                # midpoint coordinates instead would free them (by O(1)) off
+                # the manifold, where the forces differ (a spurious optimum)
                 Jm = m.fc.jacobian(q).xreplace(dict(zip(q, xm[:nq])))
                 corr = Jm.T * sm.Matrix(mu)
                 for i in range(nq):
-                    de[i] -= corr[i]
+                    de[nx + i] -= h * sm.Rational(4, 6) * corr[i]
                 dl = dl + mu
         fams.append(_Family("defect", dl, de))
         x = q + u
@@ -781,11 +789,14 @@ class OptimalControl:
         for xs, rs, s, lam, mu, c, own in lay.points:
             b = block("point")
             b.add(gather(pt, xs, rs, c, s, lam, mu), row0=con_rows(pt))
+        skip = self._fixed_manifold_nodes()
         for name, own in (("velocity", []), ("holonomic", [])):
             if name not in fams:
                 continue
             mf = fams[name][1]
             for k in range(N):
+                if k in skip[name]:
+                    continue
                 block(name).add(gather(mf, [(lay.X[k], 1.0)], [], k / (N - 1)),
                                 row0=con_rows(mf))
             for k in range(len(own)):
@@ -866,6 +877,45 @@ class OptimalControl:
         self._m_rows = rows[0]
         self._cl, self._cu = np.array(row_lo, float), np.array(row_hi, float)
         self._finish_blocks(list(blocks.values()), lay.n)
+
+    def _fixed_manifold_nodes(self):
+        """The end nodes whose initial or final values fix the constraints'
+        arguments: there the position (all q given) or velocity (all q and u
+        given) constraint rows would repeat the fixed values and make the
+        equality constraints linearly dependent (IPOPT needs them independent),
+        so they are left out after checking that the given values satisfy
+        them. {"holonomic": {k}, "velocity": {k}}."""
+        m, N, nm = self.model, self.nodes, self._names
+        skip = {"holonomic": set(), "velocity": set()}
+        if not (m.mc or m.mv):
+            return skip
+        pv = self._pvec()
+        for what, k0 in (("initial", 0), ("final", N - 1)):
+            given = {}
+            for k, v in getattr(self, what).items():
+                given[nm.key(k, what)[1]] = float(v)
+            q_all = all(i in given for i in range(m.nq))
+            x_all = q_all and all(m.nq + i in given for i in range(m.nu))
+            if not q_all:
+                continue
+            sub = {m.t: 0.0 if k0 == 0 else float(np.mean(np.atleast_1d(self.duration)))}
+            sub.update({s_: pv[i] for i, s_ in enumerate(m.p)})
+            sub.update({m.q[i]: given[i] for i in range(m.nq)})
+            checks = [("holonomic", m.fc, "configuration")]
+            if x_all:
+                sub.update({m.u[i]: given[m.nq + i] for i in range(m.nu)})
+                checks.append(("velocity", m.A * sm.Matrix(m.u) + m.b, "velocity"))
+            for name, expr, label in checks:
+                if not expr.shape[0]:
+                    continue
+                res = [float(e.xreplace(sub).evalf()) for e in expr]
+                if max(abs(r) for r in res) > 1e-9:
+                    vals = ", ".join(f"{k}={v}" for k, v in getattr(self, what).items())
+                    raise InputError(
+                        f"{what} values ({vals}) violate model {m.name!r}'s {label} "
+                        f"constraints (residuals {res}): give a consistent state")
+                skip[name].add(k0)
+        return skip
 
     def _fit_data(self, j):
         keys = list(self.fit)
