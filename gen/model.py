@@ -863,6 +863,10 @@ class Model:
             Expressions that vanish, ``q' - G(q, u)`` for explicit kinematics.
         constants, inputs, name, energy, outputs, hybrid
             As for :meth:`from_kanes`.
+        _constraints : tuple, optional
+            Internal (``gen.recursive``): a System's constraints as
+            ``(fc, A, b, nq_dep, nu_dep)``, the dependent coordinates and speeds
+            last; not for users.
 
         Returns
         -------
