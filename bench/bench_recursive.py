@@ -7,13 +7,32 @@ Pinocchio's ABA:
 - ``Model.from_system(system, formulation="recursive")`` (CRBA + RNEA over
   the joint tree) and ``gen.compile`` (generation + C compile);
 - the C right-hand side ``<name>_eval_rhs`` timed in C (bench/_cdriver.py's
-  driver, gcc -O2, median of interleaved repeats) against Pinocchio's
-  ``pin.aba`` on the same tree (built here from the same parameters),
-  timed in a Python loop minus the measured time of a cheap binding call
-  with like arguments and result (``pin.integrate(model, q, v)``: the model,
-  two vectors in, a new vector out, O(n) work): the Python-call overhead
-  subtracted (slightly over-subtracted, in Pinocchio's favour). Not in a C++
-  driver: the ``pin`` wheel's headers lack ``pinocchio/multibody/model.hpp``.
+  driver, gcc -O2, median of repeats) against Pinocchio's ABA on the same
+  tree (``pinocchio_pendulum``: built here from the same parameters) timed
+  in C++ (bench/_pinocchio_aba.cpp, built by bench/_pinocchio_cpp.py against
+  the ``pin`` wheel's headers, its Boost and an Eigen 3.4; the model is
+  passed to it from the Python ``pin`` model, every parameter to the bit):
+  ``pinocchio::aba(model, data, q, v, tau)`` in a loop of the same form as
+  the C driver's, median of repeats. Two builds of the driver:
+  ``header`` (header-only, ``g++ -std=c++17 -O2 -DNDEBUG``: the C driver's
+  -O2; ``--pin-flags`` changes them) and ``shipped`` (the aba instance in the
+  wheel's libpinocchio_default.so, which the Python binding calls, linked
+  with PINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION). The C driver and the C++
+  drivers run in turns (``--rounds`` rounds; each a separate process): the
+  times are medians over the rounds and the ratio C / ABA the median of the
+  rounds' ratios; with both builds, also C / the faster of the two in each
+  round (the figure in Pinocchio's favour).
+  Each driver's ABA result must equal ``pin.aba`` from Python to 1e-12
+  (printed); the C rhs's difference from ABA is printed beside it. A driver
+  built once is cached (``~/.cache/eomgen-bench``; a build takes 1-3
+  CPU-minutes). If the C++ build fails here (no compiler, no Eigen, a wheel
+  without headers), the bench prints why and falls back, visibly, to the
+  Python timing below for the ratio.
+- secondary, as before: ``pin.aba`` timed in a Python loop minus the
+  measured time of a cheap binding call with like arguments and result
+  (``pin.integrate(model, q, v)``: the model, two vectors in, a new vector
+  out, O(n) work): the Python-call overhead subtracted (slightly
+  over-subtracted, in Pinocchio's favour).
 
 Builds go to a fresh cache (EOMGEN_CACHE in a temporary folder) whose
 runtime objects are compiled first, by a one-link model: every build timed
@@ -24,6 +43,7 @@ wall time is printed beside them): the machine may be shared. Prints the
 times, the ratios and the growth exponents between the last two n.
 
     python bench/bench_recursive.py [--n 7 20 50] [--form-eoms-max 20] [--no-rhs]
+        [--rounds 3] [--pin-variants header shipped] [--pin-flags "-O2 -DNDEBUG"]
 """
 from __future__ import annotations
 
@@ -107,6 +127,79 @@ def time_pinocchio(pin, model, x, k=20000, reps=7):
     return a - o, a, o
 
 
+def pinocchio_drivers(variants, flags):
+    """{variant: (exe, info)} of the C++ ABA drivers that build here; a
+    variant that does not build is reported (why) and left out."""
+    import _pinocchio_cpp as pc
+    out = {}
+    for v in variants:
+        try:
+            exe, info = pc.build_driver(v, flags=flags if v == "header" else pc.DEFAULT_FLAGS)
+        except (pc.DriverError, ImportError, OSError) as e:
+            print(f"Pinocchio C++ ABA driver '{v}' NOT BUILT, so not timed: {e}", flush=True)
+            continue
+        print(f"Pinocchio C++ ABA driver '{v}': Eigen {info['eigen']}; {info['cmd']}", flush=True)
+        out[v] = (exe, info)
+    if not out:
+        print("FALLBACK: no C++ build of Pinocchio's ABA here; C / ABA below is against "
+              "pin.aba timed from Python (minus the binding call)", flush=True)
+    return out
+
+
+def rhs_section(row, n, gen, model, sim, drivers, rounds):
+    """Time the C rhs and Pinocchio's ABA (C++ drivers in turns with the C
+    driver; and from Python), check the results, fill row."""
+    import _pinocchio_cpp as pc
+    from _cdriver import time_rhs_in_c
+    rng = np.random.default_rng(n)
+    x = rng.uniform(-1, 1, 2 * n)
+    folder = tempfile.mkdtemp(prefix=f"bench_recursive_{n}_")
+    gen.generate(model, folder)
+    pin, pmodel = pinocchio_pendulum(n)
+    q, v, tau = x[:n].copy(), x[n:].copy(), np.zeros(n)
+    want = pin.aba(pmodel, pmodel.createData(), q, v, tau)
+    row["maxdiff"] = float(np.max(np.abs(sim.rhs(0.0, x)[n:] - want)))
+    cs, per = [], {k: [] for k in drivers}
+    for _ in range(rounds):
+        c = time_rhs_in_c(folder, model.name, x, model.p_values, reps=7, runs=1)
+        cs.append(c["eomgen"])
+        for k, (exe, _info) in drivers.items():
+            r = pc.run_driver(exe, pmodel, q, v, tau, reps=7)
+            dd = float(np.max(np.abs(r["ddq"] - want) / (1 + np.abs(want))))
+            row[f"check_{k}"] = max(row.get(f"check_{k}", 0.0), dd)
+            per[k].append(r["aba"])
+    row["rhs_c"] = statistics.median(cs)
+    for k, ts in per.items():
+        if row[f"check_{k}"] > 1e-12:       # not the same computation: no timing
+            continue
+        row[f"aba_{k}"] = statistics.median(ts)
+        row[f"ratio_{k}"] = statistics.median(a / b for a, b in zip(cs, ts))
+    timed = [per[k] for k in per if f"aba_{k}" in row]
+    if len(timed) > 1:         # against the faster build in each round
+        row["ratio_best"] = statistics.median(a / min(b) for a, b in zip(cs, zip(*timed)))
+    row["aba"], row["aba_raw"], row["noop"] = time_pinocchio(pin, pmodel, x)
+
+
+def rhs_line(row, drivers):
+    n = row["n"]
+    msg = f"n={n:3d}  rhs in C {row['rhs_c'] * 1e6:7.2f} us"
+    for k in drivers:
+        if f"aba_{k}" in row:
+            msg += (f" | Pinocchio ABA C++ {k} {row[f'aba_{k}'] * 1e6:6.2f} us, C / ABA "
+                    f"{row[f'ratio_{k}']:.2f} (|ABA - pin.aba| {row[f'check_{k}']:.0e})")
+        else:
+            msg += (f" | Pinocchio ABA C++ {k}: RESULT DIFFERS from pin.aba by "
+                    f"{row[f'check_{k}']:.1e} (relative): not timed")
+    msg += (f" | from Python {row['aba'] * 1e6:6.2f} us ({row['aba_raw'] * 1e6:.2f} us "
+            f"- {row['noop'] * 1e6:.2f} us binding call)")
+    if "ratio_best" in row:
+        msg += f" | C / the faster C++ ABA {row['ratio_best']:.2f}"
+    if not any(f"aba_{k}" in row for k in drivers):
+        msg += f", C / ABA(Python, FALLBACK) {row['rhs_c'] / row['aba']:.2f}"
+    msg += f" | |C - ABA| {row['maxdiff']:.1e}"
+    return msg
+
+
 class Clock:
     """Wall time and CPU time (this process and its finished children: the
     compilers) of a block: on a machine shared with other jobs the CPU time
@@ -132,11 +225,19 @@ def main(argv=None):
     ap.add_argument("--form-eoms-max", type=int, default=20,
                     help="largest n for sympy's form_eoms and the Kane path (minutes above)")
     ap.add_argument("--no-rhs", action="store_true", help="build times only")
+    ap.add_argument("--rounds", type=int, default=3,
+                    help="turns of the C driver and the C++ ABA drivers (medians over them)")
+    ap.add_argument("--pin-variants", nargs="*", default=["header", "shipped"],
+                    choices=["header", "shipped"],
+                    help="C++ builds of Pinocchio's ABA to time (none: the Python timing only)")
+    ap.add_argument("--pin-flags", default="-O2 -DNDEBUG",
+                    help="g++ flags of the header-only ABA driver")
     args = ap.parse_args(argv)
     os.environ["EOMGEN_CACHE"] = tempfile.mkdtemp(prefix="bench_recursive_")
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     import gen
     warnings.simplefilter("ignore")
+    drivers = {} if args.no_rhs else pinocchio_drivers(args.pin_variants, args.pin_flags.split())
     system, consts = pendulum(1)      # the runtime's objects, compiled once
     gen.compile(gen.Model.from_system(system, constants=consts, name="warm",
                                       formulation="recursive"))
@@ -163,17 +264,7 @@ def main(argv=None):
         row["rec_build"] = row["rec_model"] + row["rec_compile"]
         row["rec_build_wall"] = row["rec_model_wall"] + row["rec_compile_wall"]
         if not args.no_rhs:
-            from _cdriver import time_rhs_in_c
-            rng = np.random.default_rng(n)
-            x = rng.uniform(-1, 1, 2 * n)
-            folder = tempfile.mkdtemp(prefix=f"bench_recursive_{n}_")
-            gen.generate(model, folder)
-            c = time_rhs_in_c(folder, model.name, x, model.p_values, reps=11, runs=2)
-            row["rhs_c"] = c["eomgen"]
-            pin, pmodel = pinocchio_pendulum(n)
-            row["aba"], row["aba_raw"], row["noop"] = time_pinocchio(pin, pmodel, x)
-            want = pin.aba(pmodel, pmodel.createData(), x[:n], x[n:], np.zeros(n))
-            row["maxdiff"] = float(np.max(np.abs(sim.rhs(0.0, x)[n:] - want)))
+            rhs_section(row, n, gen, model, sim, drivers, args.rounds)
         rows.append(row)
         msg = (f"n={n:3d}  recursive: model {row['rec_model']:6.2f} s + compile "
                f"{row['rec_compile']:6.2f} s = {row['rec_build']:6.2f} s CPU "
@@ -182,14 +273,11 @@ def main(argv=None):
             msg += (f" | form_eoms {row['form_eoms']:7.2f} s CPU ({row['form_eoms_wall']:.2f} s "
                     f"wall; recursive build / form_eoms {row['rec_build'] / row['form_eoms']:.3f}"
                     f"), Kane path build after it {row['kane_build']:6.2f} s CPU")
-        if "rhs_c" in row:
-            msg += (f" | rhs in C {row['rhs_c'] * 1e6:7.2f} us, Pinocchio ABA "
-                    f"{row['aba'] * 1e6:6.2f} us ({row['aba_raw'] * 1e6:.2f} us from Python "
-                    f"- {row['noop'] * 1e6:.2f} us binding call), C / ABA "
-                    f"{row['rhs_c'] / row['aba']:.2f}, |C - ABA| {row['maxdiff']:.1e}")
         print(msg, flush=True)
+        if "rhs_c" in row:
+            print(rhs_line(row, drivers), flush=True)
     for key in ("form_eoms", "kane_build", "rec_model", "rec_compile", "rec_build",
-                "rhs_c", "aba"):
+                "rhs_c", "aba_header", "aba_shipped", "aba"):
         pts = [(r["n"], r[key]) for r in rows if key in r]
         if len(pts) >= 2:
             (n0, t0_), (n1, t1) = pts[-2], pts[-1]
