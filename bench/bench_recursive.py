@@ -23,7 +23,7 @@ Pinocchio's ABA:
   rounds' ratios; with both builds, also C / the faster of the two in each
   round (the figure in Pinocchio's favour).
   Each driver's ABA result must equal ``pin.aba`` from Python to 1e-12
-  (printed); the C rhs's difference from ABA is printed beside it. A driver
+  (|d| / (1 + |ddq|), printed; else that driver is not timed); the C rhs's difference from ABA is printed beside it. A driver
   built once is cached (``~/.cache/eomgen-bench``; a build takes 1-3
   CPU-minutes). If the C++ build fails here (no compiler, no Eigen, a wheel
   without headers), the bench prints why and falls back, visibly, to the
@@ -31,8 +31,8 @@ Pinocchio's ABA:
 - secondary, as before: ``pin.aba`` timed in a Python loop minus the
   measured time of a cheap binding call with like arguments and result
   (``pin.integrate(model, q, v)``: the model, two vectors in, a new vector
-  out, O(n) work): the Python-call overhead subtracted (slightly
-  over-subtracted, in Pinocchio's favour).
+  out, O(n) work): the Python-call overhead subtracted, but not all of
+  it (this reads 5-60% above the C++ ``shipped`` time: bench/README.md).
 
 Builds go to a fresh cache (EOMGEN_CACHE in a temporary folder) whose
 runtime objects are compiled first, by a one-link model: every build timed
