@@ -28,7 +28,10 @@ expressions (gen/casadi_specs.py derivative_kernels: the second-order
 adjoint of the equations x' solves; RK4 differentiated stage by stage for
 step). step of a constrained model has no derivatives (its projection has
 none). The externals are loaded with enable_forward=False: forward products
-through jac_<f> (one Jacobian, not one per seed column).
+through jac_<f> (one Jacobian, not one per seed column). functions(model,
+hessians=False) loads a library without the second derivatives (and
+without generating their kernels, the costly part of a large model's
+build): for limited-memory Hessians, Gauss-Newton, simulation.
 
 A missing r, p or h (a call by keyword without it) is NaN, so the call
 fails instead of computing with zeros: pass ``p=model.p_values`` for the
