@@ -11,7 +11,8 @@ lambdified onto SX (sympy's cse, sin/cos -> casadi), x' = [u; solve(M, f)]
 shooting constraints, each on both sides: "map" (step.map(N) over the
 intervals, one call node) and "calls" (one step call per interval). Prints
 the median milliseconds per IPOPT iteration over the repeats (gen and SX
-solved by turns), the ratio gen / SX, and IPOPT's Hessian and constraint
+solved by turns), the ratio gen / SX (of the medians, and "paired": the
+median of each repeat's ratio), and IPOPT's Hessian and constraint
 Jacobian time per iteration (t_wall_nlp_hess_l, t_wall_nlp_jac_g).
 
     python bench/bench_casadi.py [--n 1 4] [--repeats 5] [--form map calls]
@@ -98,10 +99,10 @@ def main():
                          "time per iteration is the measure)")
     a = ap.parse_args()
     h = 2.0 / a.N
-    print("| n | form | gen ms/iteration | pure SX ms/iteration | gen / SX | with setup: gen / SX | "
-          "hess_l ms/it (gen, SX) | jac_g ms/it (gen, SX) | iterations (gen, SX) | "
-          "objective (gen, SX) |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("| n | form | gen ms/iteration | pure SX ms/iteration | gen / SX | paired | "
+          "with setup: gen / SX | hess_l ms/it (gen, SX) | jac_g ms/it (gen, SX) | "
+          "iterations (gen, SX) | objective (gen, SX) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for n in a.n:
         model = n_link_cart.model(n)
         p = np.array(model.p_values, float)
@@ -133,9 +134,12 @@ def main():
                     return statistics.median(1e3 * r[2] / max(1, r[1]) for r in rs)
                 return statistics.median(1e3 * r[5].get(key, 0) / max(1, r[1]) for r in rs)
             g, s_ = per_it(ours), per_it(ref)
+            # the median of each repeat's ratio (gen and SX solved back to back)
+            pr = statistics.median((a[2] / max(1, a[1])) / (b[2] / max(1, b[1]))
+                                   for a, b in zip(ours, ref))
             g0 = statistics.median(r[4] for r in ours)
             s0 = statistics.median(r[4] for r in ref)
-            print(f"| {n} | {form} | {g:.2f} | {s_:.2f} | {g / s_:.2f} | {g0 / s0:.2f} | "
+            print(f"| {n} | {form} | {g:.2f} | {s_:.2f} | {g / s_:.2f} | {pr:.2f} | {g0 / s0:.2f} | "
                   f"{per_it(ours, 'nlp_hess_l'):.2f}, {per_it(ref, 'nlp_hess_l'):.2f} | "
                   f"{per_it(ours, 'nlp_jac_g'):.2f}, {per_it(ref, 'nlp_jac_g'):.2f} | "
                   f"{ours[0][1]}, {ref[0][1]} | {ours[0][0]:.8g}, {ref[0][0]:.8g} "
