@@ -267,7 +267,8 @@ def derivative_kernels(model, hessians=True, rhs_hessian=None):
             jacs.append(("W", sm.Matrix([g.get(s, 0) for s in wrt_extra]), z))
         return make_jacobian_kernel(name, args, [], jacs)
 
-    if hessians if rhs_hessian is None else rhs_hessian:
+    keep_wh = hessians if rhs_hessian is None else rhs_hessian
+    if keep_wh:
         ks["cs_wh"] = hess("cs_wh", R, zargs + [Aw, Amu], w)
     if m.output_names:
         y = m.y
