@@ -23,6 +23,7 @@ and one line in BACKENDS.
 """
 from __future__ import annotations
 
+import copy
 import os
 import shutil
 import sys
@@ -366,8 +367,14 @@ class CasadiBackend(CBackend):
     """The C model as CasADi external functions (gen/casadi.py): the C
     backend's model and runtime and {name}_casadi.c, the functions in
     CasADi's calling convention over the model's C API; one shared library
-    for casadi.external, always with the derivative kernels."""
+    for casadi.external, always with the derivative kernels. variant()
+    gives the backend of a library without the second-derivative functions
+    (gen.casadi.functions(model, hessians=False)) or the RODAS4 step."""
     name = "casadi"
+    #: the second-derivative functions and kernels (jac_jac_, jac_fwd1_, jac_adj1_)
+    hessians = True
+    #: step_rodas4 (unconstrained models), whose first derivatives need the rhs Hessians
+    rodas4 = True
     templates = tuple(CASADI_TEMPLATES)
     lazy_derivatives = False
     loadable = False
@@ -376,10 +383,22 @@ class CasadiBackend(CBackend):
     stack_limit = False
     tag = "_casadi"
 
+    def variant(self, hessians=True, rodas4=True):
+        """This backend for a library with (or without) the second
+        derivatives and the RODAS4 step; the same recipe, other sources."""
+        b = copy.copy(self)
+        b.hessians, b.rodas4 = bool(hessians), bool(rodas4)
+        return b
+
     def context(self, model, kernels):
         from .casadi_specs import function_specs, kernel_context, sizes
-        return {"cs_functions": function_specs(model),
-                "cs_kernels": kernel_context(model, lambda s: self.printer(s, "double")),
+        rodas4 = self.rodas4 and not (model.mc or model.mv)
+        cs_kernels = kernel_context(model, lambda s: self.printer(s, "double"),
+                                    self.hessians, self.hessians or rodas4)
+        return {"cs_functions": function_specs(model, self.hessians, self.rodas4),
+                "cs_kernels": cs_kernels,
+                "cs_hessians": self.hessians,
+                "cs_wh": any(k["name"] == "cs_wh" for k in cs_kernels),
                 "cs": sizes(model),
                 "ny": len(model.output_names),
                 "sz_nx": max(1, model.nx)}

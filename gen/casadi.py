@@ -28,7 +28,10 @@ expressions (gen/casadi_specs.py derivative_kernels: the second-order
 adjoint of the equations x' solves; RK4 differentiated stage by stage for
 step). step of a constrained model has no derivatives (its projection has
 none). The externals are loaded with enable_forward=False: forward products
-through jac_<f> (one Jacobian, not one per seed column).
+through jac_<f> (one Jacobian, not one per seed column). functions(model,
+hessians=False) loads a library without the second derivatives (and
+without generating their kernels, the costly part of a large model's
+build): for limited-memory Hessians, Gauss-Newton, simulation.
 
 A missing r, p or h (a call by keyword without it) is NaN, so the call
 fails instead of computing with zeros: pass ``p=model.p_values`` for the
@@ -61,15 +64,23 @@ def _casadi():
             "(or pip install casadi)") from None
 
 
-def library(model, verbose=False):
+def library(model, verbose=False, hessians=True, step="rk4"):
     """The path of the model's CasADi shared library (built into the cache
-    on first use): the file ``casadi.external(name, path)`` loads."""
+    on first use): the file ``casadi.external(name, path)`` loads.
+
+    With ``hessians=True`` (the default) one library holds every function,
+    both steps and the second derivatives. With ``hessians=False`` it holds
+    first derivatives only, and the RODAS4 step only when ``step="rodas4"``
+    (its first derivatives need the rhs Hessian kernel, which RK4's do not):
+    no second-derivative kernels to generate."""
     require_model(model, "gen.casadi")
-    key = model.fingerprint()
+    hessians = bool(hessians)
+    rodas4 = hessians or step == "rodas4"
+    key = (model.fingerprint(), hessians, rodas4)
     path = _LIBRARIES.get(key)
     if path is not None and path.exists():
         return path        # this process built it (rendering the Hessian kernels is the cost)
-    b = get_backend("casadi")
+    b = get_backend("casadi").variant(hessians=hessians, rodas4=rodas4)
     plan = make_plan(model, lin=b.lin, derivatives=True)
     rendered = render(plan, real="double", backend=b, project=False)
     path = _LIBRARIES[key] = build(rendered, verbose=verbose).path
@@ -215,7 +226,7 @@ def _explain(F, args, kwargs, err):
     raise exc from err
 
 
-def functions(model, verbose=False, step="rk4"):
+def functions(model, verbose=False, step="rk4", hessians=True):
     """The model as CasADi functions, loaded with ``casadi.external`` from
     one generated shared library (:func:`library`).
 
@@ -233,6 +244,16 @@ def functions(model, verbose=False, step="rk4"):
         and large h; unconstrained models; exact first derivatives, no
         second derivatives). The dict's key is ``step`` either way; the
         CasADi name is ``<model>_step`` or ``<model>_step_rodas4``.
+    hessians : bool, optional
+        With the second derivatives (``jac_jac_``, ``jac_fwd1_``,
+        ``jac_adj1_``: exact Hessians through the functions, IPOPT's
+        ``hessian_approximation="exact"``; the default). ``False`` builds a
+        library with first derivatives only, which skips generating the
+        second-derivative kernels (the costly part of the build: for the
+        Whipple bicycle most of it). For limited-memory Hessians
+        (``hessian_approximation="limited-memory"``), Gauss-Newton or
+        simulation. A Hessian through such a function fails in CasADi
+        ("Derivatives cannot be calculated for ...").
 
     Returns
     -------
@@ -249,7 +270,7 @@ def functions(model, verbose=False, step="rk4"):
         When ``model`` is not a gen.Model, or ``step="rodas4"`` for a
         constrained model.
     ValueError
-        When ``step`` is not one of "rk4", "rodas4".
+        When ``step`` is not one of "rk4", "rodas4", or ``hessians`` is not a bool.
     gen.BuildError
         When the compiler fails.
     """
@@ -261,15 +282,18 @@ def functions(model, verbose=False, step="rk4"):
     if not isinstance(step, str) or step not in STEP_METHODS:
         raise ValueError(f"gen.casadi.functions(step={step!r}): step must be one of "
                          f"{', '.join(repr(k) for k in STEP_METHODS)}")
+    if not isinstance(hessians, bool):
+        raise ValueError(f"gen.casadi.functions(hessians={hessians!r}): hessians must be True "
+                         f"(exact second derivatives) or False (first derivatives only)")
     if step == "rodas4" and (model.mc or model.mv):
         raise ModelError(
             f"gen.casadi.functions(step='rodas4'): model {model.name!r} has constraints "
             f"({model.mc} holonomic, {model.mv} nonholonomic) and the RODAS4 step has no "
             f"projection and no derivatives of one; use step='rk4' (with its projection)")
-    path = str(library(model, verbose=verbose))
+    path = str(library(model, verbose=verbose, hessians=hessians, step=step))
     out = {}
     want = STEP_METHODS[step]
-    for s in function_specs(model):
+    for s in function_specs(model, hessians, hessians or step == "rodas4"):
         if s["kind"] not in NAMES and s["kind"] != want:
             continue
         if s["kind"] == "step" and want != "step":

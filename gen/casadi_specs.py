@@ -69,7 +69,7 @@ def _holds_t(model):
     return any(m.t in getattr(e, "free_symbols", ()) for e in mats)
 
 
-def function_specs(model):
+def function_specs(model, hessians=True, rodas4=True):
     """The functions of a model's CasADi library, as the template's data:
     [{"sym", "kind", "ins": [(name, sparsity, default)], "outs": [(name,
     sparsity)], "sz_w", "sz_out", ...}]. For each function <f>: jac_<f>,
@@ -83,6 +83,8 @@ def function_specs(model):
     derivative kernels). An unconstrained model also has step_rodas4 (one
     RODAS4 step of the runtime, functions(model, step="rodas4")) with
     jac_, fwd1_ and adj1_ only; "t_dep" says whether its value needs df/dt.
+    hessians=False leaves out every jac_jac_, jac_fwd1_ and jac_adj1_
+    (functions(model, hessians=False)); rodas4=False leaves out step_rodas4.
     """
     m = model
     p = m.name
@@ -99,7 +101,7 @@ def function_specs(model):
         "constraints": ([x_, p_, t_], [("c", mc + mv)]),
     }
     have = [n for n in NAMES if (n != "outputs" or ny) and (n != "constraints" or mc + mv)]
-    if not (mc or mv):
+    if rodas4 and not (mc or mv):
         # one RODAS4 step (gen_rt_rodas4_trial), first derivatives only
         base["step_rodas4"] = base["step"]
         have.append("step_rodas4")
@@ -145,7 +147,7 @@ def function_specs(model):
         specs.append({**common, "sym": f"adj1_{p}_{n}", "kind": f"adj1_{n}", "name": f"adj1_{n}",
                       "mode": "adj", "ins": adj_ins, "outs": adj_outs,
                       "blocks": blocks, "seed": nin + nout})
-        if n == "step_rodas4":
+        if n == "step_rodas4" or not hessians:
             continue        # no second derivatives: CasADi says it cannot differentiate adj1_
         # second derivatives: the Jacobians of jac_, fwd1_ and adj1_ (their
         # outputs w.r.t. their inputs; CasADi's names), from the tensor
@@ -217,7 +219,7 @@ def function_specs(model):
 # differences). The outputs y(z) and the constraints [f_c; A u + b] are
 # explicit: their Jacobians and the Hessians of lam^T y, lam^T c directly.
 
-def derivative_kernels(model):
+def derivative_kernels(model, hessians=True, rhs_hessian=None):
     """The CasADi library's derivative kernels (gen.ir.Kernel, named
     cs_*), from the model's expressions alone:
 
@@ -226,6 +228,10 @@ def derivative_kernels(model):
     cs_wh(q, u, r, p, t, ws, mu) -> H, W  d2(mu^T R)/dz2, d(Rw^T mu)/dz
     cs_y1(z) -> J, cs_yh(z, mu) -> H      the outputs (models with outputs)
     cs_c1(z) -> J, cs_ch(z, mu) -> H      [f_c; A u + b] (constrained models)
+
+    hessians=False leaves out the second-derivative kernels (cs_wh, cs_yh,
+    cs_ch: the costly ones); rhs_hessian (default: hessians) keeps cs_wh,
+    which the RODAS4 step's first derivatives need.
     """
     import sympy as sm
 
@@ -261,28 +267,32 @@ def derivative_kernels(model):
             jacs.append(("W", sm.Matrix([g.get(s, 0) for s in wrt_extra]), z))
         return make_jacobian_kernel(name, args, [], jacs)
 
-    ks["cs_wh"] = hess("cs_wh", R, zargs + [Aw, Amu], w)
+    keep_wh = hessians if rhs_hessian is None else rhs_hessian
+    if keep_wh:
+        ks["cs_wh"] = hess("cs_wh", R, zargs + [Aw, Amu], w)
     if m.output_names:
         y = m.y
         ly = Arg("mu", tuple(sm.Dummy(f"ly{i}") for i in range(y.shape[0])))
         ks["cs_y1"] = make_jacobian_kernel("cs_y1", zargs, [], [("J", y, z)])
-        ks["cs_yh"] = hess("cs_yh", y, zargs + [ly])
+        if hessians:
+            ks["cs_yh"] = hess("cs_yh", y, zargs + [ly])
     if m.mc or m.mv:
         c = sm.Matrix(m.fc if m.mc else sm.zeros(0, 1))
         if m.mv:
             c = c.col_join(m.A * U + m.b)
         lc = Arg("mu", tuple(sm.Dummy(f"lc{i}") for i in range(c.shape[0])))
         ks["cs_c1"] = make_jacobian_kernel("cs_c1", zargs, [], [("J", c, z)])
-        ks["cs_ch"] = hess("cs_ch", c, zargs + [lc])
+        if hessians:
+            ks["cs_ch"] = hess("cs_ch", c, zargs + [lc])
     return ks
 
 
-def kernel_context(model, printer_for):
+def kernel_context(model, printer_for, hessians=True, rhs_hessian=None):
     """The derivative kernels as the template's data (the C backend's kernel
     context: name, args, outputs, body); printer_for(symbol_map) gives the
-    backend's printer."""
+    backend's printer. hessians, rhs_hessian: derivative_kernels'."""
     from .printers import print_kernel_body
-    ks = derivative_kernels(model)
+    ks = derivative_kernels(model, hessians, rhs_hessian)
     out = []
     for k in ks.values():
         smap = {model.t: "t"}

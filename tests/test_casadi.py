@@ -54,7 +54,9 @@ def _case(request, which):
     """(model, sim, F, x, r, p) of one model at a state away from zero."""
     model = request.getfixturevalue(f"{which}_model")
     sim = request.getfixturevalue(f"{which}_sim")
-    F = gc.functions(model)
+    # the bicycle's tests need no second derivatives: its library without them
+    # skips generating the Hessian kernels (60 s of sympy; hessians=False)
+    F = gc.functions(model, hessians=which != "bicycle")
     rng = np.random.default_rng(36)
     p = np.array(model.p_values, float) * 1.1      # not the defaults
     x = rng.uniform(-0.6, 0.6, model.nx)
@@ -259,6 +261,11 @@ def test_bad_use(cart_model, kane_model, monkeypatch):
         gc.functions(cart_model)
 
 
+#: the models whose tests need first derivatives only: their library is
+#: functions(model, step="rodas4", hessians=False)'s
+_FIRST = {"forced": {"hessians": False, "step": "rodas4"}}
+
+
 @pytest.mark.parametrize("which", ["kane", "cart", "forced"])
 def test_wrappers_compile_strict(request, which):
     """The generated <name>_casadi.c is clean under the project's strict
@@ -266,7 +273,8 @@ def test_wrappers_compile_strict(request, which):
     import subprocess
     from gen.backends import STRICT_FLAGS, c_compiler
     model = request.getfixturevalue(f"{which}_model")
-    src = gc.library(model).parent / "src"
+    # forced: the first-derivative library (hessians=False) with the RODAS4 step
+    src = gc.library(model, **_FIRST.get(which, {})).parent / "src"
     fname = f"{model.name}_casadi.c"
     assert (src / fname).is_file()
     proc = subprocess.run([c_compiler(), *STRICT_FLAGS, "-I", ".", "-c", fname, "-o", os.devnull],
@@ -682,7 +690,7 @@ def forced_model():
 
 def _rodas4_case(request, which):
     model = request.getfixturevalue(f"{which}_model")
-    F = gc.functions(model, step="rodas4")
+    F = gc.functions(model, **{"step": "rodas4", **_FIRST.get(which, {})})
     rng = np.random.default_rng(360)
     x = rng.uniform(-0.6, 0.6, model.nx)
     r = rng.uniform(-1, 1, model.nr)
@@ -759,7 +767,7 @@ def test_rodas4_step_jacobian(request, which):
     if which == "forced":
         assert np.abs(J[:, n + nr + np_]).max() > 1e-3        # df/dt's derivative is in
     # CasADi's own central differences of the external (its derivatives disabled)
-    path = str(gc.library(model))
+    path = str(gc.library(model, **_FIRST.get(which, {})))
     fd = ca.external(S.name(), path, {"enable_fd": True, "enable_jacobian": False,
                                       "enable_forward": False, "enable_reverse": False,
                                       "fd_method": "central"})
@@ -855,3 +863,41 @@ def test_rodas4_swing_up_limited_memory(cart_model, cart_sim):
     sol = cart_sim.simulate([0, np.pi, 0, 0], N * h, h, method="rodas4", rtol=1e-11,
                             atol=1e-12, p=p, r=(np.arange(N) * h, ours[1].reshape(-1, 1)))
     np.testing.assert_allclose(np.asarray(sol.x)[-1], 0, atol=1e-4)  # measured 2e-6
+
+
+def test_hessians_false_first_derivatives_only(forced_model):
+    """functions(model, hessians=False): a library without the second-
+    derivative functions and kernels (the costly part of a large model's
+    build), the same values and first derivatives as the simulator; a
+    Hessian through it fails in CasADi; hessians must be a bool. (The
+    library is the one the forced model's RODAS4 tests load.)"""
+    import ctypes
+    from gen.casadi_specs import derivative_kernels, function_specs
+    model = forced_model
+    F = gc.functions(model, **_FIRST["forced"])
+    assert F["step"].name() == "forced_cs_step_rodas4"
+    lib = ctypes.CDLL(str(gc.library(model, **_FIRST["forced"])))
+    for f in ("rhs", "implicit", "step", "step_rodas4"):
+        assert hasattr(lib, f"jac_forced_cs_{f}") and hasattr(lib, f"adj1_forced_cs_{f}")
+        for pre in ("jac_jac_", "jac_fwd1_", "jac_adj1_"):
+            assert not hasattr(lib, f"{pre}forced_cs_{f}"), pre + f
+    # without step="rodas4" not even the rhs Hessian kernel (RODAS4's first
+    # derivatives need it, RK4's do not), and no RODAS4 step
+    kinds = {s["kind"] for s in function_specs(model, hessians=False, rodas4=False)}
+    assert kinds == {f"{pre}{n}" for n in ("rhs", "implicit", "step")
+                     for pre in ("", "jac_", "fwd1_", "adj1_")}
+    assert sorted(derivative_kernels(model, hessians=False)) == ["cs_w0", "cs_wz"]
+    sim = gen.compile(model)
+    rng = np.random.default_rng(37)
+    x, r, p, t = rng.uniform(-0.6, 0.6, 4), np.array([0.4]), np.array(model.p_values) * 1.1, 0.3
+    np.testing.assert_allclose(_v(F["rhs"](x, r, p, t)), sim.rhs(t, x, r=r, p=p), rtol=0, atol=1e-14)
+    J, v, w = _jacobians(F, "rhs", x, r, p, t, {})
+    _check(J, *sim.jacobian(t, x, r=r, p=p), v, w)
+    X = ca.MX.sym("X", 4)
+    for name in ("rhs", "step"):
+        extra = (0.02,) if name == "step" else ()
+        with pytest.raises(RuntimeError, match=r"Derivatives cannot be calculated for adj1_forced_cs"):
+            ca.Function("H", [X], [ca.hessian(ca.sumsqr(F[name](X, r, p, t, *extra)), X)[0]])
+    for bad in ("no", None, 1):
+        with pytest.raises(ValueError, match=r"hessians must be True"):
+            gc.functions(model, hessians=bad)
