@@ -17,8 +17,8 @@ gets a partition whose dependent blocks are nonsingular at a random point. The c
 with ``numpy.linalg.solve`` of sympy's ``mass_matrix_full`` / ``forcing_full``.
 
 Tiers: the module is ``slow`` except 3 models of two quick sympy tests (``FAST_SOURCES``:
-auxiliary speeds and a plain pendulum, about 1.5 s of sympy; only these run when ``slow``
-is deselected). Sympy's ``@slow`` tests (the Whipple
+auxiliary speeds and a plain pendulum; only these run when ``slow`` is deselected, and
+each stops once it has formed its methods, before sympy's own simplify-based checks). Sympy's ``@slow`` tests (the Whipple
 bicycle, minutes of sympy time) are collected only with ``EOMGEN_CORPUS=all``.
 """
 import hashlib
