@@ -85,8 +85,11 @@ def test_a_closed_pipe_is_quiet():
     assert rc in (0, 141)
 
 
+@pytest.mark.slow
 def test_head_in_a_shell_pipeline_is_quiet(tmp_path):
-    """The user's own words: `eomgen ... | head -n 2` shows two lines, no error."""
+    """The user's own words: `eomgen ... | head -n 2` shows two lines, no error.
+    (Slow tier: the fast tier's test_a_closed_pipe_is_quiet takes the same
+    broken-pipe path, one Python start-up and sympy import less.)"""
     cmd = (f"{sys.executable} -m gen linearize {SEED} --at q1=1 --at q2=0 2>{tmp_path / 'err'} "
            f"| head -n 2; echo \"status=${{PIPESTATUS[0]}}\"")
     p = subprocess.run(["bash", "-c", cmd], capture_output=True, text=True, env=_env(),

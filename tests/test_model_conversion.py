@@ -30,24 +30,29 @@ def _rule(exprs):
     return rule
 
 
-def _methods():
-    KM, _ = seed_pendulum.derive_kane()
-    yield "kane", [KM.mass_matrix_full, KM.forcing_full]
-    LM, _ = seed_pendulum.derive_lagrange()
-    yield "lagrange", [LM.mass_matrix_full, LM.forcing_full]
-    KM, _ = n_link_cart.derive(5)
-    yield "cart5", [KM.mass_matrix, KM.forcing]
-    KM, _ = rolling_disc.derive()
-    yield "rolling_disc", [KM.mass_matrix_full, KM.forcing_full]
-    KM, _ = cart_pole.derive()
-    yield "cart_pole", [KM.mass_matrix, KM.forcing]
-    for derive in (nonsmooth.derive_drag, nonsmooth.derive_friction, nonsmooth.derive_actuator):
-        KM, _ = derive()
-        yield derive.__name__, [KM.mass_matrix, KM.forcing]
+def _full(derived):
+    return [derived[0].mass_matrix_full, derived[0].forcing_full]
 
 
-@pytest.mark.parametrize("name,mats", list(_methods()))
-def test_conversion_builds_sympys_objects(name, mats):
+def _reduced(derived):
+    return [derived[0].mass_matrix, derived[0].forcing]
+
+
+# formed when a test runs, not at collection (every pytest-xdist worker collects)
+METHODS = {
+    "kane": lambda: _full(seed_pendulum.derive_kane()),
+    "lagrange": lambda: _full(seed_pendulum.derive_lagrange()),
+    "cart5": lambda: _reduced(n_link_cart.derive(5)),
+    "rolling_disc": lambda: _full(rolling_disc.derive()),
+    "cart_pole": lambda: _reduced(cart_pole.derive()),
+    **{d.__name__: (lambda d=d: _reduced(d())) for d in (
+        nonsmooth.derive_drag, nonsmooth.derive_friction, nonsmooth.derive_actuator)},
+}
+
+
+@pytest.mark.parametrize("name", list(METHODS))
+def test_conversion_builds_sympys_objects(name):
+    mats = METHODS[name]()
     rule = _rule([e for m in mats for e in m])
     memo = {}
     for mat in mats:

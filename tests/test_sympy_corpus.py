@@ -17,8 +17,8 @@ gets a partition whose dependent blocks are nonsingular at a random point. The c
 with ``numpy.linalg.solve`` of sympy's ``mass_matrix_full`` / ``forcing_full``.
 
 Tiers: the module is ``slow`` except 3 models of two quick sympy tests (``FAST_SOURCES``:
-auxiliary speeds and a plain pendulum, about 1.5 s of sympy; only these run when ``slow``
-is deselected). Sympy's ``@slow`` tests (the Whipple
+auxiliary speeds and a plain pendulum; only these run when ``slow`` is deselected, and
+each stops once it has formed its methods, before sympy's own simplify-based checks). Sympy's ``@slow`` tests (the Whipple
 bicycle, minutes of sympy time) are collected only with ``EOMGEN_CORPUS=all``.
 """
 import hashlib
@@ -40,8 +40,10 @@ from helpers import rel_err
 
 TOL = 1e-9
 FAST_COUNT = 3
-# the fast tier's models: the first FAST_COUNT formed by these sympy tests
-FAST_SOURCES = ("test_kane.py::test_aux", "test_kane.py::test_pend")
+# the fast tier's models: the first FAST_COUNT formed by these sympy tests, {test: how
+# many methods it forms}; the fast tier stops a test there (its own checks, sympy
+# simplify calls, would only add collection time on every pytest-xdist worker)
+FAST_SOURCES = {"test_kane.py::test_aux": 2, "test_kane.py::test_pend": 1}
 TIME_LIMIT = 30          # seconds per sympy test function during collection
 FILES = ["test_kane", "test_kane2", "test_kane3", "test_kane4", "test_kane5", "test_lagrange",
          "test_lagrange2", "test_linearize", "test_system_class", "test_jointsmethod",
@@ -69,6 +71,10 @@ class _TimeLimit(BaseException):
     pass
 
 
+class _Enough(BaseException):
+    """A sympy test has formed every method the fast tier takes from it."""
+
+
 def _sympy_tests(mod, fname):
     """(id, callable) for every test function and argument-free test method."""
     out = []
@@ -89,22 +95,28 @@ def _sympy_tests(mod, fname):
 
 
 def collect(max_models=None, sources=None):
-    """Run sympy's mechanics tests (those named in ``sources`` if given),
-    recording every formed method object. Returns [(id, method)] deduplicated."""
+    """Run sympy's mechanics tests (those named in ``sources`` if given; a dict
+    {test: n} also stops each test after its n-th formed method), recording
+    every formed method object. Returns [(id, method)] deduplicated."""
     every = os.environ.get("EOMGEN_CORPUS") == "all"
     rec = []
     cur = [None]
     ok_k = me.KanesMethod.kanes_equations
     ok_l = me.LagrangesMethod.form_lagranges_equations
 
+    def record(method):
+        rec.append((cur[0], method))
+        if isinstance(sources, dict) and sum(s == cur[0] for s, _ in rec) >= sources[cur[0]]:
+            raise _Enough()
+
     def kanes(self, *a, **k):
         res = ok_k(self, *a, **k)
-        rec.append((cur[0], self))
+        record(self)
         return res
 
     def lagrange(self, *a, **k):
         res = ok_l(self, *a, **k)
-        rec.append((cur[0], self))
+        record(self)
         return res
 
     use_alarm = threading.current_thread() is threading.main_thread() and hasattr(signal, "SIGALRM")
@@ -117,6 +129,8 @@ def collect(max_models=None, sources=None):
     me.LagrangesMethod.form_lagranges_equations = lagrange
     try:
         for fname in FILES:
+            if sources is not None and not any(s.startswith(f"{fname}.py::") for s in sources):
+                continue                  # the fast tier imports (and runs) one sympy file
             try:
                 mod = importlib.import_module(f"sympy.physics.mechanics.tests.{fname}")
             except ImportError:
@@ -135,7 +149,7 @@ def collect(max_models=None, sources=None):
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore")
                         fn()
-                except (_TimeLimit, Exception):   # the test's own outcome does not matter
+                except (_TimeLimit, _Enough, Exception):   # the test's outcome does not matter
                     pass
                 finally:
                     if use_alarm:

@@ -65,7 +65,10 @@ def test_fmu_follows_the_umask(tmp_path, umask, kane_model):
     assert mode(path) == 0o666 & ~umask
 
 
+@pytest.mark.slow
 def test_cli_generate_under_umask_022(tmp_path):
+    """(Slow tier: `eomgen generate` calls gen.generate, whose modes under umask
+    0o022 test_generate_folder_and_files_follow_the_umask checks in process.)"""
     env = dict(os.environ)
     env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
     out = tmp_path / "cli"
