@@ -412,8 +412,7 @@ def accelerations_of_tree(system):
             sw, sv = n.Sw[:3, :], n.Sw[3:, :]
             Uw, Uv = _kept(A * sw + B * sv), _kept(B.T * sw + C * sv)
             D = _sym_kept(sw.T * Uw + sv.T * Uv)
-            n.Dinv = Dinv = _kept(D.inv(method="ADJ") if nj > 1 else
-                                  sm.Matrix([[1 / D[0, 0]]]))
+            n.Dinv = Dinv = _inv_small(D)
             n.uu = uu = _kept(-(sw.T * pw + sv.T * pv))
             n.U = (Uw, Uv)
             # the articulated inertia seen through the joint: IA - U D^-1 U^T,
@@ -450,6 +449,20 @@ def accelerations_of_tree(system):
         n.al, n.a = _kept(aw), _kept(av)
     _KEPT.clear()
     return ud, tree.q, tree.u, tree.kdes
+
+
+def _inv_small(D):
+    """The inverse of a small symmetric matrix of kept entries, by its
+    adjugate over placeholder symbols (sympy's inv would test the kept
+    entries for zero, a walk down the whole graph)."""
+    k = D.shape[0]
+    if k == 1:
+        return sm.Matrix([[_keep(1 / D[0, 0])]])
+    X = sm.Matrix(k, k, lambda i, j: sm.Symbol(f"_D{min(i, j)}_{max(i, j)}"))
+    sub = {X[i, j]: D[i, j] for i in range(k) for j in range(k)}
+    idet = _keep(1 / _keep(X.det(method="berkowitz").xreplace(sub)))
+    adj = X.adjugate(method="berkowitz").xreplace(sub)
+    return _sym_kept(adj * idet)
 
 
 def _walk(system):
