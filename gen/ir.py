@@ -143,9 +143,54 @@ def _cse(exprs, symbols):
     shared subexpressions kept whole) unwrapped in what it returns: the
     repeated ones are temporaries by then. Models without them come back
     unchanged (the same objects)."""
+    if _has_kept(exprs):
+        return _kept_program(exprs, symbols)
     assignments, reduced = sm.cse(exprs, symbols=symbols, order="none")
     memo = {}
     return ([(s, _unkept([e], memo)[0]) for s, e in assignments], _unkept(reduced, memo))
+
+
+def _has_kept(exprs):
+    seen, stack = set(), list(exprs)
+    while stack:
+        e = stack.pop()
+        if isinstance(e, sm.UnevaluatedExpr):
+            return True
+        if id(e) in seen or not e.args:
+            continue
+        seen.add(id(e))
+        stack.extend(a for a in e.args if isinstance(a, sm.Basic))
+    return False
+
+
+def _kept_program(exprs, symbols):
+    """gen.recursive's graphs: each opaque node (UnevaluatedExpr, a body's
+    quantity, shared) is one temporary over the temporaries of the nodes it
+    holds, in an order where each is written before it is read: the
+    graph is already the straight-line program, its size linear in the
+    bodies (sympy's cse over it sorts nested sums, superlinear in the
+    depth). Iterative: the graphs are thousands of nodes deep."""
+    memo, assignments = {}, []
+    stack = [(e, False) for e in reversed(list(exprs))]
+    while stack:
+        e, ready = stack.pop()
+        if e in memo:
+            continue
+        if not e.args or not isinstance(e, sm.Basic):
+            memo[e] = e
+            continue
+        if not ready:
+            stack.append((e, True))
+            stack.extend((a, False) for a in e.args if a not in memo)
+            continue
+        args = [memo[a] for a in e.args]
+        if isinstance(e, sm.UnevaluatedExpr):
+            sym = next(symbols)
+            assignments.append((sym, args[0]))
+            memo[e] = sym
+        else:
+            memo[e] = e.func(*args) if any(a is not b for a, b in zip(args, e.args)) else e
+    return assignments, [memo[e] for e in exprs]
 
 
 def _unkept(exprs, memo=None):

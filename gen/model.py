@@ -772,10 +772,14 @@ class Model:
         formulation : {"kane", "recursive"}, optional
             ``"kane"``: the equations the method formed (``form_eoms()`` first).
             ``"recursive"``: a sympy System's joint tree, its equations formed
-            here (no ``form_eoms()`` needed, none called): the mass matrix by the
-            composite rigid body algorithm, the forcing by recursive
-            Newton-Euler, the System's kdes as the kinematics
-            (:mod:`gen.recursive`; open trees of rigid bodies and sympy's joints).
+            here (no ``form_eoms()`` needed, none called), the System's kdes as
+            the kinematics (:mod:`gen.recursive`; trees of rigid bodies and
+            sympy's joints). An open tree (no constraints, no ``hybrid``): u' by
+            the articulated body algorithm, the model's mass matrix the identity
+            and its forcing u' (``sim.mass_matrix`` is I; the physical M from
+            :func:`gen.recursive.equations_of_tree`); with constraints or
+            ``hybrid``: the mass matrix by the composite rigid body algorithm,
+            the forcing by recursive Newton-Euler.
         **partition
             The further keywords of the builder: q_ind, q_dep, qd_ind, qd_dep for
             Lagrange models (a sympy System's own partition is the default), those
@@ -798,11 +802,18 @@ class Model:
                 raise ModelError(
                     f"unknown argument(s) {', '.join(sorted(partition))} for "
                     "Model.from_system with formulation='recursive': accepted are none")
-            from .recursive import constraints_of_tree, equations_of_tree
-            M, f, q, u, kdes = equations_of_tree(obj)
+            from .recursive import accelerations_of_tree, constraints_of_tree, equations_of_tree
+            cons = constraints_of_tree(obj)
+            if cons is None and not hybrid:
+                # an open tree: u' by the articulated body algorithm, the
+                # model's M the identity (gen.recursive's docstring)
+                ud, q, u, kdes = accelerations_of_tree(obj)
+                M, f = sm.eye(len(u)), ud
+            else:
+                M, f, q, u, kdes = equations_of_tree(obj)
             return cls.from_matrices(M, f, q, u, kdes, constants=constants, inputs=inputs,
                                      name=name, energy=energy, outputs=outputs, hybrid=hybrid,
-                                     _constraints=constraints_of_tree(obj))
+                                     _constraints=cons)
         if formulation != "kane":
             raise ModelError(f"formulation={formulation!r} for Model.from_system: "
                              "accepted are 'kane' and 'recursive'")

@@ -32,14 +32,22 @@ then Kane's equations of the tree; the kinematics are the System's own
 ``kdes``, and the result goes to :meth:`gen.Model.from_matrices` as any model
 does, so rhs, linearization, derivative kernels and every backend follow.
 
-Why CRBA + RNEA rather than the articulated body algorithm: the model keeps the
-canonical ``M u' = f`` form the rest of the pipeline (linearization, implicit
-solvers, constraints) takes, with ``M`` factorized numerically by the runtime;
-ABA would put the solve into the symbolic expressions, with divisions the
-pipeline cannot see. Nothing is expanded or simplified: each body's
-quantities are kept as shared opaque nodes (``_keep``: a graph linear in the
-bodies), every walk of the pipeline visits a shared node once, and gen.ir's
-CSE makes the repeated ones temporaries (then unwraps them).
+For an open tree (no constraints, no ``hybrid``) ``Model.from_system`` takes
+instead ``u'`` by the articulated body algorithm (:func:`accelerations_of_tree`)
+and hands the pipeline ``M = I``, ``f = u'``: measured on the n-link pendulum,
+CRBA's n(n+1)/2 entries of M made the n = 50 rhs kernel 3629 temporaries and
+its C compile 19 CPU-s (rhs 31 us), ABA's u' is a few dozen temporaries per
+body (n = 50: build 6 s, rhs 2.2 us). The identity costs nothing at run time
+(its unrolled LDL^T over a diagonal of ones is constant-folded), linearization
+and derivative kernels differentiate the same graph. ``sim.mass_matrix`` of
+such a model is the identity; the physical M and f are
+:func:`equations_of_tree`'s. With constraints (the multiplier solve needs the
+true M) or ``hybrid`` impacts (solved with M), CRBA + RNEA as above.
+
+Nothing is expanded or simplified: each body's quantities are kept as shared
+opaque nodes (``_keep``: a graph linear in the bodies, equal nodes one object,
+``_intern``), every walk of the pipeline visits a shared node once, and gen.ir
+writes each node as one temporary, in order (``_kept_program``).
 
 Taken: trees of ``PinJoint``, ``PrismaticJoint``, ``CylindricalJoint``,
 ``PlanarJoint``, ``SphericalJoint`` and ``WeldJoint`` between rigid bodies,
@@ -59,7 +67,8 @@ import sympy.physics.mechanics as me
 
 from .errors import ModelError
 
-__all__ = ["equations_of_tree", "constraints_of_tree", "SUPPORTED_JOINTS"]
+__all__ = ["equations_of_tree", "accelerations_of_tree", "constraints_of_tree",
+           "SUPPORTED_JOINTS"]
 
 SUPPORTED_JOINTS = ("PinJoint", "PrismaticJoint", "CylindricalJoint", "PlanarJoint",
                     "SphericalJoint", "WeldJoint")
@@ -89,6 +98,13 @@ def _skew(a):
 _UE = sm.UnevaluatedExpr
 
 
+# the opaque nodes made so far (equations_of_tree, accelerations_of_tree):
+# equal nodes are one object, so sympy's == (dict lookups, CSE) compares
+# two nodes through identical arguments, never down two equal DAGs (a walk
+# that grows exponentially with the depth)
+_KEPT = {}
+
+
 def _keep(e):
     """e as one opaque node (``UnevaluatedExpr``): sums and products built
     on it keep it as one argument instead of flattening its terms into
@@ -98,7 +114,31 @@ def _keep(e):
     if e.is_Atom or isinstance(e, _UE) or (e.is_Mul and len(e.args) == 2
                                            and e.args[0].is_Number and e.args[1].is_Atom):
         return e
-    return _UE(e)
+    ue = _UE(_intern(e))
+    return _KEPT.setdefault(ue, ue)
+
+
+def _intern(e):
+    """e with every subexpression (down to the opaque nodes) one object per
+    value: equal products built apart (the two sides of a symmetric
+    matrix, a cross product's terms) would make sympy's == and its cache
+    compare down two equal copies of the graph below them."""
+    if e.is_Atom or isinstance(e, _UE):
+        return e
+    args = tuple(_intern(a) for a in e.args)
+    if any(a is not b for a, b in zip(args, e.args)):
+        # equal arguments: the same canonical form, not re-flattened (a
+        # sum's flatten would make its products anew)
+        e = e.func._from_args(args, e.is_commutative) if (e.is_Add or e.is_Mul) \
+            else e.func(*args)
+    return _KEPT.setdefault(e, e)
+
+
+def _sym_kept(mat):
+    """A symmetric matrix kept from its lower triangle (one node per pair)."""
+    n = mat.shape[0]
+    low = {(i, j): _keep(mat[i, j]) for i in range(n) for j in range(i + 1)}
+    return sm.Matrix(n, n, lambda i, j: low[max(i, j), min(i, j)])
 
 
 def _kept(mat):
@@ -114,8 +154,9 @@ def _is_zero(e):
 
 class _Body:
     __slots__ = ("body", "joint", "parent", "children", "E", "r", "S", "rel_bias",
-                 "speed_idx", "w", "v", "al", "a", "F", "N", "Ic", "depth", "Ftot", "Ntot",
-                 "rep", "R", "Sw", "rw", "Iw", "r_pp", "r_cc", "mt", "h", "J")
+                 "speed_idx", "w", "al", "a", "F", "N", "Ic", "depth", "Ftot", "Ntot",
+                 "rep", "R", "Sw", "rw", "Iw", "r_pp", "r_cc", "mt", "h", "J", "cw", "cv",
+                 "IA", "pA", "U", "Dinv", "uu")
 
     def __init__(self, body, joint, parent):
         self.body, self.joint, self.parent = body, joint, parent
@@ -248,7 +289,8 @@ class _Tree:
 
 
 def equations_of_tree(system):
-    """M, f, q, u, kinematics of a System's joint tree (see the module docstring).
+    """M, f, q, u, kinematics of a System's joint tree by CRBA and RNEA (see
+    the module docstring).
 
     Returns
     -------
@@ -259,9 +301,184 @@ def equations_of_tree(system):
         System's order), without the constraint forces, as a Kane model's
         are; see :func:`constraints_of_tree`.
     """
+    tree = _walk(system)
+    nu = len(tree.u)
+    zero = sm.zeros(3, 1)
+    for n in tree.order:
+        al_p, a_p = (zero, zero) if n.parent is None else (n.parent.al, n.parent.a)
+        n.al, n.a = _kept(al_p + n.cw), _kept(a_p + _cross(al_p, n.rw) + n.cv)
+    # forces in: each body's F - m a and T - I al - w x I w, plus its
+    # children's (formed with their signs: negating a large sum would make
+    # sympy distribute the -1 over every term)
+    f = sm.zeros(nu, 1)
+    for n in reversed(tree.order):
+        b = n.body
+        Fi = n.F - b.mass * n.a
+        Ni = n.N + (-n.Iw) * n.al + _cross(n.Iw * n.w, n.w)
+        for c in n.children:
+            Fi += c.Ftot
+            Ni += c.Ntot + _cross(c.rw, c.Ftot)
+        n.Ftot, n.Ntot = Fi, Ni = _kept(Fi), _kept(Ni)
+        tau = n.Sw.T * sm.Matrix.vstack(Ni, Fi)
+        for k, idx in enumerate(n.speed_idx):
+            f[idx] = tau[k]
+
+    # ---- CRBA: each subtree's mass, first moment h and inertia J about the
+    # mass centre of its root body (inertial axes; shifted by the joint
+    # vectors, never by absolute positions); a joint's column F = Ic s goes up
+    # the tree as the force of the backward pass does
+    M = sm.zeros(nu, nu)
+    for n in reversed(tree.order):
+        mt, h, J = n.body.mass, sm.zeros(3, 1), n.Iw
+        for c in n.children:
+            d = c.rw
+            dt_, ht, ndt = _skew(d), _skew(c.h), _skew(-d)
+            mt += c.mt
+            h += c.h + c.mt * d
+            J += c.J + (ht * ndt + ndt * ht) + c.mt * (dt_ * ndt)
+        n.mt, n.h, n.J = _keep(mt), _kept(h), _kept(J)
+    for n in tree.order:
+        nj = n.Sw.shape[1]
+        if not nj:
+            continue
+        ht = _skew(n.h)
+        sw, sv = n.Sw[:3, :], n.Sw[3:, :]
+        L = _kept(n.J * sw + ht * sv)
+        P = _kept(n.mt * sv + sm.Matrix.hstack(*[_cross(sw[:, k], n.h) for k in range(nj)]))
+        m = n
+        while m is not None:
+            if m is not n:
+                L = _kept(L + sm.Matrix.hstack(*[_cross(prev.rw, P[:, k]) for k in range(nj)]))
+            blk = m.Sw.T * sm.Matrix.vstack(L, P)    # rows: m's speeds, columns: n's
+            for a_, ia in enumerate(m.speed_idx):
+                for b_, ib in enumerate(n.speed_idx):
+                    M[ia, ib] = blk[a_, b_]
+                    M[ib, ia] = blk[a_, b_]
+            prev, m = m, m.parent
+    _KEPT.clear()
+    return M, f, tree.q, tree.u, tree.kdes
+
+
+def accelerations_of_tree(system):
+    """u' of a System's joint tree by the articulated body algorithm (see
+    the module docstring), for an open tree without constraints.
+
+    Spatial quantities in the inertial frame's axes at each body's mass
+    centre (angular part first; accelerations are those of the mass centres,
+    as in the Newton-Euler equations RNEA uses): per body, inward, its
+    articulated inertia ``IA = [[A, B], [B^T, C]]`` (the blocks kept apart:
+    ``C`` is the subtree's mass times the identity where nothing couples),
+    its bias force ``pA``, ``U = IA S``, ``D = S^T U`` and ``D^-1`` (1 x 1
+    for pins and sliders, up to 3 x 3), ``uu = -S^T pA``; then, outward,
+    ``u'_j = D^-1 (uu - U^T a')`` and the body's acceleration ``a' + S u'_j``
+    (``a'``: the parent's carried to the body, plus the velocity-product
+    part). Every body's quantities are shared opaque nodes (``_keep``): the
+    expression graph, and so the straight-line C, is linear in the bodies.
+
+    Returns
+    -------
+    (ud, q, u, kdes) : sympy Matrix (nu, 1), list, list, Matrix (nq, 1)
+        The accelerations in the System's speed order and the System's
+        kinematic equations (``kdes = 0``).
+    """
+    tree = _walk(system)
+    nu = len(tree.u)
+    # the graph is a few nodes deep per body, inward and outward: the
+    # pipeline's recursive walks (model conversion, CSE) go that deep
+    import sys
+    sys.setrecursionlimit(max(sys.getrecursionlimit(), 2000 + 200 * len(tree.order)))
+    I3 = sm.eye(3)
+    for n in reversed(tree.order):
+        Iw = n.Iw
+        # the body: I a + b - f_ext, b = [w x Iw w; 0] (mass-centre accelerations)
+        A, B, C = Iw, sm.zeros(3, 3), n.body.mass * I3
+        pw, pv = _cross(n.w, Iw * n.w) - n.N, -n.F
+        for c in n.children:
+            # the child's articulated inertia and bias force carried to this
+            # body's mass centre: X^T Ia X, X^T pa (X: motion from here to there)
+            Ac, Bc, Cc = c.IA
+            pcw, pcv = c.pA
+            Rx = _skew(c.rw)
+            RC = Rx * Cc
+            A = A + Ac - Bc * Rx + Rx * Bc.T - RC * Rx
+            B = B + Bc + RC
+            C = C + Cc
+            pw = pw + pcw + _cross(c.rw, pcv)
+            pv = pv + pcv
+        A, B, C, pw, pv = _sym_kept(A), _kept(B), _sym_kept(C), _kept(pw), _kept(pv)
+        nj = n.Sw.shape[1]
+        cw, cv = n.cw, n.cv
+        if nj:
+            sw, sv = n.Sw[:3, :], n.Sw[3:, :]
+            Uw, Uv = _kept(A * sw + B * sv), _kept(B.T * sw + C * sv)
+            D = _sym_kept(sw.T * Uw + sv.T * Uv)
+            n.Dinv = Dinv = _inv_small(D)
+            n.uu = uu = _kept(-(sw.T * pw + sv.T * pv))
+            n.U = (Uw, Uv)
+            # the articulated inertia seen through the joint: IA - U D^-1 U^T,
+            # and its bias pA + Ia c + U D^-1 uu
+            UDw, UDv = _kept(Uw * Dinv), _kept(Uv * Dinv)
+            Aa = A - UDw * Uw.T
+            Ba = B - UDw * Uv.T
+            Ca = C - UDv * Uv.T
+            g = UDw * uu, UDv * uu
+        else:
+            Aa, Ba, Ca = A, B, C
+            g = (sm.zeros(3, 1), sm.zeros(3, 1))
+        Aa, Ba, Ca = _sym_kept(Aa), _kept(Ba), _sym_kept(Ca)
+        n.IA = (Aa, Ba, Ca)
+        n.pA = (_kept(pw + Aa * cw + Ba * cv + g[0]),
+                _kept(pv + Ba.T * cw + Ca * cv + g[1]))
+    ud = sm.zeros(nu, 1)
+    for n in tree.order:
+        if n.parent is None:
+            aw, av = n.cw, n.cv
+        else:
+            pal, pa = n.parent.al, n.parent.a
+            aw = pal + n.cw
+            av = pa + _cross(pal, n.rw) + n.cv
+        aw, av = _kept(aw), _kept(av)
+        nj = n.Sw.shape[1]
+        if nj:
+            Uw, Uv = n.U
+            uj = _kept(n.Dinv * (n.uu - (Uw.T * aw + Uv.T * av)))
+            for k, idx in enumerate(n.speed_idx):
+                ud[idx] = uj[k]
+            aw = aw + n.Sw[:3, :] * uj
+            av = av + n.Sw[3:, :] * uj
+        n.al, n.a = _kept(aw), _kept(av)
+    _KEPT.clear()
+    return ud, tree.q, tree.u, tree.kdes
+
+
+def _inv_small(D):
+    """The inverse of a small symmetric matrix of kept entries, by its
+    adjugate over placeholder symbols (sympy's inv would test the kept
+    entries for zero, a walk down the whole graph)."""
+    k = D.shape[0]
+    if k == 1:
+        return sm.Matrix([[_keep(1 / D[0, 0])]])
+    X = sm.Matrix(k, k, lambda i, j: sm.Symbol(f"_D{min(i, j)}_{max(i, j)}"))
+    sub = {X[i, j]: D[i, j] for i in range(k) for j in range(k)}
+    idet = _keep(1 / _keep(X.det(method="berkowitz").xreplace(sub)))
+    adj = X.adjugate(method="berkowitz").xreplace(sub)
+    return _sym_kept(adj * idet)
+
+
+def _walk(system):
+    """The checked tree with, per body, its joint's kinematics, external
+    loads, orientation R, and (inertial axes, at the mass centres) S, the
+    joint vector, velocities, velocity-product accelerations (absolute: al,
+    a; the joint's own share: cw, cv) and central inertia: what CRBA/RNEA
+    (equations_of_tree) and ABA (accelerations_of_tree) both start from."""
+    # no node of an earlier build in sympy's cache: one equal to a new node
+    # (an ancestor's quantities when the same tree is built again) would be
+    # compared with it down the two graphs
+    _KEPT.clear()
+    from sympy.core.cache import clear_cache
+    clear_cache()
     tree = _Tree(system)
     N = tree.N
-    nu = len(tree.u)
     qset = set(tree.q)
 
     udots = [s.diff(_T) for s in tree.u]
@@ -408,73 +625,23 @@ def equations_of_tree(system):
         rel = n.Sw * _col(n.joint.speeds)
         w_rel, v_rel = rel[:3, :], rel[3:, :]
         if n.parent is None:
-            w_p = v_p = al_p = a_p = zero
-            Rp = sm.eye(3)
+            w_p, Rp = zero, sm.eye(3)
         else:
-            w_p, v_p, al_p, a_p = n.parent.w, n.parent.v, n.parent.al, n.parent.a
-            Rp = n.parent.R
+            w_p, Rp = n.parent.w, n.parent.R
         r = _kept(Rp * n.r_pp + R * n.r_cc)
         n.rw = r
         n.w = _kept(w_p + w_rel)
-        n.v = _kept(v_p + _cross(w_p, r) + v_rel)
-        al = al_p + _cross(w_p, w_rel)
-        a = a_p + _cross(al_p, r) + _cross(w_p, _cross(w_p, r)) \
-            + _cross(2 * w_p, v_rel) + _cross(w_rel, v_rel)
+        # the joint's share of the velocity-product accelerations: the
+        # body's (al, a) = the parent's carried to it + (cw, cv) at u' = 0
+        cw = _cross(w_p, w_rel)
+        cv = _cross(w_p, _cross(w_p, r)) + _cross(2 * w_p, v_rel) + _cross(w_rel, v_rel)
         if n.rel_bias is not None:
-            al += R * n.rel_bias[:3, :]
-            a += R * n.rel_bias[3:, :]
-        n.al, n.a = _kept(al), _kept(a)
+            cw += R * n.rel_bias[:3, :]
+            cv += R * n.rel_bias[3:, :]
+        n.cw, n.cv = cw, cv
         b = n.body
         n.Iw = _kept(R * _inertia_matrix(b) * R.T)
-    # forces in: each body's F - m a and T - I al - w x I w, plus its
-    # children's (formed with their signs: negating a large sum would make
-    # sympy distribute the -1 over every term)
-    f = sm.zeros(nu, 1)
-    for n in reversed(tree.order):
-        b = n.body
-        Fi = n.F - b.mass * n.a
-        Ni = n.N + (-n.Iw) * n.al + _cross(n.Iw * n.w, n.w)
-        for c in n.children:
-            Fi += c.Ftot
-            Ni += c.Ntot + _cross(c.rw, c.Ftot)
-        n.Ftot, n.Ntot = Fi, Ni = _kept(Fi), _kept(Ni)
-        tau = n.Sw.T * sm.Matrix.vstack(Ni, Fi)
-        for k, idx in enumerate(n.speed_idx):
-            f[idx] = tau[k]
-
-    # ---- CRBA: each subtree's mass, first moment h and inertia J about the
-    # mass centre of its root body (inertial axes; shifted by the joint
-    # vectors, never by absolute positions); a joint's column F = Ic s goes up
-    # the tree as the force of the backward pass does
-    M = sm.zeros(nu, nu)
-    for n in reversed(tree.order):
-        mt, h, J = n.body.mass, sm.zeros(3, 1), n.Iw
-        for c in n.children:
-            d = c.rw
-            dt_, ht, ndt = _skew(d), _skew(c.h), _skew(-d)
-            mt += c.mt
-            h += c.h + c.mt * d
-            J += c.J + (ht * ndt + ndt * ht) + c.mt * (dt_ * ndt)
-        n.mt, n.h, n.J = _keep(mt), _kept(h), _kept(J)
-    for n in tree.order:
-        nj = n.Sw.shape[1]
-        if not nj:
-            continue
-        ht = _skew(n.h)
-        sw, sv = n.Sw[:3, :], n.Sw[3:, :]
-        L = _kept(n.J * sw + ht * sv)
-        P = _kept(n.mt * sv + sm.Matrix.hstack(*[_cross(sw[:, k], n.h) for k in range(nj)]))
-        m = n
-        while m is not None:
-            if m is not n:
-                L = _kept(L + sm.Matrix.hstack(*[_cross(prev.rw, P[:, k]) for k in range(nj)]))
-            blk = m.Sw.T * sm.Matrix.vstack(L, P)    # rows: m's speeds, columns: n's
-            for a_, ia in enumerate(m.speed_idx):
-                for b_, ib in enumerate(n.speed_idx):
-                    M[ia, ib] = blk[a_, b_]
-                    M[ib, ia] = blk[a_, b_]
-            prev, m = m, m.parent
-    return M, f, tree.q, tree.u, tree.kdes
+    return tree
 
 
 def _inertia_matrix(body):
@@ -511,6 +678,8 @@ def constraints_of_tree(system):
         and the numbers of dependent coordinates and speeds (last in the
         System's q and u).
     """
+    if not isinstance(system, me.System):
+        _Tree(system)           # the error naming what it got
     nh, nn = len(system.holonomic_constraints), len(system.nonholonomic_constraints)
     if not nh and not nn:
         return None

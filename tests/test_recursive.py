@@ -1,5 +1,6 @@
 """Issue 37: Model.from_system(system, formulation="recursive") forms the
-equations of a sympy System's joint tree itself (CRBA + RNEA, gen.recursive).
+equations of a sympy System's joint tree itself (gen.recursive: ABA for an
+open tree, CRBA + RNEA with constraints; both checked).
 
 Reference: sympy's own System.form_eoms() (Kane) on an identical System built
 separately, its mass_matrix_full / forcing_full lambdified and solved with
@@ -170,6 +171,17 @@ def _compile(spec, name):
     return model, gen.compile(model)
 
 
+def _compile_crba(spec, name, **kw):
+    """The same tree by CRBA + RNEA (gen.recursive.equations_of_tree: the
+    physical M u' = f; from_system takes ABA for an open tree)."""
+    from gen.recursive import equations_of_tree
+    system, consts, inputs = _tree(spec, **kw)
+    M, f, q, u, kd = equations_of_tree(system)
+    model = gen.Model.from_matrices(M, f, q, u, kd, constants=consts,
+                                    inputs=inputs, name=name)
+    return model, gen.compile(model)
+
+
 # the larger trees (each > 8 s: sympy's form_eoms reference dominates) run in the
 # slow tier; pin, prismatic and weld joints keep a case in the fast one, the
 # cylindrical, planar and spherical joints are in the slow one
@@ -180,21 +192,27 @@ SLOW_CASES = {"tree5", "spherical2", "chain3d4", "mixed5", "tree6", "planar2", "
 @pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.slow) if c in SLOW_CASES
                                   else c for c in sorted(CASES)])
 def test_rhs_and_mass_matrix_match_form_eoms(case):
+    """ABA (from_system's choice for an open tree: M = I, f = u') and CRBA +
+    RNEA (equations_of_tree: the physical M and f) against form_eoms."""
     spec = CASES[case]
     model, sim = _compile(spec, f"rec_{case}")
+    cmodel, csim = _compile_crba(spec, f"crba_{case}")
     ref = _Ref(spec, with_jac=model.nq <= 5)
     nq = model.nq
     assert model.nu == nq and nq == ref.nq
     assert [str(s) for s in model.q_orig + model.u_orig] == [str(s) for s in ref.x]
+    assert model.M == sm.eye(nq)
     rng = np.random.default_rng(1)
     for _ in range(5):
         x = rng.uniform(-1.5, 1.5, 2 * nq)
         r = rng.uniform(-1, 1, 1)
         want = ref.rhs(x, r)
-        got = sim.rhs(0.0, x, r=r)
-        assert np.max(np.abs(got - want)) <= TOL * max(1.0, np.max(np.abs(want))), (got, want)
+        for s_ in (sim, csim):
+            got = s_.rhs(0.0, x, r=r)
+            assert np.max(np.abs(got - want)) <= TOL * max(1.0, np.max(np.abs(want))), (got, want)
+        assert np.array_equal(sim.mass_matrix(x[:nq]), np.eye(nq))
         Mw = ref.mass(x)
-        Mg = sim.mass_matrix(x[:nq])
+        Mg = csim.mass_matrix(x[:nq])
         assert np.max(np.abs(Mg - Mw)) <= TOL * max(1.0, np.max(np.abs(Mw)))
         if nq <= 5:
             A, B = sim.linearize(x, r=r)
@@ -436,6 +454,7 @@ def test_pinocchio_aba_matches_rhs(which):
     model = gen.Model.from_system(system, constants=consts, name=f"rec_{which}",
                                   formulation="recursive")
     sim = gen.compile(model)
+    _, csim = _compile_crba(spec, f"crba_{which}", loads=False, actuator=False)
     data = pmodel.createData()
     n = model.nq
     assert pmodel.nq == n
@@ -450,7 +469,9 @@ def test_pinocchio_aba_matches_rhs(which):
         tau0 = pin.rnea(pmodel, data, x[:n], z, z).copy()
         Mw = np.column_stack([pin.rnea(pmodel, data, x[:n], z, np.eye(n)[k]) - tau0
                               for k in range(n)])
-        assert np.max(np.abs(sim.mass_matrix(x[:n]) - Mw)) <= TOL * np.max(np.abs(Mw))
+        assert np.max(np.abs(csim.mass_matrix(x[:n]) - Mw)) <= TOL * np.max(np.abs(Mw))
+        got = csim.rhs(0.0, x)[n:]
+        assert np.max(np.abs(got - want)) <= TOL * max(1.0, np.max(np.abs(want))), (got, want)
 
 
 def test_recursive_needs_a_system():
