@@ -769,17 +769,18 @@ class Model:
             ``{name: gen.Impact(gap, ...) or gen.Reset(guard, map, ...)}``:
             impacts and resets, run in C with the rest of the model; every jump
             is logged in ``sol.events`` (``docs/guides/hybrid.md``).
-        formulation : {"kane", "recursive"}, optional
+        formulation : {"kane", "recursive", "crba"}, optional
             ``"kane"``: the equations the method formed (``form_eoms()`` first).
             ``"recursive"``: a sympy System's joint tree, its equations formed
             here (no ``form_eoms()`` needed, none called), the System's kdes as
             the kinematics (:mod:`gen.recursive`; trees of rigid bodies and
             sympy's joints). An open tree (no constraints, no ``hybrid``): u' by
             the articulated body algorithm, the model's mass matrix the identity
-            and its forcing u' (``sim.mass_matrix`` is I; the physical M from
-            :func:`gen.recursive.equations_of_tree`); with constraints or
+            and its forcing u' (``sim.mass_matrix`` is I); with constraints or
             ``hybrid``: the mass matrix by the composite rigid body algorithm,
-            the forcing by recursive Newton-Euler.
+            the forcing by recursive Newton-Euler. ``"crba"``: the same tree,
+            always by CRBA + RNEA, for the physical mass matrix and forcing
+            (``sim.mass_matrix`` is M; a slower build and rhs from n ~ 20).
         **partition
             The further keywords of the builder: q_ind, q_dep, qd_ind, qd_dep for
             Lagrange models (a sympy System's own partition is the default), those
@@ -797,14 +798,14 @@ class Model:
             called (or whose equations were reset by a later change): eomgen never
             forms the equations itself.
         """
-        if formulation == "recursive":
+        if formulation in ("recursive", "crba"):
             if partition:
                 raise ModelError(
                     f"unknown argument(s) {', '.join(sorted(partition))} for "
-                    "Model.from_system with formulation='recursive': accepted are none")
+                    f"Model.from_system with formulation={formulation!r}: accepted are none")
             from .recursive import accelerations_of_tree, constraints_of_tree, equations_of_tree
             cons = constraints_of_tree(obj)
-            if cons is None and not hybrid:
+            if cons is None and not hybrid and formulation == "recursive":
                 # an open tree: u' by the articulated body algorithm, the
                 # model's M the identity (gen.recursive's docstring)
                 ud, q, u, kdes = accelerations_of_tree(obj)
@@ -816,7 +817,7 @@ class Model:
                                      _constraints=cons)
         if formulation != "kane":
             raise ModelError(f"formulation={formulation!r} for Model.from_system: "
-                             "accepted are 'kane' and 'recursive'")
+                             "accepted are 'kane', 'recursive' and 'crba'")
         m, desc, kind, call = _unwrap(obj)
         needs = "Model.from_system needs a KanesMethod or LagrangesMethod"
         accepted = ("(accepted: a KanesMethod or LagrangesMethod, or a sympy System, "
@@ -1426,6 +1427,9 @@ def _check_coupled_regular(M, G, C, H, names):
 _ELIMINATE_CONSTANT = True
 
 
+_ID_MEMO, _CONS_MEMO = object(), object()
+
+
 def _xreplace_shared(mat, rule, memo):
     """mat.xreplace(rule), each distinct subexpression rebuilt once (memo,
     shared between calls): sympy's xreplace rebuilds a subexpression every
@@ -1450,18 +1454,34 @@ def _xreplace_shared(mat, rule, memo):
             return e.func._from_args(nums + rest, True)
         return e.func(*args)
 
+    # memo and the rebuilt nodes keyed by object identity: two equal but
+    # distinct deep subexpressions (gen.recursive's graphs once sympy's LRU
+    # cache has dropped the one that made them identical) are never compared
+    # with sympy's ==, which walks shared nodes as a tree (exponential); equal
+    # rebuilt nodes are made one object (hash-consed by their arguments' ids)
+    ids = memo.setdefault(_ID_MEMO, {})
+    cons = memo.setdefault(_CONS_MEMO, {})
+
     def walk(e):
-        hit = memo.get(e)
+        hit = ids.get(id(e))
         if hit is not None:
-            return hit
-        if e in rule:
+            return hit[1]
+        if not e.args:
+            out = rule.get(e, e)
+        elif e in rule:
             out = rule[e]
-        elif not e.args:
-            out = e
         else:
             args = [walk(a) if isinstance(a, sm.Basic) else a for a in e.args]
-            out = rebuild(e, args) if any(a is not b for a, b in zip(args, e.args)) else e
-        memo[e] = out
+            if any(a is not b for a, b in zip(args, e.args)):
+                key = (e.func, tuple(a if not isinstance(a, sm.Basic) or not a.args else id(a)
+                                     for a in args))
+                out = cons.get(key)
+                if out is None:
+                    out = rebuild(e, args)
+                    cons[key] = out
+            else:
+                out = e
+        ids[id(e)] = (e, out)
         return out
 
     return sm.Matrix(mat.shape[0], mat.shape[1], [walk(e) for e in mat])

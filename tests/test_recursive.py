@@ -172,13 +172,11 @@ def _compile(spec, name):
 
 
 def _compile_crba(spec, name, **kw):
-    """The same tree by CRBA + RNEA (gen.recursive.equations_of_tree: the
-    physical M u' = f; from_system takes ABA for an open tree)."""
-    from gen.recursive import equations_of_tree
+    """The same tree by CRBA + RNEA (formulation="crba": the physical
+    M u' = f; "recursive" takes ABA for an open tree)."""
     system, consts, inputs = _tree(spec, **kw)
-    M, f, q, u, kd = equations_of_tree(system)
-    model = gen.Model.from_matrices(M, f, q, u, kd, constants=consts,
-                                    inputs=inputs, name=name)
+    model = gen.Model.from_system(system, constants=consts, inputs=inputs, name=name,
+                                  formulation="crba")
     return model, gen.compile(model)
 
 
