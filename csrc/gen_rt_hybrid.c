@@ -46,6 +46,16 @@ static void layout_(const gen_rt_model *m, gen_rt_real *work, int *iwork, hwork_
     L->iw = iwork + nq;
 }
 
+/* [M, A^T; A, 0] [ud; -lam] = [f; -a] with the first nc rows of A, a; a
+ * non-finite entry of the model's M, f, A or a stops before the solve */
+static int kkt_(int nu, int nc, const hwork_ *L)
+{
+    if (!gen_rt_all_finite(nu * nu, L->M) || !gen_rt_all_finite(nu, L->f) ||
+        !gen_rt_all_finite(nc * nu, L->A) || !gen_rt_all_finite(nc, L->a))
+        return GEN_RT_ERR_NONFINITE_MODEL;
+    return gen_rt_accel_kkt(nu, nc, L->M, L->f, L->A, L->a, L->kkt, L->iw, L->ud, L->lam);
+}
+
 int gen_rt_hybrid_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
                       const gen_rt_real *r, const gen_rt_real *p, const int *active,
                       gen_rt_real *work, int *iwork, gen_rt_real *dxdt, gen_rt_real *lam_c)
@@ -71,10 +81,7 @@ int gen_rt_hybrid_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x
         L.a[mv + na] = L.h[k];
         ++na;
     }
-    if (!gen_rt_all_finite(nu * nu, L.M) || !gen_rt_all_finite(nu, L.f) ||
-        !gen_rt_all_finite((mv + na) * nu, L.A) || !gen_rt_all_finite(mv + na, L.a))
-        return GEN_RT_ERR_NONFINITE_MODEL;
-    st = gen_rt_accel_kkt(nu, mv + na, L.M, L.f, L.A, L.a, L.kkt, L.iw, L.ud, L.lam);
+    st = kkt_(nu, mv + na, &L);
     if (st) return st;
     copy_n(nq, L.qd, dxdt);
     copy_n(nu, L.ud, dxdt + nq);
@@ -150,10 +157,7 @@ int gen_rt_hybrid_impulse(const gen_rt_model *m, gen_rt_real t, const gen_rt_rea
         L.a[mv + na] = L.w[k] + e[k] * vn;
         ++na;
     }
-    if (!gen_rt_all_finite(nu * nu, L.M) || !gen_rt_all_finite(nu, L.f) ||
-        !gen_rt_all_finite((mv + na) * nu, L.A) || !gen_rt_all_finite(mv + na, L.a))
-        return GEN_RT_ERR_NONFINITE_MODEL;
-    st = gen_rt_accel_kkt(nu, mv + na, L.M, L.f, L.A, L.a, L.kkt, L.iw, L.ud, L.lam);
+    st = kkt_(nu, mv + na, &L);
     if (st) return st;
     copy_n(nu, L.ud, u);
     if (impulse) {

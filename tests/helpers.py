@@ -59,3 +59,22 @@ def ldlt_solve_c(prefix, n, nonzero, real, rtol_macro="GEN_RT_PIVOT_RTOL"):
     macro = template_env().get_template("c/mass_solve.j2").module.mass_solve
     plan = ldlt_program(n, nonzero)
     return str(macro(prefix, real, plan, ldlt_statements(plan), rtol_macro))
+
+
+def cortex_m4_tables(src, cfile, obj, flags, flash):
+    """Compile a tracker's float sources for the Cortex-M4F (hard float) and
+    check its tables are const data only (nothing in .data/.bss, .rodata at
+    least the footprint's flash bytes); the object's section sizes, or None
+    without arm-none-eabi-gcc."""
+    import shutil
+    import subprocess
+    if not shutil.which("arm-none-eabi-gcc"):
+        return None
+    subprocess.run(["arm-none-eabi-gcc", "-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16",
+                    "-mfloat-abi=hard", "-Os", *flags, "-c", "-I", str(src),
+                    str(src / cfile), "-o", str(obj)], check=True)
+    from gen.footprint import section_sizes
+    sec = section_sizes(obj, "arm-none-eabi-")
+    assert sec["data"] == 0 and sec["bss"] == 0, sec
+    assert sec["rodata"] >= flash, sec
+    return sec

@@ -13,8 +13,6 @@ optimal inputs from the same start; the host's double sim.simulate for the
 float and double builds under qemu-arm.
 """
 import os
-import shutil
-import subprocess
 
 import numpy as np
 import pytest
@@ -22,6 +20,7 @@ from scipy.interpolate import CubicHermiteSpline
 from scipy.linalg import expm, solve_discrete_are
 
 from conftest import require_tool
+from helpers import cortex_m4_tables
 
 try:
     import cyipopt  # noqa: F401
@@ -167,16 +166,9 @@ def test_float_cortex_build_agrees_with_double_under_qemu(swing, tmp_path):
         assert _miss(v["end"]) < 1e-2
     fp = tr.footprint("float")
     assert fp["rows"] == 201 and fp["flash"] == 201 * (4 + 4 + 1) * 4 and fp["ram"] == 0
-    if shutil.which("arm-none-eabi-gcc"):
-        src = tmp_path / "src_float"
-        obj = tmp_path / "swingup_m4.o"
-        subprocess.run(["arm-none-eabi-gcc", "-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16",
-                        "-mfloat-abi=hard", "-Os", *STRICT, "-c", "-I", str(src),
-                        str(src / "swingup.c"), "-o", str(obj)], check=True)
-        from gen.footprint import section_sizes
-        sec = section_sizes(obj, "arm-none-eabi-")
-        assert sec["data"] == 0 and sec["bss"] == 0, sec
-        assert sec["rodata"] >= fp["flash"], sec
+    sec = cortex_m4_tables(tmp_path / "src_float", "swingup.c", tmp_path / "swingup_m4.o",
+                           STRICT, fp["flash"])
+    if sec is not None:
         print(f"  tracker of the optimum (201 rows) on the Cortex-M4F, float: tables "
               f"{fp['flash']} B, object .text {sec['text']} B, .rodata {sec['rodata']} B, RAM 0 B")
 

@@ -21,6 +21,7 @@ import cart_pole as cp
 import cart_pole_tracking as cpt
 import gen
 from conftest import require_tool
+from helpers import cortex_m4_tables
 
 HERE = Path(__file__).resolve().parent
 EMB = HERE / "embedded"
@@ -476,16 +477,9 @@ def test_float_cortex_build_agrees_with_double_under_qemu(sim, swing, tmp_path):
     assert abs(X[-1, 2] - 2 * np.pi) < 1e-2
     # the float tables on the Cortex-M4F: text and const data, nothing in RAM
     fp_float = tr.footprint("float")
-    if shutil.which("arm-none-eabi-gcc"):
-        src = tmp_path / "src_float"
-        obj = tmp_path / "swingup_m4.o"
-        subprocess.run(["arm-none-eabi-gcc", "-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16",
-                        "-mfloat-abi=hard", "-Os", *STRICT, "-c", "-I", str(src),
-                        str(src / "swingup.c"), "-o", str(obj)], check=True)
-        from gen.footprint import section_sizes
-        sec = section_sizes(obj, "arm-none-eabi-")
-        assert sec["data"] == 0 and sec["bss"] == 0, sec
-        assert sec["rodata"] >= fp_float["flash"], sec
+    sec = cortex_m4_tables(tmp_path / "src_float", "swingup.c", tmp_path / "swingup_m4.o",
+                           STRICT, fp_float["flash"])
+    if sec is not None:
         print(f"\ntracker (801 rows) on the Cortex-M4F, float: tables {fp_float['flash']} B "
               f"(K {fp_float['K']}, x_ref {fp_float['x_ref']}, r_ref {fp_float['r_ref']}), "
               f"object .text {sec['text']} B, .rodata {sec['rodata']} B, RAM 0 B")
