@@ -246,7 +246,7 @@ def time_rhs_in_c(eom_dir, prefix, x0, pvals, cas_c=None, cas_fname=None, reps=2
     tag = re.sub(r"\W", "_", Path(cc).name)
     drv = eom_dir / f"bench_driver_{tag}.c"
     exe = eom_dir / f"bench_driver_{tag}"
-    from gen.render import model_sources
+    from gen.codegen.render import model_sources
     srcs = [str(drv)] + [str(eom_dir / f) for f in model_sources(prefix)] + sorted(
         str(f) for f in eom_dir.glob("gen_rt_*.c"))
     incs = ["-I", str(eom_dir)]

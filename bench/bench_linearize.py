@@ -125,7 +125,7 @@ def time_c_call(model, workdir, reps=7):
     x0 = "0.3" if model.mc or model.mv else "0.1"
     (out / "bench.c").write_text(DRIVER.format(p=p, P=p.upper(), iters=iters, reps=reps, x0=x0))
     exe = out / "bench"
-    from gen.render import model_sources
+    from gen.codegen.render import model_sources
     srcs = [str(out / "bench.c")] + [str(out / f) for f in model_sources(p)] + sorted(
         str(f) for f in out.glob("gen_rt_*.c"))
     subprocess.run(["gcc", "-std=c99", "-O2", "-D_POSIX_C_SOURCE=199309L", "-I", str(out), *srcs,

@@ -172,7 +172,7 @@ def worker_eomgen(n, work, opts):
         # speed changes between phases), the median of the pairs' ratios;
         # rhs_batch into a preallocated out= (as a loop calling it would)
         from _cdriver import time_rhs_in_c
-        from gen.backends import C_FLAGS, c_compiler as _compiler
+        from gen.codegen.backends import C_FLAGS, c_compiler as _compiler
         cc, pv, pairs = _compiler(), np.array(vals, dtype=float), []
         Yb = np.empty_like(X)
         for _ in range(7):

@@ -4,7 +4,7 @@ coupled solve, on a model where both apply (issue 33).
 The bead on a circular track of tests/test_reactions_coupled.py with its
 auxiliary speed along the track's normal: the normal force's coefficient is
 1, so Model.from_kanes eliminates it exactly (N = m (g cos + R omega^2) put
-into f, today's path); with gen.model._ELIMINATE_CONSTANT = False the same
+into f, today's path); with gen.intake.model._ELIMINATE_CONSTANT = False the same
 model goes through the coupled solve ([M, -G; C, H] [u'; N] = [f; -g0] by
 pivoted LU at each evaluation). Also the cart-pole with Coulomb friction
 (examples/cart_pole_friction.py), which only the coupled solve handles,
@@ -30,7 +30,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "examples")]
 
 import gen                                      # noqa: E402
-from gen import model as gen_model              # noqa: E402
+from gen.intake import model as gen_model              # noqa: E402
 
 
 def step_time(sim, x0, r, steps, repeats, dt=1e-5):

@@ -72,7 +72,7 @@ enum gen_rt_status { GEN_RT_STATUS_TABLE(GEN_RT_STATUS_ENUM_) GEN_RT_STATUS_END_
 
 /* The integration methods, the table holds, the stack bound and the structs
  * of the public API (gen_rt_sim_options, gen_rt_sim_stats, gen_rt_input,
- * gen_rt_events, gen_rt_controller_fn): rendered from gen/abi.py, the one
+ * gen_rt_events, gen_rt_controller_fn): rendered from gen/codegen/abi.py, the one
  * description of the interface, which every model's header also comes from. */
 #include "gen_rt_abi.h"
 
@@ -357,7 +357,7 @@ typedef struct {
     gen_rt_real *Kqd, *Ku, *M, *A, *Kq, *Rq, *Ru, *Rr, *Sq, *Su, *Vq, *Jc, *Sqd;
 } gen_rt_lin_out;
 
-/* Hybrid behaviour of a model (hybrid={...}, gen/hybrid.py; the engine in
+/* Hybrid behaviour of a model (hybrid={...}, gen/intake/hybrid.py; the engine in
  * gen_rt_hybrid.c and gen_rt_simulate.c): n declarations, each an impact
  * (a gap g(q, t) >= 0) or a reset (a guard of the state and a map). */
 #define GEN_RT_HYBRID_IMPACT 0
@@ -633,7 +633,7 @@ int gen_rt_model_simulate(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_r
  *              rows (nr x ns, nx and nr values each): row k is used from
  *              t_gain + k dt_gain on (row 0 before, the last row after the
  *              end), a time-varying feedback such as a trajectory tracker's
- *              (gen/tracking.py). Row changes are step boundaries.
+ *              (gen/design/tracking.py). Row changes are step boundaries.
  *   bounds     with r_min / r_max (nr each, NULL: none; infinite entries
  *              allowed), base and feedback clipped to [r_min, r_max]
  *              before the controller is called.

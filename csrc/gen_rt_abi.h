@@ -5,10 +5,10 @@
  * model's <p>_<name> has the same fields in the same order, rendered from
  * the same list, and its wrappers copy them field by field from that list).
  *
- * Rendered from gen/abi.py (templates/c/gen_rt_abi.h.j2); every generated
- * model carries its own copy. Do not edit: change gen/abi.py, then
+ * Rendered from gen/codegen/abi.py (templates/c/gen_rt_abi.h.j2); every generated
+ * model carries its own copy. Do not edit: change gen/codegen/abi.py, then
  * EOMGEN_UPDATE_GOLDEN=1 python -m pytest tests/test_abi.py rewrites this
- * file (the test fails while it differs from gen/abi.py).
+ * file (the test fails while it differs from gen/codegen/abi.py).
  * Included by gen_rt.h once gen_rt_real is defined.
  */
 #ifndef GEN_RT_ABI_H

@@ -1,5 +1,5 @@
 /* gen_rt_hybrid.c - impacts, resets and persistent contact of a hybrid
- * model (hybrid={...}, gen/hybrid.py): the dynamics with contacts held as
+ * model (hybrid={...}, gen/intake/hybrid.py): the dynamics with contacts held as
  * constraints, their forces, the impulse solve at an impact and the reset
  * map. The simulation engine (gen_rt_simulate.c) locates the events and
  * calls these; no model knowledge here beyond the kernels of gen_rt_hybrid.

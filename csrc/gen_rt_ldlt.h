@@ -3,9 +3,9 @@
  * LDL^T in loops: the mass-matrix solve of a large model.
  *
  * A small model's solve is unrolled by the generator over M's structural
- * nonzeros (gen/solvers.py). From about two dozen speeds on, with M dense, the
+ * nonzeros (gen/plan/ldlt.py). From about two dozen speeds on, with M dense, the
  * unrolled code (n^3/3 statements) is slower than loops the compiler
- * vectorizes, and slower to compile (gen.solvers.LDLT_LOOP_MIN). This is
+ * vectorizes, and slower to compile (gen.plan.ldlt.LDLT_LOOP_MIN). This is
  * the same factorization in loops: the same IEEE operations in the same
  * order on every entry, so the solution is the unrolled solve's bit for bit
  * (tests/test_ldlt_loop.py):

@@ -5,7 +5,7 @@
  */
 #include "gen_rt_main.h"
 /* the method and hold names with their codes (GEN_RT_METHOD_NAMES,
- * GEN_RT_HOLD_NAMES in gen_rt_abi.h, rendered from gen/abi.py; every model
+ * GEN_RT_HOLD_NAMES in gen_rt_abi.h, rendered from gen/codegen/abi.py; every model
  * checks at compile time that its codes are these) */
 #include "gen_rt.h"
 

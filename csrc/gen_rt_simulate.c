@@ -13,10 +13,10 @@
 
 #include "gen_rt.h"
 
-/* the methods and holds of gen/abi.py (gen_rt_abi.h) are those this file
+/* the methods and holds of gen/codegen/abi.py (gen_rt_abi.h) are those this file
  * implements (method_ok, input_check): one added there fails the build here */
 #if GEN_RT_METHOD_COUNT != 3 || GEN_RT_HOLD_COUNT != 2
-#error "gen/abi.py lists a method or table hold that gen_rt_simulate.c does not implement"
+#error "gen/codegen/abi.py lists a method or table hold that gen_rt_simulate.c does not implement"
 #endif
 
 static int finite_n(int n, const gen_rt_real *v)

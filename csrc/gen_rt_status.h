@@ -2,7 +2,7 @@
  * gen_rt_status.h - the status table of the eomgen runtime: one line per
  * code, X(NAME, value, "message"). It is the one source of the codes and
  * their messages: the C runtime (gen_rt.h, gen_rt_status.c), the C++
- * runtime (eigen/gen_rt_eigen.hpp) and the generator (gen/abi.py reads this file)
+ * runtime (eigen/gen_rt_eigen.hpp) and the generator (gen/codegen/abi.py reads this file)
  * all take them from here. Add a code here and nowhere else.
  */
 #ifndef GEN_RT_STATUS_H

@@ -2,7 +2,7 @@
 
 Sphinx rather than MkDocs: autodoc + napoleon read the numpy-style
 docstrings of the package as they are, the C domain documents the generated
-C interface (rendered from gen/abi.py by _ext/eomgen_capi.py), and
+C interface (rendered from gen/codegen/abi.py by _ext/eomgen_capi.py), and
 sphinx-gallery runs every tutorial at build time and keeps its figures.
 Theme: furo (readable code blocks and tables, a sidebar that holds the
 guides and the API, light and dark); alabaster's fixed narrow column cuts

@@ -36,7 +36,7 @@ def problem(nodes=101, method="hermite-simpson", duration=2.0):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--nodes", type=int, default=101)
-    ap.add_argument("--method", default="hermite-simpson", choices=gen.ocp.METHODS)
+    ap.add_argument("--method", default="hermite-simpson", choices=gen.design.ocp.METHODS)
     ap.add_argument("--plot")
     a = ap.parse_args(argv)
     ocp, s = problem(a.nodes, a.method)

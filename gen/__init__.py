@@ -11,24 +11,28 @@ verified C simulators.
     gen.export_fmu(model, "pend.fmu", fmi_version="3.0")   # FMI 2.0/3.0, ME and CS
     sol = gen.OptimalControl(model, 101, 2.0, objective=F**2, ...).solve()   # IPOPT
 """
+import importlib.abc
+import importlib.util
+import sys
+
 from ._version import __version__
 
-from .errors import (BuildError, ConvergenceError, DivergenceError, EomgenError,  # noqa: E402
+from .core.errors import (BuildError, ConvergenceError, DivergenceError, EomgenError,  # noqa: E402
                      InputError, MissingDependencyError, ModelError, SingularError, SolverError,
                      UnusedConstantWarning, UnusedInputWarning, MasslessSpeedWarning)
-from .solution import Event, Solution  # noqa: E402
-from .bindings import Simulator  # noqa: E402
-from .model import Model  # noqa: E402
-from .render import generate  # noqa: E402
+from .sim.solution import Event, Solution  # noqa: E402
+from .sim.simulator import Simulator  # noqa: E402
+from .intake.model import Model  # noqa: E402
+from .codegen.render import generate  # noqa: E402
 from .pipeline import compile  # noqa: E402,A001
-from .symbolic import linearize_symbolic  # noqa: E402
-from .verify import VerifyReport, verify  # noqa: E402
-from .control import LinearFeedback  # noqa: E402
-from .tracking import TrajectoryTracker  # noqa: E402
-from .fmu import export_fmu  # noqa: E402
-from .ensemble import At, EnsembleResult, Final, Max, Mean, Min, Sampler  # noqa: E402
-from .hybrid import Impact, Reset  # noqa: E402
-from .ocp import OptimalControl, OptimalSolution  # noqa: E402
+from .plan.linearize import linearize_symbolic  # noqa: E402
+from .export.verify import VerifyReport, verify  # noqa: E402
+from .sim.inputs import LinearFeedback  # noqa: E402
+from .design.tracking import TrajectoryTracker  # noqa: E402
+from .export.fmu import export_fmu  # noqa: E402
+from .sim.ensemble import At, EnsembleResult, Final, Max, Mean, Min, Sampler  # noqa: E402
+from .intake.hybrid import Impact, Reset  # noqa: E402
+from .design.ocp import OptimalControl, OptimalSolution  # noqa: E402
 
 __all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "EomgenError",
            "ModelError", "BuildError", "InputError", "MissingDependencyError",
@@ -37,10 +41,36 @@ __all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "Eo
            "Impact", "Reset", "OptimalControl", "OptimalSolution", "__version__"]
 
 
+# gen.casadi and gen.pydy (the products users name as modules: CasADi external
+# functions, the PyDy drop-in) live in gen.export and are loaded on first
+# use, as attributes (gen.casadi.functions) and as modules (import gen.export.pydy):
+# `import gen` stays as it was
+_LAZY = {"casadi": "gen.export.casadi", "pydy": "gen.export.pydy"}
+
+
 def __getattr__(name):
-    # gen.pydy (the PyDy drop-in) and gen.casadi (CasADi external functions) are
-    # loaded on first use: `import gen` stays as it was
-    if name in ("pydy", "casadi"):
+    if name in _LAZY:
         import importlib
-        return importlib.import_module(f".{name}", __name__)
+        return importlib.import_module(_LAZY[name])
     raise AttributeError(f"module 'gen' has no attribute {name!r}")
+
+
+class _Alias(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """`import gen.export.casadi` loads gen.export.casadi (one module, two names)."""
+
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname in {f"{__name__}.{k}" for k in _LAZY}:
+            return importlib.util.spec_from_loader(fullname, self)
+        return None
+
+    def create_module(self, spec):
+        module = importlib.import_module(_LAZY[spec.name.rpartition(".")[2]])
+        self._own = (module.__name__, module.__spec__, module.__loader__)
+        return module
+
+    def exec_module(self, module):
+        # the import system gave the module the alias's names: give it back its own
+        module.__name__, module.__spec__, module.__loader__ = self._own
+
+
+sys.meta_path.append(_Alias())

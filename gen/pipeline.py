@@ -1,13 +1,13 @@
 """The pipeline from a model to a loaded Simulator, one stage per module:
 
-    model -> plan (gen/ir.py) -> render (gen/render.py) -> build (gen/build.py)
-          -> load (gen/host.py) -> Simulator (gen/bindings.py)
+    model -> plan (gen/plan/ir.py) -> render (gen/codegen/render.py) -> build (gen/toolchain/build.py)
+          -> load (gen/toolchain/host.py) -> Simulator (gen/sim/simulator.py)
 
 compile() runs it (gen.compile is this function). A model is compiled
 without its derivative kernels when its backend can add them later
 (Backend.lazy_derivatives): the Simulator gets derive(), which plans and
 renders them (derivatives_source), builds the complete library
-(gen.build.build_derivatives) and loads it, on first use.
+(gen.toolchain.build.build_derivatives) and loads it, on first use.
 """
 from __future__ import annotations
 
@@ -15,14 +15,14 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from .backends import get_backend
-from .bindings import Simulator
-from .build import build, build_derivatives
-from .errors import ModelError
-from .host import load
-from .ir import DERIVATIVE_KERNELS, plan as make_plan, with_derivatives
-from .model import require_model
-from .render import render
+from .codegen.backends import get_backend
+from .sim.simulator import Simulator
+from .toolchain.build import build, build_derivatives
+from .core.errors import ModelError
+from .toolchain.host import load
+from .plan.ir import DERIVATIVE_KERNELS, plan as make_plan, with_derivatives
+from .intake.model import require_model
+from .codegen.render import render
 
 __all__ = ["compile", "derivatives_source", "simulator"]
 
@@ -44,8 +44,8 @@ def derivatives_source(plan, real="double", timings=None):
 
 
 def simulator(built, derive=None):
-    """The Simulator of a Built (gen.build.build): its library loaded
-    through the host module (gen.host.load)."""
+    """The Simulator of a Built (gen.toolchain.build.build): its library loaded
+    through the host module (gen.toolchain.host.load)."""
     host, api = load(built)
     return Simulator(host, api, built.interface, derivatives=derive)
 
@@ -61,7 +61,7 @@ def compile(model, backend="c", real="double", verbose=False, sources=None,  # n
     ----------
     model : gen.Model
         The model.
-    backend : {"c", "eigen"} or gen.backends.Backend, optional
+    backend : {"c", "eigen"} or gen.codegen.backends.Backend, optional
         C99 over the C runtime, or C++17 over Eigen 3.4 through its
         ``extern "C"`` layer (the same API, the same Simulator).
     real : {"double", "float"}, optional
@@ -81,7 +81,7 @@ def compile(model, backend="c", real="double", verbose=False, sources=None,  # n
 
     Returns
     -------
-    gen.bindings.Simulator
+    gen.sim.simulator.Simulator
         The loaded model library.
 
     Raises

@@ -54,8 +54,8 @@ def ldlt_solve_c(prefix, n, nonzero, real, rtol_macro="GEN_RT_PIVOT_RTOL"):
     (also for NaN); x is written only on success. Rendered from the
     template the generated models use (templates/c/mass_solve.j2), for the
     tests of the solve on its own."""
-    from gen.render import template_env
-    from gen.solvers import ldlt_program, ldlt_statements
+    from gen.codegen.render import template_env
+    from gen.plan.ldlt import ldlt_program, ldlt_statements
     macro = template_env().get_template("c/mass_solve.j2").module.mass_solve
     plan = ldlt_program(n, nonzero)
     return str(macro(prefix, real, plan, ldlt_statements(plan), rtol_macro))
@@ -73,7 +73,7 @@ def cortex_m4_tables(src, cfile, obj, flags, flash):
     subprocess.run(["arm-none-eabi-gcc", "-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16",
                     "-mfloat-abi=hard", "-Os", *flags, "-c", "-I", str(src),
                     str(src / cfile), "-o", str(obj)], check=True)
-    from gen.footprint import section_sizes
+    from gen.toolchain.footprint import section_sizes
     sec = section_sizes(obj, "arm-none-eabi-")
     assert sec["data"] == 0 and sec["bss"] == 0, sec
     assert sec["rodata"] >= flash, sec

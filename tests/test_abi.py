@@ -1,4 +1,4 @@
-"""The one description of the C interface (gen/abi.py) against what is
+"""The one description of the C interface (gen/codegen/abi.py) against what is
 built from it and what it is read from:
 
 - the status table is the runtime's (csrc/gen_rt_status.h), and the compiled
@@ -17,9 +17,12 @@ import subprocess
 import pytest
 
 import gen
-from gen import abi, host, bindings, render
-from gen.ir import plan
-from gen.resources import csrc_dir
+from gen.codegen import abi
+from gen.toolchain import host
+from gen.sim import simulator as bindings
+from gen.codegen import render
+from gen.plan.ir import plan
+from gen.core.resources import csrc_dir
 
 from conftest import require_eigen
 
@@ -129,9 +132,9 @@ int main(void)
 
 
 def test_a_new_struct_field_appears_everywhere(monkeypatch, kane_model, tmp_path):
-    """Fields added to the structs in the description only (gen/abi.py) reach
+    """Fields added to the structs in the description only (gen/codegen/abi.py) reach
     the model's header, the runtime's header (gen_rt_abi.h, rendered into
-    every model), the copy between them, the cffi cdef (gen/host.py: the
+    every model), the copy between them, the cffi cdef (gen/toolchain/host.py: the
     same offsets as the C compiler's) and the C++ header, with no other
     edit; the model and the runtime compile with them under the strict flags
     and run."""
@@ -227,18 +230,18 @@ def struct_body(text, name):
 
 def test_runtime_abi_header_is_current():
     """csrc/gen_rt_abi.h (the runtime built alone: ctest, firmware) is what
-    gen/abi.py renders; EOMGEN_UPDATE_GOLDEN=1 rewrites it."""
+    gen/codegen/abi.py renders; EOMGEN_UPDATE_GOLDEN=1 rewrites it."""
     path = csrc_dir() / "gen_rt_abi.h"
     want = render.runtime_abi_header()
     if os.environ.get("EOMGEN_UPDATE_GOLDEN", "") not in ("", "0"):
         path.write_text(want)
-    assert path.read_text() == want, ("csrc/gen_rt_abi.h differs from gen/abi.py: "
+    assert path.read_text() == want, ("csrc/gen_rt_abi.h differs from gen/codegen/abi.py: "
                                       "EOMGEN_UPDATE_GOLDEN=1 python -m pytest tests/test_abi.py")
 
 
 def test_codes_and_bounds_come_from_the_description(kane_model):
     """Method and hold codes, the method aliases and the stack bound are
-    gen/abi.py's in the model's header, the runtime's header, the CMake
+    gen/codegen/abi.py's in the model's header, the runtime's header, the CMake
     project, the footprint, the command line and the Python checks."""
     files = render.render_files(kane_model)
     h, rt = files["pendulum_kane.h"], files["gen_rt_abi.h"]
@@ -253,7 +256,7 @@ def test_codes_and_bounds_come_from_the_description(kane_model):
             + " ".join(f'X("{k}", {v})' for k, v in names.items()) + "\n") in rt
     assert f"#define GEN_RT_STACK_LIMIT {abi.STACK_LIMIT}\n" in rt
     assert f"_STACK_LIMIT_DEFAULT {abi.STACK_LIMIT})" in files["CMakeLists.txt"]
-    from gen import footprint
+    from gen.toolchain import footprint
     assert footprint.DEFAULT_STACK_LIMIT == abi.STACK_LIMIT
     assert abi.method_code("rodas") == abi.method_code("rodas4") == 2
     with pytest.raises(ValueError, match=r"method must be one of .* got 'rk5'"):
@@ -316,7 +319,7 @@ def test_model_pinned_to_the_runtime_description(kane_model, tmp_path, tamper):
 
 
 def test_runtime_pinned_to_the_methods_it_implements(kane_model, tmp_path):
-    """A method added to gen/abi.py that gen_rt_simulate.c does not implement
+    """A method added to gen/codegen/abi.py that gen_rt_simulate.c does not implement
     fails the runtime's build with a message saying so."""
     files = render.render_files(kane_model)
     ok = _compile_one(tmp_path / "ok", files, "gen_rt_simulate.c")
@@ -344,7 +347,7 @@ def test_header_table_cdef_and_footprint_list_one_function_list(kane_model):
             assert re.search(rf"\bpendulum_kane_{fn.verb}\(", r.files["pendulum_kane.h"])
         assert re.search(rf"\beomgen_{fn.verb}\(const eomgen_api \*api", cdef), fn.verb
         assert re.search(rf"\beomgen_{fn.verb}\(const eomgen_api \*api[^;]*\)\n\{{", source)
-    from gen import footprint
+    from gen.toolchain import footprint
     assert [f"pendulum_kane_{f.verb}" for f in footprint.FUNCTIONS] == names
 
 

@@ -12,7 +12,7 @@ import sympy as sm
 from sympy.physics import mechanics as me
 
 import gen
-from gen.errors import ModelError
+from gen.core.errors import ModelError
 from helpers import rel_err
 
 t = me.dynamicsymbols._t
@@ -490,7 +490,7 @@ def test_constrained_model_matches_sympy_auxiliary_eqs():
 def test_standalone_csv_has_one_column_per_reaction(tmp_path):
     import shutil
     import subprocess
-    from gen.render import generate
+    from gen.codegen.render import generate
     cc = shutil.which("cc") or shutil.which("gcc")
     if cc is None:
         pytest.skip("no C compiler")

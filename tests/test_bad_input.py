@@ -11,7 +11,7 @@ from sympy.physics import mechanics as me
 
 import gen
 import seed_pendulum as sp
-from gen import render
+from gen.codegen import render
 
 
 def _snapshot(folder):
@@ -251,8 +251,8 @@ def test_binary_failed_step_says_the_csv_is_truncated(binary, tmp_path):
 
 
 def test_compile_failure_raises_build_error_with_the_log(kane_model):
-    from gen.build import build
-    from gen.ir import plan
+    from gen.toolchain.build import build
+    from gen.plan.ir import plan
     rendered = render.render(plan(kane_model))
     name = f"{kane_model.name}.c"
     files = rendered.files
@@ -261,4 +261,4 @@ def test_compile_failure_raises_build_error_with_the_log(kane_model):
         build(rendered)
     assert "compiling the model 'pendulum_kane' failed" in str(e.value)
     assert "error" in e.value.log and name in e.value.log
-    assert f"$ {gen.backends.c_compiler()} " in e.value.log       # the compiler's command line
+    assert f"$ {gen.codegen.backends.c_compiler()} " in e.value.log       # the compiler's command line

@@ -28,9 +28,9 @@ import numpy as np
 import pytest
 
 import gen
-import gen.cache
-import gen.footprint
-import gen.render
+import gen.core.cache
+import gen.toolchain.footprint
+import gen.codegen.render
 from conftest import require_tool
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -73,18 +73,18 @@ def test_stack_limit_is_the_embedded_profiles():
     """The generated CMake bounds frames when cross-compiling (8192 by
     default), not on the host; libm by name, never a cached find_library."""
     import seed_pendulum
-    files = gen.render.render_files(seed_pendulum.kane_model())
+    files = gen.codegen.render.render_files(seed_pendulum.kane_model())
     text = files["CMakeLists.txt"]
     cross = re.search(r"if\(CMAKE_CROSSCOMPILING\)\s+set\(PENDULUM_KANE_STACK_LIMIT_DEFAULT "
                       r"(\d+)\)\s+else\(\)\s+set\(PENDULUM_KANE_STACK_LIMIT_DEFAULT (\d+)\)", text)
-    assert cross and cross.groups() == (str(gen.footprint.DEFAULT_STACK_LIMIT), "0")
+    assert cross and cross.groups() == (str(gen.toolchain.footprint.DEFAULT_STACK_LIMIT), "0")
     assert "PENDULUM_KANE_STACK_LIMIT GREATER 0" in text
     assert "find_library(" not in text and "PUBLIC m)" in text
 
 
 def test_footprint_rejects_a_negative_stack_limit(kane_model):
-    with pytest.raises(gen.footprint.FootprintError, match="stack_limit"):
-        gen.footprint.report(kane_model, target="host", stack_limit=-1)
+    with pytest.raises(gen.toolchain.footprint.FootprintError, match="stack_limit"):
+        gen.toolchain.footprint.report(kane_model, target="host", stack_limit=-1)
 
 
 @pytest.mark.slow
@@ -203,7 +203,7 @@ def test_stale_temp_dirs_are_cleaned_by_the_next_build(tmp_path, monkeypatch, ka
     dead = _fake_temp(cache, _dead_pid())
     dead_no_owner = _fake_temp(cache, _dead_pid(), owner=False,
                                name="_eomgen_other_fedcba9876543210")
-    legacy_old = _fake_temp(cache, None, age=2 * gen.cache.STALE_SECONDS,
+    legacy_old = _fake_temp(cache, None, age=2 * gen.core.cache.STALE_SECONDS,
                             name="_eomgen_legacy_00112233445566ff")
     legacy_new = _fake_temp(cache, None, name="_eomgen_recent_00112233445566ff")
     live = _fake_temp(cache, os.getpid(), name="_eomgen_live_0123456789abcdef")
@@ -238,7 +238,7 @@ def test_unwritable_cache_is_one_clear_error(tmp_path, monkeypatch, kane_model):
 
     def read_only(*a, **k):
         raise OSError(errno.EROFS, os.strerror(errno.EROFS), str(ro))
-    monkeypatch.setattr(gen.cache.tempfile, "mkdtemp", read_only)
+    monkeypatch.setattr(gen.core.cache.tempfile, "mkdtemp", read_only)
     with pytest.raises(gen.BuildError, match="EOMGEN_CACHE") as ei:
         gen.compile(kane_model)
     assert str(ro) in str(ei.value) and os.strerror(errno.EROFS) in str(ei.value)
@@ -269,7 +269,7 @@ def test_cache_subcommand(tmp_path):
     live = _fake_temp(cache, os.getpid(), name="_eomgen_live_0123456789abcdef")
     keep = cache / "notes.txt"
     keep.write_text("not eomgen's")
-    info = gen.cache.cache_info()   # the test session's cache: just the shape
+    info = gen.core.cache.cache_info()   # the test session's cache: just the shape
     assert {"path", "entries", "bytes"} <= set(info)
     p = eomgen("cache", "info", cache=cache)
     assert p.returncode == 0, p.stderr
@@ -317,9 +317,9 @@ def test_runtime_object_cache_key_covers_every_runtime_file(tmp_path, monkeypatc
     header: changing any one of them (gen_rt_rodas4.h, say) gives another
     cache folder, never stale objects."""
     import shutil
-    from gen import build as b
-    from gen.backends import RUNTIME_HEADERS, RUNTIME_SOURCES, c_compiler
-    from gen.resources import csrc_dir
+    from gen.toolchain import build as b
+    from gen.codegen.backends import RUNTIME_HEADERS, RUNTIME_SOURCES, c_compiler
+    from gen.core.resources import csrc_dir
     monkeypatch.setenv("EOMGEN_CACHE", str(tmp_path / "cache"))
     src = tmp_path / "src"
     src.mkdir()

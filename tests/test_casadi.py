@@ -25,7 +25,7 @@ if ca is None:
                     pytrace=False)
     pytestmark = pytest.mark.skip(reason="casadi not installed (pip install eomgen[casadi])")
 
-import gen.casadi as gc  # noqa: E402  (importable without casadi)
+import gen.export.casadi as gc  # noqa: E402  (importable without casadi)
 
 
 @pytest.fixture(scope="module")
@@ -271,7 +271,7 @@ def test_wrappers_compile_strict(request, which):
     """The generated <name>_casadi.c is clean under the project's strict
     flags (-std=c99 -Wall -Wextra -Werror -pedantic)."""
     import subprocess
-    from gen.backends import STRICT_FLAGS, c_compiler
+    from gen.codegen.backends import STRICT_FLAGS, c_compiler
     model = request.getfixturevalue(f"{which}_model")
     # forced: the first-derivative library (hessians=False) with the RODAS4 step
     src = gc.library(model, **_FIRST.get(which, {})).parent / "src"
@@ -357,7 +357,7 @@ def test_sanitizers_every_entry_point(request, which, tmp_path):
     agree with the library CasADi loaded."""
     import shutil
     import subprocess
-    from gen.backends import c_compiler
+    from gen.codegen.backends import c_compiler
     cart_model = request.getfixturevalue(f"{which}_model")
     src = gc.library(cart_model).parent / "src"
     specs = gc.function_specs(cart_model)
@@ -453,7 +453,7 @@ def test_sources_build_standalone(cart_model, tmp_path):
     functions) compiles on its own with a plain `cc -shared`, and that
     library, loaded by casadi.external, gives the same bits."""
     import subprocess
-    from gen.backends import c_compiler
+    from gen.codegen.backends import c_compiler
     src = gc.library(cart_model).parent / "src"
     name = cart_model.name
     header = (src / f"{name}_casadi.h").read_text()
@@ -482,11 +482,12 @@ def test_lazy_import():
     loaded: `import gen` stays as it was."""
     import subprocess
     import sys
-    code = ("import sys, gen; a = 'gen.casadi' in sys.modules; f = gen.casadi.functions; "
-            "print(a, 'casadi' in sys.modules, f.__module__)")
+    code = ("import sys, gen; a = 'gen.export.casadi' in sys.modules; "
+            "f = gen.casadi.functions; import gen.casadi as c; "
+            "print(a, 'casadi' in sys.modules, f.__module__, c is gen.casadi)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env={**os.environ, "PYTHONPATH": str(gc.__file__).rsplit("/gen/", 1)[0]})
-    assert out.stdout.split() == ["False", "False", "gen.casadi"], out.stderr
+    assert out.stdout.split() == ["False", "False", "gen.export.casadi", "True"], out.stderr
 
 
 # ------------------------------------------- every input; second derivatives
@@ -872,7 +873,7 @@ def test_hessians_false_first_derivatives_only(forced_model):
     Hessian through it fails in CasADi; hessians must be a bool. (The
     library is the one the forced model's RODAS4 tests load.)"""
     import ctypes
-    from gen.casadi_specs import derivative_kernels, function_specs
+    from gen.codegen.casadi_kernels import derivative_kernels, function_specs
     model = forced_model
     F = gc.functions(model, **_FIRST["forced"])
     assert F["step"].name() == "forced_cs_step_rodas4"

@@ -11,7 +11,7 @@ import pytest
 
 import gen
 import gen.cli
-from gen.bindings import Simulator
+from gen.sim.simulator import Simulator
 
 ROOT = Path(__file__).resolve().parent.parent
 SEED = str(ROOT / "examples" / "seed_pendulum.py")

@@ -238,7 +238,7 @@ def test_eigen_backend_closes_the_loop_too(cart):
 def _build_binary(model, tmp_path):
     import shutil
     import subprocess
-    from gen.render import generate
+    from gen.codegen.render import generate
     cc = shutil.which("cc") or shutil.which("gcc")
     if cc is None:
         pytest.skip("no C compiler")

@@ -11,11 +11,11 @@ import sympy as sm
 from sympy.physics import mechanics as me
 
 import gen
-import gen.build
+import gen.toolchain.build
 import gen.pipeline
-import gen.ir
-import gen.render
-from gen.errors import UnusedConstantWarning
+import gen.plan.ir
+import gen.codegen.render
+from gen.core.errors import UnusedConstantWarning
 
 FINITE = "; constants must be finite real numbers"
 
@@ -128,11 +128,11 @@ def test_nan_constant_never_reaches_the_compiler(monkeypatch, tmp_path, capsys):
     constant: neither through the Python API nor through the command line."""
     def forbidden(*a, **k):
         raise AssertionError("the generator or compiler was reached")
-    monkeypatch.setattr(gen.build.subprocess, "run", forbidden)
+    monkeypatch.setattr(gen.toolchain.build.subprocess, "run", forbidden)
     monkeypatch.setattr(gen.pipeline, "build", forbidden)
     monkeypatch.setattr(gen.pipeline, "make_plan", forbidden)
-    monkeypatch.setattr(gen.render, "make_plan", forbidden)
-    monkeypatch.setattr(gen.ir, "plan", forbidden)
+    monkeypatch.setattr(gen.codegen.render, "make_plan", forbidden)
+    monkeypatch.setattr(gen.plan.ir, "plan", forbidden)
     km, s = _oscillator()
     with pytest.raises(gen.ModelError, match=r"constant m has a value nan that is NaN"):
         sim = gen.compile(gen.Model.from_kanes(

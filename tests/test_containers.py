@@ -22,7 +22,7 @@ from sympy.physics.mechanics import (
     ReferenceFrame, RigidBody, System, TorqueActuator, dynamicsymbols, inertia)
 
 import gen
-from gen.errors import UnusedConstantWarning
+from gen.core.errors import UnusedConstantWarning
 from helpers import rel_err
 
 t = dynamicsymbols._t

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import gen
-from gen.bindings import Simulator
+from gen.sim.simulator import Simulator
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"
@@ -34,7 +34,7 @@ RECEIVED = {
 
 
 def public_objects():
-    """(qualified name, object, kind) of gen.__all__, gen.bindings.Simulator
+    """(qualified name, object, kind) of gen.__all__, gen.sim.simulator.Simulator
     and the public methods and properties of the public classes."""
     out = []
     classes = []
@@ -239,12 +239,12 @@ def test_every_public_name_is_in_the_api_reference():
     missing = []
     for qual, obj, kind in public_objects():
         if "." not in qual:
-            key = "gen.bindings.Simulator" if qual == "Simulator" else f"gen.{qual}"
+            key = "gen.sim.simulator.Simulator" if qual == "Simulator" else f"gen.{qual}"
             if key not in ref:
                 missing.append(qual)
         else:
             cname, mname = qual.split(".", 1)
-            key = "gen.bindings.Simulator" if cname == "Simulator" else f"gen.{cname}"
+            key = "gen.sim.simulator.Simulator" if cname == "Simulator" else f"gen.{cname}"
             members = ref.get(key, set())
             if members is not None and mname not in members:
                 missing.append(qual)
@@ -283,7 +283,7 @@ def test_readme_example_is_the_documented_one_and_runs(tmp_path, monkeypatch):
 @pytest.mark.slow
 def test_site_builds_without_warnings_and_runs_every_tutorial(tmp_path):
     """sphinx-build -W --keep-going: every page, the API reference, the C
-    API from gen/abi.py, and every tutorial executed (their assertions check
+    API from gen/codegen/abi.py, and every tutorial executed (their assertions check
     their numbers); then the built pages hold what they should."""
     pytest.importorskip("sphinx_gallery")
     out = tmp_path / "html"
@@ -308,7 +308,7 @@ def test_site_builds_without_warnings_and_runs_every_tutorial(tmp_path):
     for name in ("Simulator.simulate", "Model.from_kanes", "export_fmu", "LinearFeedback"):
         assert name.split(".")[-1] in api
     c_api = (out / "api" / "c.html").read_text()
-    from gen import abi
+    from gen.codegen import abi
     for fn in abi.FUNCTIONS:
         assert f"pendulum_kane_{fn.verb}" in c_api, fn.verb
     for s in abi.STATUSES:

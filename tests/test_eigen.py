@@ -39,9 +39,9 @@ import gen
 import n_link_cart as nl
 import rolling_disc as rd
 import seed_pendulum as sp
-from gen.backends import RUNTIME_SOURCES
-import gen.ir
-from gen.render import model_sources
+from gen.codegen.backends import RUNTIME_SOURCES
+import gen.plan.ir
+from gen.codegen.render import model_sources
 from conftest import require_eigen
 from helpers import pendulum_state, rel_err
 
@@ -381,7 +381,7 @@ def test_nonsymmetric_mass_matrix_lu(sims):
     triangle (what the old C++ runtime did) is off by far more than the
     tolerance here."""
     model = nonsymmetric_model()
-    assert gen.ir.plan(model).accel == "lu"
+    assert gen.plan.ir.plan(model).accel == "lu"
     LM, s = derive_nonsymmetric()
     x1, x2 = s[:2]
     v1, v2 = sm.symbols("v1 v2")

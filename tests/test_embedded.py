@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import gen.footprint as fp
-from gen.render import model_sources
+import gen.toolchain.footprint as fp
+from gen.codegen.render import model_sources
 from conftest import require_tool
 from helpers import pendulum_state
 

@@ -3,7 +3,7 @@ through the same cffi wrapper and the same Simulator.
 
 There is one engine (csrc/gen_rt_simulate.c and the rest of the C runtime):
 the Eigen backend's library is the C backend's model and runtime plus the
-typed C++ face (gen/eigen.py). So every run here is the same on both
+typed C++ face (gen/codegen/eigen.py). So every run here is the same on both
 backends bit for bit: the output times, the states, the inputs, the event
 times and states, the step, rejection, right-hand-side and Jacobian counts
 and h_next, for DOPRI5, RODAS4 and RK4, with tables, feedback, callbacks,
@@ -173,7 +173,7 @@ def _advance(sim, x, t0, t1, method, h_next=0.0, rtol=1e-8, atol=1e-8):
     """The C API's advance (accumulating stats) through cffi."""
     opts = sim._new("sim_options")
     sim._fn("sim_options_default")(opts)
-    opts.method = gen.abi.METHODS[method]
+    opts.method = gen.codegen.abi.METHODS[method]
     opts.rtol, opts.atol = rtol, atol
     stats = sim._new("sim_stats")
     stats.h_next = h_next

@@ -1,4 +1,4 @@
-"""Ensembles (gen/ensemble.py, csrc/host/gen_host_ensemble.c): many runs in
+"""Ensembles (gen/sim/ensemble.py, csrc/host/gen_host_ensemble.c): many runs in
 C, reduced as they finish.
 
 Every number is checked against an independent computation: each run
@@ -164,7 +164,7 @@ def test_host_hand_written_sources_compile_strict(tmp_path):
     Simulator.rhs with Python's and numpy's headers, whose own macros are
     not -pedantic clean, with the rest."""
     import sysconfig
-    cdef, source = gen.host.host_sources("double", python=False)
+    cdef, source = gen.toolchain.host.host_sources("double", python=False)
     assert "eomgen_fast_rhs" not in source
     src = tmp_path / "host.c"
     src.write_text(source)
@@ -172,7 +172,7 @@ def test_host_hand_written_sources_compile_strict(tmp_path):
     r = subprocess.run(strict + ["-pedantic", "-c", str(src), "-o", os.devnull],
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
-    cdef, source = gen.host.host_sources("double")
+    cdef, source = gen.toolchain.host.host_sources("double")
     assert "eomgen_fast_rhs_new" in cdef
     src.write_text("#define _CFFI_NO_LIMITED_API\n#include <Python.h>\n" + source)
     r = subprocess.run(strict + ["-I" + np.get_include(), "-I" + sysconfig.get_paths()["include"],

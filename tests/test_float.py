@@ -17,9 +17,9 @@ import pytest
 import sympy as sm
 
 import gen
-from gen.render import model_sources
+from gen.codegen.render import model_sources
 from conftest import require_tool
-from gen.printers import ModelCPrinter
+from gen.sym.printers import ModelCPrinter
 from helpers import pendulum_state
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -22,8 +22,8 @@ import numpy as np
 import pytest
 
 import gen
-import gen.cache
-from gen.dependencies import dependencies
+import gen.core.cache
+from gen.plan.dependencies import dependencies
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "examples"))
@@ -323,7 +323,7 @@ def test_bad_arguments(tmp_path, monkeypatch):
     real_find = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec",
                         lambda n, *a: None if n == "fmpy" else real_find(n, *a))
-    with pytest.raises(gen.errors.MissingDependencyError, match=r"pip install eomgen\[fmu\]"):
+    with pytest.raises(gen.core.errors.MissingDependencyError, match=r"pip install eomgen\[fmu\]"):
         gen.export_fmu(m, tmp_path / "c.fmu")
     assert not (tmp_path / "c.fmu").exists()
 
@@ -333,13 +333,13 @@ def test_reproducible(tmp_path, monkeypatch):
     """The same model gives the same bytes (no timestamps, sorted entries,
     fixed zip dates, no build path in the binary), also when the binary is
     built afresh in another build cache (the binary is cached by content,
-    as every library gen.build makes)."""
+    as every library gen.toolchain.build makes)."""
     _fmpy()
     m, (_, start, units) = _model("kane"), CASES["kane"]
     a = gen.export_fmu(m, tmp_path / "a.fmu", start=start, units=units)
     monkeypatch.setenv("EOMGEN_CACHE", str(tmp_path / "other-cache"))
     b = gen.export_fmu(m, tmp_path / "b.fmu", start=start, units=units)
-    assert gen.cache.cache_info()["modules"] == 1      # b's binary: built there
+    assert gen.core.cache.cache_info()["modules"] == 1      # b's binary: built there
     assert a.read_bytes() == b.read_bytes()
     names = zipfile.ZipFile(a).namelist()
     assert "binaries/linux64/pendulum_kane.so" in names or sys.platform != "linux"
@@ -457,7 +457,7 @@ def test_dependencies_follow_blocks():
 
 def test_units():
     """Derivative units and SI decompositions in Modelica's unit syntax."""
-    from gen.fmu import _base_unit, _per_second
+    from gen.export.fmu import _base_unit, _per_second
     assert [_per_second(u) for u in ("m", "m/s", "rad/s2", "N.m/rad", "1", "m/(rad.s)")] == \
         ["m/s", "m/s2", "rad/s3", "N.m/(rad.s)", "1/s", "m/(rad.s.s)"]
     assert _base_unit("N.m/rad") == [("kg", "1"), ("m", "2"), ("s", "-2"), ("rad", "-1")]
@@ -564,7 +564,7 @@ def test_glue_under_sanitizers(tmp_path, version):
     from conftest import require_tool
     cc = require_tool("gcc")
     _fmpy()
-    from gen.fmu import fmi_headers
+    from gen.export.fmu import fmi_headers
     src = gen.export_fmu(_model("kane"), tmp_path / "k.fmu", fmi_version=f"{version}.0",
                          start={"q2": 0.6, "q1": 0.8}, binary=False)
     zipfile.ZipFile(src).extractall(tmp_path / "fmu")

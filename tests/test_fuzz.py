@@ -14,7 +14,7 @@ import pytest
 
 import four_bar
 import gen
-from gen.render import model_sources
+from gen.codegen.render import model_sources
 import rolling_disc
 import seed_pendulum as sp
 from conftest import require_eigen, require_tool
@@ -81,8 +81,8 @@ def test_eigen_backend_under_sanitizers(tmp_path, key):
     """The C++/Eigen backend's library (the C model and runtime for both
     scalar types, the second copy's names prefixed, and the face
     instantiated) obeys the same rules through its C API."""
-    from gen.eigen import ALT_DEFINE, sources
-    from gen.render import C_TEMPLATES, RUNTIME_SOURCES
+    from gen.codegen.eigen import ALT_DEFINE, sources
+    from gen.codegen.render import C_TEMPLATES, RUNTIME_SOURCES
     inc = require_eigen()
     model = MODELS[key]()
     out = tmp_path

@@ -22,10 +22,10 @@ from pathlib import Path
 
 import pytest
 
-import gen.backends
-import gen.host
-import gen.ir
-import gen.render
+import gen.codegen.backends
+import gen.toolchain.host
+import gen.plan.ir
+import gen.codegen.render
 
 GOLDEN = Path(__file__).resolve().parent / "golden" / "sources"
 UPDATE = os.environ.get("EOMGEN_UPDATE_GOLDEN", "") not in ("", "0")
@@ -36,28 +36,28 @@ HOW_TO_UPDATE = ("if the change is intended: EOMGEN_UPDATE_GOLDEN=1 python -m py
 
 # the runtime's files are copied into the project verbatim (csrc/ has its own
 # tests): the golden files are what the templates produce
-RUNTIME_COPIES = {Path(f).name for f in (gen.backends.RUNTIME_SOURCES + gen.backends.RUNTIME_HEADERS
-                                         + gen.backends.EIGEN_RUNTIME_HEADERS
-                                         + gen.backends.RUNTIME_MAIN)}
+RUNTIME_COPIES = {Path(f).name for f in (gen.codegen.backends.RUNTIME_SOURCES + gen.codegen.backends.RUNTIME_HEADERS
+                                         + gen.codegen.backends.EIGEN_RUNTIME_HEADERS
+                                         + gen.codegen.backends.RUNTIME_MAIN)}
 
 
 def render(model, backend, real="double"):
     """{file name: text} of the files the templates render for a model (with
     the C backend: the stand-ins of the derivative kernels that gen.compile
     links before they are built, and the Python host module's declarations
-    and source, gen/host.py)."""
-    out = gen.render.render(gen.ir.plan(model), real=real, backend=backend)
+    and source, gen/toolchain/host.py)."""
+    out = gen.codegen.render.render(gen.plan.ir.plan(model), real=real, backend=backend)
     files = {k: v for k, v in out.files.items() if k not in RUNTIME_COPIES}
     # the runtime's structs and codes: the csrc/ copy (tests/test_abi.py keeps
     # that copy current), not a golden file of its own
-    from gen.resources import csrc_dir
+    from gen.core.resources import csrc_dir
     assert files.pop("gen_rt_abi.h") == (csrc_dir() / "gen_rt_abi.h").read_text(), \
         "the model's gen_rt_abi.h is not the runtime's csrc/gen_rt_abi.h"
     if backend == "c":
-        core = gen.ir.plan(model, derivatives=False)
-        files.update(gen.render.render(core, real=real, backend=backend, project=False,
+        core = gen.plan.ir.plan(model, derivatives=False)
+        files.update(gen.codegen.render.render(core, real=real, backend=backend, project=False,
                                        only={"stub"}).files)
-        files["host/host.h"], files["host/host.c"] = gen.host.host_sources(real,
+        files["host/host.h"], files["host/host.c"] = gen.toolchain.host.host_sources(real,
                                                                             hand_written=False)
     return files
 
@@ -71,13 +71,13 @@ def eigen_split(model, files):
     what the C backend renders for that type and name."""
     import copy
     import dataclasses
-    import gen.eigen
-    plan = gen.ir.plan(model)
-    c_files = gen.render.render(plan, real="double", backend="c").files
-    alt = gen.eigen.alt_name(model.name, "double")
+    import gen.codegen.eigen
+    plan = gen.plan.ir.plan(model)
+    c_files = gen.codegen.render.render(plan, real="double", backend="c").files
+    alt = gen.codegen.eigen.alt_name(model.name, "double")
     alt_model = copy.copy(model)
     alt_model.name = alt
-    alt_files = gen.render.render(dataclasses.replace(plan, model=alt_model), real="float",
+    alt_files = gen.codegen.render.render(dataclasses.replace(plan, model=alt_model), real="float",
                                   backend="c", project=False).files
     own, bad = {}, {}
     for name, text in files.items():

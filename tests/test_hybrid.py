@@ -349,7 +349,7 @@ def test_inconsistent_reset_is_an_error():
     ERR_INCONSISTENT_RESET, naming the reset."""
     q1, q2 = me.dynamicsymbols("q1:3")
     m = _pendulum(0.5, "hyb_pend_bad")
-    from gen.hybrid import attach_hybrid
+    from gen.intake.hybrid import attach_hybrid
     attach_hybrid(m, {"kick": gen.Reset(q2 + sm.Rational(1, 5), {q1: 2 * q1})})
     sim = gen.compile(m)
     with pytest.raises(gen.SolverError, match=r"reset\(s\) kick.*ERR_INCONSISTENT_RESET"):
@@ -402,8 +402,8 @@ def test_hybrid_work_sizes_match_runtime(tmp_path):
     GEN_RT_HYBRID_IWORK macros (Python allocates what C uses)."""
     import subprocess
     from pathlib import Path
-    from gen.backends import c_compiler
-    from gen.hybrid import hybrid_iwork_len, hybrid_work_len
+    from gen.codegen.backends import c_compiler
+    from gen.intake.hybrid import hybrid_iwork_len, hybrid_work_len
     csrc = Path(gen.__file__).resolve().parent.parent / "csrc"
     sizes = [(1, 1, 0, 1), (3, 3, 0, 2), (2, 2, 1, 1), (2, 2, 1, 3), (7, 6, 2, 4)]
     body = "".join(f'    printf("%d %d\\n", (int)GEN_RT_HYBRID_WORK({a}, {b}, {c}, {d}), '
@@ -445,7 +445,7 @@ def test_cortex_m_float_footprint():
     hybrid engine included, links and reports its flash and worst-case stack."""
     import bouncing_ball
     import simplest_walker
-    import gen.footprint as fp
+    import gen.toolchain.footprint as fp
     from conftest import require_tool
     require_tool("cmake")
     require_tool("arm-none-eabi-gcc")
@@ -523,7 +523,7 @@ def test_fmu_model_exchange_ball_and_walker(tmp_path):
 
 def test_fmu_refuses_hybrid_cs_and_fmi3():
     with pytest.raises(gen.ModelError, match=r"hybrid.*kind='me', fmi_version='2.0'"):
-        from gen.fmu import describe
+        from gen.export.fmu import describe
         describe(_ball(), fmi_version="2.0", kind="both")
     with pytest.raises(gen.ModelError, match=r"FMI 2.0 Model Exchange"):
         describe(_ball(), fmi_version="3.0", kind="me")

@@ -6,7 +6,7 @@ process stays usable: the next calls give the same bits as before.
 
 The C side: the runtime stops a run when the caller's flag
 (sim_options.cancel) is set (tests/c/test_model.c checks the status and the
-last good state); the Python side: gen/interrupt.py and the host module's
+last good state); the Python side: gen/sim/interrupt.py and the host module's
 SIGINT relay (csrc/host/gen_host_interrupt.c)."""
 import os
 import re
@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 import gen
-import gen.host
-from gen import abi
+import gen.toolchain.host
+from gen.codegen import abi
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -139,7 +139,7 @@ def test_cancelled_status_is_in_the_table_and_the_host():
     assert code < 0 and "cancel" in abi.status_message(code)
     src = (ROOT / "csrc" / "host" / "gen_host_ensemble.c").read_text()
     assert f"#define EOMGEN_ERR_CANCELLED_ ({code})" in src
-    from gen.bindings import EXCEPTIONS
+    from gen.core.status import EXCEPTIONS
     assert EXCEPTIONS["ERR_CANCELLED"] is KeyboardInterrupt
 
 
@@ -177,7 +177,7 @@ def test_a_set_flag_cancels_in_process(any_sim):
     assert st == 0 and np.array_equal(X, ref)
     # a slot of the process's relay: free again after release, its flag
     # cleared on arm
-    from gen.interrupt import _relay_of
+    from gen.sim.interrupt import _relay_of
     lib, _ = _relay_of(lib, ffi)
     slot = lib.eomgen_interrupt_arm()
     assert slot >= 0
@@ -191,7 +191,7 @@ def test_a_set_flag_cancels_in_process(any_sim):
 def test_a_custom_sigint_handler_is_left_alone(kane_sim):
     """With a handler of the program's own, no relay is armed: the call runs
     as before (its handler, not a KeyboardInterrupt, deals with SIGINT)."""
-    from gen.interrupt import _armed
+    from gen.sim.interrupt import _armed
     seen = []
     old = signal.signal(signal.SIGINT, lambda *a: seen.append(a))
     try:
@@ -206,7 +206,7 @@ def test_relay_compiles_strict_with_posix(tmp_path):
     """The relay under the strict flags with sigaction declared (as the host
     module compiles it, after Python.h), C99 -pedantic, gcc and clang."""
     import shutil
-    cdef, source = gen.host.host_sources("double", python=False)
+    cdef, source = gen.toolchain.host.host_sources("double", python=False)
     assert "eomgen_interrupt_arm" in cdef
     src = tmp_path / "host.c"
     src.write_text("#define _POSIX_C_SOURCE 200809L\n" + source)

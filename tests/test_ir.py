@@ -1,4 +1,4 @@
-"""Unit tests of the IR (gen/ir.py), no compiler.
+"""Unit tests of the IR (gen/plan/ir.py), no compiler.
 
 - Jacobians by forward differentiation of the CSE'd assignment list
   (differentiate_graph, make_jacobian_kernel) against sympy's
@@ -19,9 +19,10 @@ import sympy as sm
 
 import n_link_cart
 import seed_pendulum
-from gen import ir
-from gen.ir import Arg, Kernel, Output, collect_constants, differentiate_graph, \
-    make_jacobian_kernel, make_kernel, prune
+from gen.plan import ir
+from gen.plan.ir import Arg, Kernel, Output, collect_constants, make_jacobian_kernel, \
+    make_kernel, prune
+from gen.sym.graph import differentiate_graph
 
 DIGITS = 30
 TOL = sm.Float("1e-22", DIGITS)
@@ -45,7 +46,7 @@ POINT = {x: sm.Rational(3, 7), y: sm.Rational(-5, 4), z: sm.Rational(9, 5)}
 
 # ------------------------------------------------------------------ helpers
 def kernels_of(model):
-    """{name: Kernel} of a model, whatever gen.ir now calls the function
+    """{name: Kernel} of a model, whatever gen.plan.ir now calls the function
     (build_kernels, or a plan object with .kernels)."""
     for fname in ("plan", "build_plan", "make_plan", "build_kernels"):
         fn = getattr(ir, fname, None)
@@ -55,7 +56,7 @@ def kernels_of(model):
             if isinstance(out, (list, tuple)):
                 out = {k.name: k for k in out}
             return out
-    pytest.fail("gen.ir offers no build_kernels (or plan) function")
+    pytest.fail("gen.plan.ir offers no build_kernels (or plan) function")
 
 
 def inline(assignments, exprs):
@@ -424,7 +425,7 @@ def test_common_factors_make_the_parameter_work_linear():
     mass and entry; the whole kernel is smaller, and its values are the
     model's (sympy's M and f at random points)."""
     import n_link_cart
-    from gen import ir as gir
+    from gen.plan import ir as gir
     m = n_link_cart.model(6)
 
     def param_work(kernel):

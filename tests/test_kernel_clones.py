@@ -1,6 +1,6 @@
 """The right-hand-side kernel of a large model is built twice, for the
 baseline and for AVX, and picked by the CPU at load time (GEN_RT_CLONES in
-csrc/gen_rt.h, gen.render.CLONE_MIN_STATEMENTS; issue 17): the clones give
+csrc/gen_rt.h, gen.codegen.render.CLONE_MIN_STATEMENTS; issue 17): the clones give
 bit for bit the baseline's numbers (the same IEEE operations, no FMA), the
 code compiles clean under the strict flags and the sanitizers, the threshold
 keeps small models as they were, and the kernels are not exported."""
@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 import gen
-import gen.render
+import gen.codegen.render
 import n_link_cart
 import seed_pendulum
-from gen.backends import C_FLAGS, STRICT_FLAGS, c_compiler
+from gen.codegen.backends import C_FLAGS, STRICT_FLAGS, c_compiler
 
 DRIVER = r"""
 #include <stdio.h>
@@ -42,7 +42,7 @@ X86_LINUX = sys.platform.startswith("linux") and platform.machine() in ("x86_64"
 
 
 def _sources(model, out, monkeypatch, threshold=0):
-    monkeypatch.setattr(gen.render, "CLONE_MIN_STATEMENTS", threshold)
+    monkeypatch.setattr(gen.codegen.render, "CLONE_MIN_STATEMENTS", threshold)
     gen.generate(model, out)
     return out
 
@@ -51,7 +51,7 @@ def _build(src, prefix, nx, states, name, flags):
     drv = src / f"drv_{name}.c"
     rows = ", ".join("{" + ", ".join(repr(float(v)) for v in x) + "}" for x in states)
     drv.write_text(DRIVER.format(p=prefix, n=len(states), nx=nx, states=rows))
-    from gen.render import model_sources
+    from gen.codegen.render import model_sources
     srcs = [str(drv)] + [str(src / f) for f in model_sources(prefix)] + sorted(
         str(f) for f in src.glob("gen_rt_*.c"))
     exe = src / f"drv_{name}"
@@ -123,7 +123,7 @@ def test_small_models_keep_one_kernel(tmp_path, monkeypatch):
     """Below the threshold (the default's 300 statements: the 2-link cart
     has about 100) the kernel is built once, as before."""
     src = _sources(n_link_cart.model(2), tmp_path / "src", monkeypatch,
-                   threshold=gen.render.CLONE_MIN_STATEMENTS)
+                   threshold=gen.codegen.render.CLONE_MIN_STATEMENTS)
     kern = (src / "cart2_kernels.c").read_text()
     assert "GEN_RT_CLONES" not in kern and "_isa" not in kern
     assert "int cart2_k_rhs_terms(" in kern
@@ -135,9 +135,9 @@ def test_compiled_library_dispatches_and_hides_its_kernels(monkeypatch):
     """gen.compile's library (the cffi path) with the clones: the rhs is
     the baseline library's to the bit, and neither the kernels nor their
     clones are among the library's exported functions (GEN_RT_INTERNAL)."""
-    monkeypatch.setattr(gen.render, "CLONE_MIN_STATEMENTS", 0)
+    monkeypatch.setattr(gen.codegen.render, "CLONE_MIN_STATEMENTS", 0)
     sim = gen.compile(n_link_cart.model(2, name="cart2_clones"))
-    monkeypatch.setattr(gen.render, "CLONE_MIN_STATEMENTS", 10 ** 9)
+    monkeypatch.setattr(gen.codegen.render, "CLONE_MIN_STATEMENTS", 10 ** 9)
     ref = gen.compile(n_link_cart.model(2, name="cart2_noclones"))
     so = sim.build_info["module"]
     syms = subprocess.run(["nm", so], capture_output=True, text=True).stdout

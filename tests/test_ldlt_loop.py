@@ -1,5 +1,5 @@
 """The mass-matrix solve of a large dense model: the runtime's LDL^T in
-loops (csrc/gen_rt_ldlt.h, gen.solvers.LDLT_LOOP_MIN; issue 17). It does
+loops (csrc/gen_rt_ldlt.h, gen.plan.ldlt.LDLT_LOOP_MIN; issue 17). It does
 the unrolled solve's operations in the same order, so it must give the
 unrolled solve's bits, refuse what it refuses, agree with numpy, and leave
 small models and sparse mass matrices unrolled."""
@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 import gen
-import gen.solvers
+import gen.plan.ldlt
 import n_link_cart
-from gen.backends import C_FLAGS, STRICT_FLAGS, c_compiler
-from gen.solvers import ldlt_program
+from gen.codegen.backends import C_FLAGS, STRICT_FLAGS, c_compiler
+from gen.plan.ldlt import ldlt_program
 from helpers import ldlt_solve_c
 
 CSRC = Path(__file__).resolve().parents[1] / "csrc"
@@ -25,9 +25,9 @@ def _solve_both(tmp_path, monkeypatch, Ms, fs, real="double", flags=()):
     back from %a (exact)."""
     n = len(fs[0])
     dense = [[True] * n for _ in range(n)]
-    monkeypatch.setattr(gen.solvers, "LDLT_LOOP_MIN", 10 ** 6)
+    monkeypatch.setattr(gen.plan.ldlt, "LDLT_LOOP_MIN", 10 ** 6)
     unrolled = ldlt_solve_c("u", n, dense, real)
-    monkeypatch.setattr(gen.solvers, "LDLT_LOOP_MIN", 1)
+    monkeypatch.setattr(gen.plan.ldlt, "LDLT_LOOP_MIN", 1)
     loop = ldlt_solve_c("l", n, dense, real)
     assert "gen_rt_ldlt_dense" in loop and "gen_rt_ldlt_dense" not in unrolled
     lit = lambda v: "NAN" if np.isnan(v) else repr(float(v))  # noqa: E731
@@ -125,7 +125,7 @@ def test_loop_under_sanitizers(tmp_path, monkeypatch):
 
 
 def test_threshold_keeps_small_and_sparse_models_unrolled(monkeypatch):
-    lo = gen.solvers.LDLT_LOOP_MIN
+    lo = gen.plan.ldlt.LDLT_LOOP_MIN
     dense = lambda n: [[True] * n for _ in range(n)]  # noqa: E731
     assert not ldlt_program(lo - 1, dense(lo - 1))["loop"]
     assert ldlt_program(lo, dense(lo))["loop"]
@@ -144,7 +144,7 @@ def test_model_with_the_loop_gives_the_unrolled_model_bit_for_bit(tmp_path, monk
     X = rng.uniform(-2.0, 2.0, size=(12, m.nx))
     out = {}
     for mode, thr in (("unrolled", 10 ** 6), ("loop", 1)):
-        monkeypatch.setattr(gen.solvers, "LDLT_LOOP_MIN", thr)
+        monkeypatch.setattr(gen.plan.ldlt, "LDLT_LOOP_MIN", thr)
         gen.generate(m, tmp_path / mode)
         for f in ("cart4loop_kernels.c", "cart4loop.c"):
             assert ("gen_rt_ldlt_dense" in (tmp_path / mode / f).read_text()) == (mode == "loop")
@@ -160,10 +160,10 @@ def test_model_with_the_loop_gives_the_unrolled_model_bit_for_bit(tmp_path, monk
 
 
 def test_work_index_is_the_headers(tmp_path):
-    """gen.solvers.ldlt_work_index (where a fused kernel stores M and f) and
+    """gen.plan.ldlt.ldlt_work_index (where a fused kernel stores M and f) and
     the header's GEN_RT_LDLT_M/D/F/WORK macros (where the solve reads them)
     are one layout."""
-    from gen.solvers import ldlt_work_index
+    from gen.plan.ldlt import ldlt_work_index
     ns = [1, 3, 4, 5, 24, 33]
     body = "".join(
         f'    for (i = 0; i < {n}; ++i) {{ printf("F %d %d %d\\n", {n}, i, GEN_RT_LDLT_F({n}, i));\n'

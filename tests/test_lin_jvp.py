@@ -1,5 +1,5 @@
 """Issue 17: the linearization's Jacobian blocks generated as a kernel of
-directional derivatives called once per variable (gen/ir.py, lin="jvp",
+directional derivatives called once per variable (gen/plan/ir.py, lin="jvp",
 the C backend's choice from JVP_MIN_VARIABLES variables) give the same
 numbers as the unrolled kernel (lin="unrolled"): linearize, jacobian and
 step sensitivities of constrained, nonholonomic and implicit-kinematics
@@ -10,13 +10,13 @@ import pytest
 import cart_pole
 import four_bar
 import gen
-import gen.ir as ir
+import gen.plan.ir as ir
 import rolling_disc
 import seed_pendulum
-from gen.bindings import Simulator
-from gen.build import build
-from gen.host import load
-from gen.render import render
+from gen.sim.simulator import Simulator
+from gen.toolchain.build import build
+from gen.toolchain.host import load
+from gen.codegen.render import render
 
 MODELS = {
     "kane": seed_pendulum.kane_model,

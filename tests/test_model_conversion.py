@@ -8,7 +8,7 @@ import pytest
 import sympy as sm
 import sympy.physics.mechanics as me
 
-from gen.model import _xreplace_shared
+from gen.intake.model import _xreplace_shared
 
 import cart_pole
 import n_link_cart

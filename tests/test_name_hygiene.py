@@ -12,7 +12,7 @@ import sympy as sm
 from sympy.physics import mechanics as me
 
 import gen
-from gen.model import c_name, c_names
+from gen.intake.model import c_name, c_names
 from helpers import rel_err
 
 

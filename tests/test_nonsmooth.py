@@ -1,6 +1,6 @@
 """Non-smooth functions (issue 14): sign, Abs, Heaviside, floor, ceiling,
 Min, Max, Piecewise and relations print exactly (C99 double and float, C++),
-are differentiated almost everywhere for the linearization (gen.ir.partial),
+are differentiated almost everywhere for the linearization (gen.sym.graph.partial),
 and anything the generator cannot print is refused when the model is created,
 named in the user's symbols.
 
@@ -22,8 +22,8 @@ from sympy.physics import mechanics as me
 
 import gen
 import nonsmooth as ns
-from gen.ir import differentiate_graph, partial
-from gen.printers import ModelCPrinter, ModelCxxPrinter, check_printable, unprintable
+from gen.sym.graph import differentiate_graph, partial
+from gen.sym.printers import ModelCPrinter, ModelCxxPrinter, check_printable, unprintable
 
 
 # ----------------------------------------------------------------- models

@@ -149,7 +149,7 @@ def test_hermite_simpson_order(cart):
 
 def test_interpolant_matches_nodes(cart):
     _, s, model = cart
-    for method in gen.ocp.METHODS:
+    for method in gen.design.ocp.METHODS:
         sol = swing_up(model, s, 21, method).solve(tol=1e-9)
         assert sol.status == 0, (method, sol.message)
         np.testing.assert_allclose(sol(sol.t), sol.x, atol=1e-9, err_msg=method)
@@ -219,7 +219,7 @@ def test_bad_input_is_refused_before_building(cart, monkeypatch):
 
     def no_build(*a, **k):
         raise AssertionError("built despite the error")
-    monkeypatch.setattr(gen.build, "build_plain", no_build)
+    monkeypatch.setattr(gen.toolchain.build, "build_plain", no_build)
     for bad in (sm.Abs(F), sm.Max(F, 0), sm.Piecewise((F, x > 0), (0, True))):
         with pytest.raises(gen.InputError, match="not differentiable"):
             gen.OptimalControl(model, 11, 1.0, objective=bad)
@@ -320,7 +320,7 @@ def test_generated_c_is_strict_clean(cart, tmp_path):
     """The generated kernels and the runtime's node loop compile clean with
     the strict flags (-std=c99 -Wall -Wextra -Werror -pedantic)."""
     import subprocess
-    from gen.backends import STRICT_FLAGS, c_compiler
+    from gen.codegen.backends import STRICT_FLAGS, c_compiler
     _, s, model = cart
     o = swing_up(model, s, 11, "hermite-simpson")
     src = Path(o._lib_path).parent / "src"

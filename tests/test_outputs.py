@@ -14,7 +14,7 @@ from sympy.physics import mechanics as me
 
 import cart_pole as cp
 import gen
-from gen.errors import ModelError
+from gen.core.errors import ModelError
 
 t = me.dynamicsymbols._t
 

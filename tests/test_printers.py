@@ -1,4 +1,4 @@
-"""Unit tests of the printers (gen/printers.py) on exact strings, no compiler.
+"""Unit tests of the printers (gen/sym/printers.py) on exact strings, no compiler.
 
 ModelCPrinter(symbol_map, real_type) prints C99 for "double" or "float"
 (float: the f-suffixed libm functions and F-suffixed literals);
@@ -11,9 +11,9 @@ import pytest
 import sympy as sm
 from sympy.printing.codeprinter import PrintMethodNotImplementedError
 
-from gen.errors import ModelError
-from gen.ir import Arg, Kernel, Output
-from gen.printers import ModelCPrinter, ModelCxxPrinter, print_kernel_body
+from gen.core.errors import ModelError
+from gen.plan.ir import Arg, Kernel, Output
+from gen.sym.printers import ModelCPrinter, ModelCxxPrinter, print_kernel_body
 
 q0, q1, u0, p0, t = sm.symbols("q0 q1 u0 p0 t")
 SYMBOLS = {q0: "q[0]", q1: "q[1]", u0: "u[0]", p0: "p[0]", t: "t"}

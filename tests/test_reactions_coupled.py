@@ -17,7 +17,7 @@ import sympy as sm
 from sympy.physics import mechanics as me
 
 import gen
-from gen import model as gen_model
+from gen.intake import model as gen_model
 from helpers import rel_err
 
 t = me.dynamicsymbols._t
@@ -254,8 +254,8 @@ def test_cpp_typed_face_eval_auxiliary_forces(tmp_path, ref):
     import subprocess
     from pathlib import Path
     from conftest import require_eigen, require_tool
-    from gen.eigen import ALT_DEFINE, sources
-    from gen.render import C_TEMPLATES, RUNTIME_SOURCES
+    from gen.codegen.eigen import ALT_DEFINE, sources
+    from gen.codegen.render import C_TEMPLATES, RUNTIME_SOURCES
     inc = require_eigen()
     cc, cxx = require_tool("gcc"), require_tool("g++")
     km, consts, F, _ = bead_kane("vertical")
@@ -325,7 +325,7 @@ def test_standalone_binary_writes_the_coupled_reaction(tmp_path, ref):
     # the generated main.c: its CSV ends with the N column, from the coupled solve
     import shutil
     import subprocess
-    from gen.render import generate
+    from gen.codegen.render import generate
     cc = shutil.which("cc") or shutil.which("gcc")
     if cc is None:
         pytest.skip("no C compiler")

@@ -168,8 +168,8 @@ def test_huge_run_is_refused_before_anything_is_allocated(kane_sim, monkeypatch)
     with the count and the ways out, nothing allocated (the machine's
     available memory set to 16 GiB, so that the test does not depend on
     this machine's)."""
-    import gen.runs
-    monkeypatch.setattr(gen.runs, "memory_available", lambda: 16 * 2**30)
+    import gen.sim.options
+    monkeypatch.setattr(gen.sim.options, "memory_available", lambda: 16 * 2**30)
     x0 = pendulum_state(0.5, 0.0, 1.0, "kane")
     tracemalloc.start()
     try:
@@ -227,24 +227,25 @@ def test_one_convention_keyword_only_and_one_option_check(cart):
 def test_exports():
     for name in ("Solution", "Simulator", "MissingDependencyError", "InputError", "Event"):
         assert name in gen.__all__ and getattr(gen, name) is not None
-    from gen.bindings import Simulator
+    from gen.sim.simulator import Simulator
     assert gen.Simulator is Simulator
 
 
 def test_modules_use_no_private_simulator_names_and_no_import_circle():
-    """gen/ensemble.py, control.py and events.py reach the C library through
-    sim.library, never sim._name; gen.ensemble imports nothing of
-    gen.bindings (bindings imports it: one direction)."""
-    for name in ("ensemble", "control", "events"):
-        src = (ROOT / "gen" / f"{name}.py").read_text()
+    """gen/sim/ensemble.py, inputs.py and events.py reach the C library through
+    sim.library, never sim._name; gen.sim.ensemble imports nothing of
+    gen.sim.simulator (the simulator imports it: one direction)."""
+    for name in ("ensemble", "inputs", "events"):
+        src = (ROOT / "gen" / "sim" / f"{name}.py").read_text()
         tree = ast.parse(src)
         private = [n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)
                    and n.attr.startswith("_") and not n.attr.startswith("__")
                    and not (isinstance(n.value, ast.Name) and n.value.id in ("self", "np"))]
         assert not private, (name, private)
         imports = [n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)]
-        assert "bindings" not in imports, name
-    assert re.search(r"^from \.ensemble import", (ROOT / "gen" / "bindings.py").read_text(), re.M)
+        assert "simulator" not in imports, name
+    assert re.search(r"^from \.ensemble import",
+                     (ROOT / "gen" / "sim" / "simulator.py").read_text(), re.M)
 
 
 def test_a_failure_at_the_start_names_x0_not_zeros(kane_sim):

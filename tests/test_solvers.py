@@ -9,8 +9,8 @@ import sympy as sm
 
 import gen
 import n_link_cart
-from gen.ir import collect_constants, mass_structure
-from gen.solvers import ldlt_pattern
+from gen.plan.ir import collect_constants, mass_structure
+from gen.plan.ldlt import ldlt_pattern
 from helpers import ldlt_solve_c, rel_err
 
 HEAD = ("#include <math.h>\n#include <stdio.h>\n#define GEN_RT_OK 0\n"
@@ -117,11 +117,11 @@ def test_generated_singular_mass_matrix_raises():
 
 
 def test_demand_order_defines_before_use():
-    """The fused kernel's order (gen.solvers.demand_order): each temporary
+    """The fused kernel's order (gen.plan.ldlt.demand_order): each temporary
     right before the first spine line that reads it, its own reads first,
     the unread ones after the spine in their order; a chain of 5000 (the
     size of a large kernel) without recursion."""
-    from gen.solvers import demand_order
+    from gen.plan.ldlt import demand_order
     temps = [("a", "A", set()), ("b", "B", {"a", "q"}), ("c", "C", {"b"}),
              ("d", "D", set()), ("e", "E", {"a", "d"})]
     out = demand_order(["S1 = c;", "S2 = a + e;"], temps)

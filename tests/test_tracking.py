@@ -256,7 +256,7 @@ def test_schedule_rows_change_at_their_times(sim):
     xo = np.array([[0.1, 0.0, 0.0, 0.0], [0.0, 0.2, 0.0, 0.0], [0.0, 0.0, 0.3, 0.0]])
     fb = gen.LinearFeedback(K, xo, np.array([1.0, 2.0, 3.0]), t_gain=0.5, dt_gain=0.25)
     lib = sim.library
-    from gen.control import plan_inputs
+    from gen.sim.inputs import plan_inputs
     plan = plan_inputs(sim, None, fb, 1e-3, "rk4", None, "zoh")
     fn = lib.function("eval_input")
     x = np.array([0.3, -0.2, 0.1, 0.4])
@@ -383,7 +383,7 @@ def test_standalone_binary_runs_the_tracker_from_const_tables(sim, swing, tmp_pa
     subprocess.run([cc, *STRICT, "-O2", "-c", "-I", str(src), str(src / "swingup.c"), "-o",
                     str(obj)], check=True)
     if shutil.which("size"):
-        from gen.footprint import section_sizes
+        from gen.toolchain.footprint import section_sizes
         sec = section_sizes(obj)
         assert sec["data"] == 0 and sec["bss"] == 0, sec
         assert sec["rodata"] >= tr.footprint("double")["flash"], sec
@@ -418,7 +418,7 @@ def _build_driver(model, tr, out, real, cc, extra=()):
     gen.generate(model, src, real=real)
     tr.to_c(src, name="swingup", real=real)
     exe = out / f"tracker_driver_{real}"
-    from gen.render import model_sources
+    from gen.codegen.render import model_sources
     sources = [str(src / f) for f in model_sources(model.name)] + sorted(
         str(s) for s in src.glob("gen_rt_*.c") if s.name != "gen_rt_main.c") + [
         str(src / "swingup.c")]

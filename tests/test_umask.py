@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 import gen
-from gen.render import current_umask, write_atomic
+from gen.codegen.render import current_umask, write_atomic
 
 ROOT = Path(__file__).resolve().parent.parent
 SEED = str(ROOT / "examples" / "seed_pendulum.py")

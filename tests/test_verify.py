@@ -5,7 +5,7 @@ import pytest
 import gen
 import rolling_disc
 import seed_pendulum as sp
-from gen.verify import verify
+from gen.export.verify import verify
 
 
 @pytest.mark.parametrize("build", [sp.kane_model, sp.lagrange_model, rolling_disc.model],

@@ -35,7 +35,7 @@ def test_wheel_contents_and_install(tmp_path):
                  "gen/templates/common/macros.j2", "gen/csrc/gen_rt.h",
                  "gen/csrc/gen_rt_linearize.c", "gen/csrc/gen_rt_model.c",
                  "gen/csrc/gen_rt_status.h", "gen/csrc/eigen/gen_rt_names.h",
-                 "gen/templates/cffi/host.h.j2", "gen/model.py"):
+                 "gen/templates/cffi/host.h.j2", "gen/intake/model.py"):
         assert need in names, need
     assert any(n.endswith("entry_points.txt") for n in names)
     site = tmp_path / "site"

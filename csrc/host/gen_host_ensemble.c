@@ -3,7 +3,7 @@
  * through the model's plugin table exactly as one sim.simulate call makes
  * it (simulate, or simulate_input with a table, a feedback), then reduced
  * into the caller's arrays (gen_host_ensemble.h). The options' cancel flag
- * (Ctrl-C, gen/interrupt.py) is read before each run and, inside a run, by
+ * (Ctrl-C, gen/sim/interrupt.py) is read before each run and, inside a run, by
  * the runtime before each step. Hand-written; compiled
  * into eomgen's Python host module after its declarations.
  */

@@ -1,7 +1,7 @@
 /*
  * gen_host_ensemble.h - many simulations of one model in one call, reduced
- * as they finish (gen/ensemble.py). Hand-written; part of eomgen's Python
- * host module (gen/host.py), which declares eomgen_real, the structs and
+ * as they finish (gen/sim/ensemble.py). Hand-written; part of eomgen's Python
+ * host module (gen/toolchain/host.py), which declares eomgen_real, the structs and
  * the plugin table eomgen_api before this header. Also the module's cffi
  * declarations: plain C, no preprocessor beyond integer constants.
  */

@@ -1,12 +1,12 @@
 /*
  * gen_host_fast.h - the Python fast paths of Simulator.rhs and rhs_batch
- * (gen/bindings.py). For rhs:
+ * (gen/sim/simulator.py). For rhs:
  * a CPython function, made once per model table, that takes (t, x, r) and
  * returns x' as a new numpy array, or None where it does not apply (x or r
  * not an exact, aligned, C-contiguous array of the model's scalar type and
  * size) or where the model returns a nonzero status: the caller then takes
  * its general path, which converts, checks and raises in the user's names.
- * Hand-written; part of eomgen's Python host module (gen/host.py). Also
+ * Hand-written; part of eomgen's Python host module (gen/toolchain/host.py). Also
  * the module's cffi declarations: plain C.
  */
 

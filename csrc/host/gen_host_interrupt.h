@@ -1,6 +1,6 @@
 /*
  * gen_host_interrupt.h - Ctrl-C during the long calls of eomgen's Python
- * host module (gen/interrupt.py). Hand-written; plain C declarations (also
+ * host module (gen/sim/interrupt.py). Hand-written; plain C declarations (also
  * the module's cffi cdef).
  *
  * The C runtime knows nothing of signals: a simulation stops when the

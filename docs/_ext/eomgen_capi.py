@@ -1,5 +1,5 @@
 """Sphinx extension: the reference of the generated C interface, rendered
-at build time from the one description of it (gen/abi.py).
+at build time from the one description of it (gen/codegen/abi.py).
 
 ``.. eomgen-c-api::`` (option ``:prefix:``, default ``pendulum_kane``)
 writes the sizes, the scalar type, the structs with their fields, every
@@ -7,7 +7,7 @@ public function with the C prototype of the generated header (the same
 Jinja macro, ``templates/common/macros.j2``, renders both), its parameters
 with their role and size, and the status codes with their messages and the
 Python exception each one raises. Nothing of it is written by hand: a
-function added to ``gen.abi.FUNCTIONS`` appears here on the next build.
+function added to ``gen.codegen.abi.FUNCTIONS`` appears here on the next build.
 """
 from __future__ import annotations
 
@@ -18,11 +18,11 @@ from docutils.parsers.rst import directives
 from docutils.statemachine import StringList
 from sphinx.util.docutils import SphinxDirective
 
-from gen import abi
-from gen.bindings import EXCEPTIONS
-from gen.render import template_env
+from gen.codegen import abi
+from gen.core.status import EXCEPTIONS
+from gen.codegen.render import template_env
 
-# what each role of gen.abi.Param means for the caller (its docstring, in words)
+# what each role of gen.codegen.abi.Param means for the caller (its docstring, in words)
 _ROLES = {
     "in": "input array of {size} values; NULL gives ``ERR_NULL``, a NaN or infinite "
           "value ``ERR_NONFINITE_INPUT``",
@@ -199,7 +199,7 @@ class CApiDirective(SphinxDirective):
         self.env.note_dependency(abi.__file__)
         node = nodes.section()
         node.document = self.state.document
-        self.state.nested_parse(StringList(lines, source="gen/abi.py"), self.content_offset,
+        self.state.nested_parse(StringList(lines, source="gen/codegen/abi.py"), self.content_offset,
                                 node, match_titles=True)
         return node.children
 

@@ -124,14 +124,14 @@ assert err32 < 1e-4
 
 # %%
 # Then for a Cortex-M4F (``-mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16
-# -mfloat-abi=hard``, newlib-nano, ``-Os``): ``gen.footprint.report``
+# -mfloat-abi=hard``, newlib-nano, ``-Os``): ``gen.toolchain.footprint.report``
 # generates the CMake project with its toolchain file, builds the static
 # library with ``arm-none-eabi-gcc`` and reads its flash and, from GCC's
 # stack usage and call graph, the worst-case stack of every public
 # function. Without the cross compiler this step says so and is skipped.
 import shutil
 
-from gen import footprint
+from gen.toolchain import footprint
 
 if shutil.which("arm-none-eabi-gcc"):
     rep = footprint.report(model, real="float", target="cortex-m4f")

@@ -135,7 +135,7 @@ with tempfile.TemporaryDirectory() as tmp:
     text = (src / "swingup.c").read_text()
     assert "static const cart_pole_real swingup_K[201 * CART_POLE_NR * CART_POLE_NS]" in text
     if shutil.which("arm-none-eabi-gcc"):
-        from gen.footprint import section_sizes
+        from gen.toolchain.footprint import section_sizes
         obj = Path(tmp) / "swingup.o"
         subprocess.run(["arm-none-eabi-gcc", "-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16",
                         "-mfloat-abi=hard", "-Os", "-std=c99", "-Wall", "-Wextra", "-Werror",

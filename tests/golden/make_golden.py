@@ -54,7 +54,7 @@ FINGERPRINT_KEYS = ("machine", "system", "libc", "compiler", "compiler_version",
 
 
 def compiler_command():
-    """The C compiler gen.compile runs, by its rule (gen/build.py): $CC, else
+    """The C compiler gen.compile runs, by its rule (gen/toolchain/build.py): $CC, else
     clang when it is installed, else the compiler Python was built with."""
     cc = os.environ.get("CC")
     if not cc:
@@ -75,7 +75,7 @@ def _c_flags():
     optimization and floating-point ones): gen's C_FLAGS and C_LIN_FLAGS,
     wherever the package keeps them."""
     import importlib
-    for mod in ("gen.build", "gen.pipeline", "gen.cache"):
+    for mod in ("gen.toolchain.build", "gen.build", "gen.pipeline", "gen.cache"):
         try:
             m = importlib.import_module(mod)
         except ImportError:

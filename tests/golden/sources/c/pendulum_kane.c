@@ -19,7 +19,7 @@
 /* the model's scalar type must be the runtime's */
 typedef char pendulum_kane_real_matches_runtime[(sizeof(pendulum_kane_real) == sizeof(gen_rt_real)) ? 1 : -1];
 /* the model's codes and structs are the runtime's (both rendered from
- * gen/abi.py): built against a runtime of another description, this fails */
+ * gen/codegen/abi.py): built against a runtime of another description, this fails */
 typedef char pendulum_kane_abi_matches_runtime[(
     PENDULUM_KANE_METHOD_RK4 == GEN_RT_METHOD_RK4 &&
     PENDULUM_KANE_METHOD_DOPRI5 == GEN_RT_METHOD_DOPRI5 &&
@@ -146,7 +146,7 @@ static const gen_rt_model pendulum_kane_model = {
 };
 
 /* ------------------------------------------------------------------ */
-/* The public API (gen/abi.py)                                        */
+/* The public API (gen/codegen/abi.py)                                        */
 /* ------------------------------------------------------------------ */
 
 static int pendulum_kane_finite(int n, const pendulum_kane_real *v)

@@ -24,7 +24,7 @@
 #endif
 
 typedef struct {
-    const char *abi;                 /* gen/abi.py ABI_TAG: the layout of this table */
+    const char *abi;                 /* gen/codegen/abi.py ABI_TAG: the layout of this table */
     const char *name;                /* the model's name */
     int real_size;                   /* sizeof(pendulum_kane_real) */
     int nq, nu, nx, nr, np, mc, mv, ns, na, ny;

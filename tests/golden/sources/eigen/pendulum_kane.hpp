@@ -196,7 +196,7 @@ inline Params<S> default_params() noexcept
 }
 
 // ------------------------------------------------------------ the structs
-// The C API's structs (gen/abi.py) with their defaults set on construction;
+// The C API's structs (gen/codegen/abi.py) with their defaults set on construction;
 // a pointer to one is a pointer to the C struct of its scalar type.
 
 /* Integration options (fill with sim_options_default).
@@ -303,7 +303,7 @@ struct SimStats : detail::Api<S>::sim_stats {
 };
 
 // ------------------------------------------------------------ the functions
-// One per function of the C API (gen/abi.py), its arguments in the same
+// One per function of the C API (gen/codegen/abi.py), its arguments in the same
 // order: arrays as the Eigen types of their sizes, structs as the above.
 
 /* Mass matrix M(q) of the unconstrained equations, NU x NU. */

@@ -61,7 +61,7 @@ typedef struct {
     eomgen_real x_last[];
 } eomgen_sim_stats;
 typedef struct {
-    const char *abi;                 /* gen/abi.py ABI_TAG: the layout of this table */
+    const char *abi;                 /* gen/codegen/abi.py ABI_TAG: the layout of this table */
     const char *name;                /* the model's name */
     int real_size;                   /* sizeof(eomgen_real) */
     int nq, nu, nx, nr, np, mc, mv, ns, na, ny;
@@ -130,7 +130,7 @@ int eomgen_linearize_batch(const eomgen_api *api, int n, const eomgen_real *x, c
 
 
 
-/* a batch loop stops at a SIGINT (Ctrl-C: gen/interrupt.py, the relay of
+/* a batch loop stops at a SIGINT (Ctrl-C: gen/sim/interrupt.py, the relay of
    csrc/host/gen_host_interrupt.c) with the runtime's ERR_CANCELLED */
 #define EOMGEN_CANCELLED_ (-13)
 

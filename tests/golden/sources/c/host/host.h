@@ -59,7 +59,7 @@ typedef struct {
     eomgen_real x_last[];
 } eomgen_sim_stats;
 typedef struct {
-    const char *abi;                 /* gen/abi.py ABI_TAG: the layout of this table */
+    const char *abi;                 /* gen/codegen/abi.py ABI_TAG: the layout of this table */
     const char *name;                /* the model's name */
     int real_size;                   /* sizeof(eomgen_real) */
     int nq, nu, nx, nr, np, mc, mv, ns, na, ny;

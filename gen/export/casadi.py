@@ -1,0 +1,305 @@
+"""The model inside CasADi: external functions with exact first and second derivatives.
+
+    F = gen.casadi.functions(model)          # {"rhs": casadi.Function, ...}
+    xdot = F["rhs"](x, r, p, t)
+    J = casadi.jacobian(F["step"](X, r, p, t, h), X)   # jac_<f>, exact
+
+One shared library, generated from templates/casadi/casadi_ext.c.j2 over
+the model's C API (the "casadi" backend of gen/codegen/backends.py: the C model,
+its derivative kernels, the C runtime, and the CasADi wrappers), built
+into the content-keyed cache by gen.build and loaded with
+``casadi.external(name, path)``. The functions (CasADi names prefixed with
+the model's, ``<model>_rhs``; the dict's keys are the short names):
+
+    rhs(x, r, p, t) -> xdot                      <p>_eval_rhs
+    implicit(x, xdot, r, p, t) -> residual       xdot - rhs, then f_c(q), f_v(q, u)
+    step(x, r, p, t, h) -> x_next                <p>_step_rk4 with projection, or with
+                                                 step="rodas4" one RODAS4 step of the
+                                                 runtime (gen_rt_rodas4_trial; CasADi
+                                                 name <p>_step_rodas4, first derivatives)
+    outputs(x, r, p, t) -> y                     <p>_eval_outputs (models with outputs)
+    constraints(x, p, t) -> c                    [f_c(q); f_v(q, u)] (constrained models)
+
+The derivatives, found by CasADi by name in the same library: jac_<f>,
+fwd1_<f>, adj1_<f> (every input: x, xdot, r, p, t, h) and their Jacobians
+jac_jac_<f>, jac_fwd1_<f>, jac_adj1_<f> (the second derivatives CasADi
+forms exact Hessians from), computed by kernels generated from the model's
+expressions (gen/codegen/casadi_kernels.py derivative_kernels: the second-order
+adjoint of the equations x' solves; RK4 differentiated stage by stage for
+step). step of a constrained model has no derivatives (its projection has
+none). The externals are loaded with enable_forward=False: forward products
+through jac_<f> (one Jacobian, not one per seed column). functions(model,
+hessians=False) loads a library without the second derivatives (and
+without generating their kernels, the costly part of a large model's
+build): for limited-memory Hessians, Gauss-Newton, simulation.
+
+A missing r, p or h (a call by keyword without it) is NaN, so the call
+fails instead of computing with zeros: pass ``p=model.p_values`` for the
+model's own constants. The values are GenFunction (a casadi.Function): a
+numeric call that fails raises gen.InputError (the missing or non-finite
+input) or the library's status as gen.SolverError/SingularError, where
+CasADi says only "Evaluation failed".
+"""
+from __future__ import annotations
+
+import importlib
+
+from ..codegen.backends import get_backend
+from ..toolchain.build import build
+from ..core.errors import MissingDependencyError, ModelError
+from ..plan.ir import plan as make_plan
+from ..intake.model import require_model
+from ..codegen.render import render
+
+__all__ = ["functions", "library", "function_specs", "NAMES", "GenFunction"]
+
+from ..codegen.casadi_kernels import NAMES, STEP_METHODS, function_specs  # noqa: E402,F401
+
+def _casadi():
+    try:
+        return importlib.import_module("casadi")
+    except ImportError:
+        raise MissingDependencyError(
+            "gen.casadi needs CasADi, which is not installed: pip install eomgen[casadi] "
+            "(or pip install casadi)") from None
+
+
+def library(model, verbose=False, hessians=True, step="rk4"):
+    """The path of the model's CasADi shared library (built into the cache
+    on first use): the file ``casadi.external(name, path)`` loads.
+
+    With ``hessians=True`` (the default) one library holds every function,
+    both steps and the second derivatives. With ``hessians=False`` it holds
+    first derivatives only, and the RODAS4 step only when ``step="rodas4"``
+    (its first derivatives need the rhs Hessian kernel, which RK4's do not):
+    no second-derivative kernels to generate."""
+    require_model(model, "gen.casadi")
+    hessians = bool(hessians)
+    rodas4 = hessians or step == "rodas4"
+    key = (model.fingerprint(), hessians, rodas4)
+    path = _LIBRARIES.get(key)
+    if path is not None and path.exists():
+        return path        # this process built it (rendering the Hessian kernels is the cost)
+    b = get_backend("casadi").variant(hessians=hessians, rodas4=rodas4)
+    plan = make_plan(model, lin=b.lin, derivatives=True)
+    rendered = render(plan, real="double", backend=b, project=False)
+    path = _LIBRARIES[key] = build(rendered, verbose=verbose).path
+    return path
+
+
+#: model fingerprint -> library path, for this process
+_LIBRARIES = {}
+
+
+def _checked_class(ca):
+    """casadi.Function with a clear error for a failing numeric call (the
+    class is made once casadi is imported)."""
+    global _CHECKED
+    if _CHECKED is not None:
+        return _CHECKED
+
+    class GenFunction(ca.Function):
+        """A casadi.Function of the model's library: everything CasADi's
+        has; a numeric call that fails (CasADi says only "Evaluation
+        failed") raises a gen error that names the input or the status."""
+
+        def __init__(self, f, path, model):
+            ca.Function.__init__(self, f)
+            self._gen = (path, model)
+
+        def __call__(self, *args, **kwargs):
+            try:
+                return ca.Function.__call__(self, *args, **kwargs)
+            except RuntimeError as e:
+                if "Evaluation failed" not in str(e):
+                    raise
+                _explain(self, args, kwargs, e)
+                raise
+
+        def call(self, *args, **kwargs):
+            try:
+                return ca.Function.call(self, *args, **kwargs)
+            except RuntimeError as e:
+                if "Evaluation failed" not in str(e):
+                    raise
+                a = args[0] if args else kwargs.get("arg", ())
+                if isinstance(a, dict):
+                    _explain(self, (), a, e)
+                else:
+                    _explain(self, tuple(a), {}, e)
+                raise
+
+    GenFunction.__module__, GenFunction.__qualname__ = __name__, "GenFunction"
+    _CHECKED = GenFunction
+    return GenFunction
+
+
+_CHECKED = None
+
+
+def __getattr__(name):
+    # gen.casadi.GenFunction: the class of functions()' values (made once
+    # casadi is imported)
+    if name == "GenFunction":
+        return _checked_class(_casadi())
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+# forward products through jac_<f>: CasADi would otherwise call fwd1_<f> (the
+# whole Jacobian each time) once per seed column; reverse products and the
+# Hessians keep adj1_<f> and jac_adj1_<f> (one adjoint sweep)
+_OPTIONS = {"enable_forward": False}
+
+
+def _explain(F, args, kwargs, err):
+    """Raise the gen error of a failed numeric call of F: a missing r, p or
+    h; a NaN or infinite input entry; or the library's status (its name and
+    message, from the same C function called again through ctypes)."""
+    import ctypes
+
+    import numpy as np
+
+    from ..core.status import EXCEPTIONS, status_message, status_name
+    from ..core.errors import InputError, SolverError
+    path, model = F._gen
+    names = F.name_in()
+    try:
+        vals = {}
+        for i, a in enumerate(args):
+            vals[names[i]] = a
+        vals.update(kwargs)
+        arrays = []
+        for i, n in enumerate(names):
+            k = F.nnz_in(i)
+            if n in vals:
+                v = np.asarray(np.asarray(vals[n], dtype=float).ravel(order="F"), dtype=float)
+            else:
+                v = None
+            arrays.append((n, k, v))
+    except (TypeError, ValueError):
+        return                      # symbolic or odd arguments: CasADi's error stands
+    fname = F.name()
+    sig = f"{fname}({', '.join(names)})"
+    for n, k, v in arrays:
+        if v is None and k and n in ("r", "p", "h"):
+            what = {"r": f"the model's inputs {list(model.input_names)}",
+                    "p": "the constants (p=model.p_values for the model's own)",
+                    "h": "the step size"}[n]
+            raise InputError(f"{sig}: {n} is missing ({what}): it defaults to NaN so "
+                             f"that the call fails instead of computing with zeros") from err
+        if v is not None and v.size == k and not np.all(np.isfinite(v)):
+            i = int(np.flatnonzero(~np.isfinite(v))[0])
+            raise InputError(f"{sig}: {n}[{i}] = {v[i]}: the inputs must be finite") from err
+        if n == "h" and fname.endswith("_step_rodas4") and v is not None and v.size == 1 \
+                and v[0] == 0:
+            raise InputError(f"{sig}: h = 0: a RODAS4 step needs a nonzero step size "
+                             f"(its stages divide by h)") from err
+    # the status of the library's function at these inputs
+    lib = ctypes.CDLL(str(path))
+    dp = ctypes.POINTER(ctypes.c_double)
+    fn = getattr(lib, F.name())
+    fn.restype = ctypes.c_int
+    fn.argtypes = [ctypes.POINTER(dp), ctypes.POINTER(dp), ctypes.POINTER(ctypes.c_longlong), dp,
+                   ctypes.c_int]
+    work = getattr(lib, F.name() + "_work")
+    sz = [ctypes.c_longlong() for _ in range(4)]
+    work(*[ctypes.byref(s) for s in sz])
+    keep = [np.ascontiguousarray(v if v is not None else np.zeros(k)) for _, k, v in arrays]
+    outs = [np.zeros(max(1, F.nnz_out(i))) for i in range(F.n_out())]
+    arg = (dp * max(1, sz[0].value))(*[a.ctypes.data_as(dp) for a in keep])
+    res = (dp * max(1, sz[1].value))(*[o.ctypes.data_as(dp) for o in outs])
+    w = np.zeros(max(1, sz[3].value))
+    iw = (ctypes.c_longlong * max(1, sz[2].value))()
+    st = fn(arg, res, iw, w.ctypes.data_as(dp), 0)
+    if st == 0:
+        return
+    name = status_name(st)
+    state = dict(zip(names, keep))
+    at = ", ".join(f"{n} = {np.array2string(v, precision=6, separator=', ')}" if v.size > 1
+                   else f"{n} = {float(v[0]):g}" for n, v in state.items() if n in ("x", "t", "h"))
+    cls = EXCEPTIONS.get(name, SolverError)
+    msg = f"{sig} failed with {name}: {status_message(st)} (at {at})"
+    try:
+        exc = cls(msg, status=st, status_name=name)
+    except TypeError:           # an error class without a status (InputError)
+        exc = cls(msg)
+    raise exc from err
+
+
+def functions(model, verbose=False, step="rk4", hessians=True):
+    """The model as CasADi functions, loaded with ``casadi.external`` from
+    one generated shared library (:func:`library`).
+
+    Parameters
+    ----------
+    model : gen.Model
+        The model.
+    verbose : bool, optional
+        Print the compiler's commands.
+    step : {"rk4", "rodas4"}, optional
+        The method of ``step``: one classic RK4 step with the projection
+        (``<model>_step_rk4``; exact first and second derivatives), or one
+        RODAS4 step of the runtime (``gen_rt_rodas4_trial``, the adaptive
+        RODAS4's trial step: linearly implicit, L-stable, for stiff models
+        and large h; unconstrained models; exact first derivatives, no
+        second derivatives). The dict's key is ``step`` either way; the
+        CasADi name is ``<model>_step`` or ``<model>_step_rodas4``.
+    hessians : bool, optional
+        With the second derivatives (``jac_jac_``, ``jac_fwd1_``,
+        ``jac_adj1_``: exact Hessians through the functions, IPOPT's
+        ``hessian_approximation="exact"``; the default). ``False`` builds a
+        library with first derivatives only, which skips generating the
+        second-derivative kernels (the costly part of the build: for the
+        Whipple bicycle most of it). For limited-memory Hessians
+        (``hessian_approximation="limited-memory"``), Gauss-Newton or
+        simulation. A Hessian through such a function fails in CasADi
+        ("Derivatives cannot be calculated for ...").
+
+    Returns
+    -------
+    dict of str to casadi.Function
+        ``rhs``, ``implicit``, ``step`` and, when the model has them,
+        ``outputs`` and ``constraints`` (the module's docstring lists their
+        inputs and outputs; ``F.name_in()`` too).
+
+    Raises
+    ------
+    gen.MissingDependencyError
+        When CasADi is not installed (``pip install eomgen[casadi]``).
+    gen.ModelError
+        When ``model`` is not a gen.Model, or ``step="rodas4"`` for a
+        constrained model.
+    ValueError
+        When ``step`` is not one of "rk4", "rodas4", or ``hessians`` is not a bool.
+    gen.BuildError
+        When the compiler fails.
+    """
+    ca = _casadi()
+    if ca.__dict__.get("external") is None:
+        raise MissingDependencyError("the installed casadi has no casadi.external: "
+                                     "pip install --upgrade eomgen[casadi]")
+    require_model(model, "gen.casadi.functions")
+    if not isinstance(step, str) or step not in STEP_METHODS:
+        raise ValueError(f"gen.casadi.functions(step={step!r}): step must be one of "
+                         f"{', '.join(repr(k) for k in STEP_METHODS)}")
+    if not isinstance(hessians, bool):
+        raise ValueError(f"gen.casadi.functions(hessians={hessians!r}): hessians must be True "
+                         f"(exact second derivatives) or False (first derivatives only)")
+    if step == "rodas4" and (model.mc or model.mv):
+        raise ModelError(
+            f"gen.casadi.functions(step='rodas4'): model {model.name!r} has constraints "
+            f"({model.mc} holonomic, {model.mv} nonholonomic) and the RODAS4 step has no "
+            f"projection and no derivatives of one; use step='rk4' (with its projection)")
+    path = str(library(model, verbose=verbose, hessians=hessians, step=step))
+    out = {}
+    want = STEP_METHODS[step]
+    for s in function_specs(model, hessians, hessians or step == "rodas4"):
+        if s["kind"] not in NAMES and s["kind"] != want:
+            continue
+        if s["kind"] == "step" and want != "step":
+            continue
+        key = "step" if s["kind"] == want else s["name"]
+        out[key] = _checked_class(ca)(ca.external(s["sym"], path, _OPTIONS), path, model)
+    out = {k: out[k] for k in NAMES if k in out}
+    if not out:
+        raise ModelError(f"model {model.name!r} gave no CasADi functions")
+    return out

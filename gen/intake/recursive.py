@@ -1,0 +1,761 @@
+"""Equations of motion of a sympy ``System``'s joint tree by recursive
+algorithms (issue 37), without ``KanesMethod.kanes_equations`` or
+``System.form_eoms``.
+
+``Model.from_system(system, formulation="recursive")`` lands here. The tree is
+read from the System's joints: each joint gives its child body a parent body,
+and the body whose frame is the System's frame is the root. Per joint, from
+sympy's own joint kinematics, a few small expressions:
+
+- ``E``: the direction cosines from the parent's axes to the child's
+  (``child.frame.dcm(parent.frame)``); the joint vector from the parent's mass
+  centre to the child's, as a part in the parent's axes (to the child point)
+  plus a constant part in the child's axes;
+- the joint's relative motion ``[w_rel; v_rel] = S u_j`` in the child's axes
+  (the child frame's angular velocity in the parent's, and the derivative in
+  the parent frame of the joint vector), ``S`` its Jacobian in the joint's
+  speeds, and the velocity-product part ``dS/dt u_j``.
+
+The recursions run in the inertial frame's axes at each body's mass centre:
+each body's orientation is kept as ``A Rot(k, theta) B``, and a joint turning
+about its parent's axis adds its angle to ``theta``. A chain of parallel pins
+thus holds ``cos(q1 + ... + qk)``, not a product of k rotation matrices, and
+the expressions grow polynomially with the number of bodies where body-axes
+recursions (each level re-rotating its parent's vectors) grow exponentially as
+sympy trees. The mass matrix comes from the composite rigid body algorithm
+(each subtree's mass, first moment and inertia about its root's mass centre,
+shifted by joint vectors; a joint's column ``Ic s`` carried up the tree), the
+forcing from recursive Newton-Euler with ``u' = 0`` (velocities and
+velocity-product accelerations outward, each body's ``m a - F_ext`` and
+``I alpha + w x I w - T_ext`` inward, projected on ``S``). ``M u' = f`` are
+then Kane's equations of the tree; the kinematics are the System's own
+``kdes``, and the result goes to :meth:`gen.Model.from_matrices` as any model
+does, so rhs, linearization, derivative kernels and every backend follow.
+
+For an open tree (no constraints, no ``hybrid``) ``Model.from_system`` takes
+instead ``u'`` by the articulated body algorithm (:func:`accelerations_of_tree`)
+and hands the pipeline ``M = I``, ``f = u'``: measured on the n-link pendulum,
+CRBA's n(n+1)/2 entries of M made the n = 50 rhs kernel 3629 temporaries and
+its C compile 19 CPU-s (rhs 31 us), ABA's u' is a few dozen temporaries per
+body (n = 50: build 6 s, rhs 2.2 us). The identity costs nothing at run time
+(its unrolled LDL^T over a diagonal of ones is constant-folded), linearization
+and derivative kernels differentiate the same graph. ``sim.mass_matrix`` of
+such a model is the identity; the physical M and f are
+:func:`equations_of_tree`'s. With constraints (the multiplier solve needs the
+true M) or ``hybrid`` impacts (solved with M), CRBA + RNEA as above.
+
+Nothing is expanded or simplified: each body's quantities are kept as shared
+opaque nodes (``_keep``: a graph linear in the bodies, equal nodes one object,
+``_intern``), every walk of the pipeline visits a shared node once, and gen.ir
+writes each node as one temporary, in order (``_kept_program``).
+
+Taken: trees of ``PinJoint``, ``PrismaticJoint``, ``CylindricalJoint``,
+``PlanarJoint``, ``SphericalJoint`` and ``WeldJoint`` between rigid bodies,
+with forces on points and torques on frames the tree knows (gravity from
+``apply_uniform_gravity``, loads, actuators), and the System's holonomic and
+nonholonomic constraints (loop closures) with their dependent coordinates
+and speeds, handed to the runtime's constraint machinery as a Kane model's
+(:func:`constraints_of_tree`). Refused with a :class:`gen.ModelError`
+naming what: auxiliary speeds, particles, other joint classes, explicitly
+time-dependent joints, bodies not joined to the System's frame, a body that
+is the child of two joints, loads on unknown points or frames.
+"""
+from __future__ import annotations
+
+import sympy as sm
+import sympy.physics.mechanics as me
+
+from ..core.errors import ModelError
+
+__all__ = ["equations_of_tree", "accelerations_of_tree", "constraints_of_tree",
+           "SUPPORTED_JOINTS"]
+
+SUPPORTED_JOINTS = ("PinJoint", "PrismaticJoint", "CylindricalJoint", "PlanarJoint",
+                    "SphericalJoint", "WeldJoint")
+
+_T = me.dynamicsymbols._t
+
+
+def _name(obj):
+    return getattr(obj, "name", None) or str(obj)
+
+
+def _cross(a, b):
+    return sm.Matrix([a[1] * b[2] - a[2] * b[1],
+                      a[2] * b[0] - a[0] * b[2],
+                      a[0] * b[1] - a[1] * b[0]])
+
+
+def _col(xs):
+    xs = list(xs)
+    return sm.Matrix(xs) if xs else sm.zeros(0, 1)
+
+
+def _skew(a):
+    return sm.Matrix([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+
+
+_UE = sm.UnevaluatedExpr
+
+
+# the opaque nodes made so far (equations_of_tree, accelerations_of_tree):
+# equal nodes are one object, so sympy's == (dict lookups, CSE) compares
+# two nodes through identical arguments, never down two equal DAGs (a walk
+# that grows exponentially with the depth)
+_KEPT = {}
+
+
+def _keep(e):
+    """e as one opaque node (``UnevaluatedExpr``): sums and products built
+    on it keep it as one argument instead of flattening its terms into
+    theirs, so each body's quantities stay a few nodes over its parent's
+    (a DAG linear in the bodies), where flattened they grow with the depth.
+    ``gen.ir`` unwraps the nodes after its CSE."""
+    if e.is_Atom or isinstance(e, _UE) or (e.is_Mul and len(e.args) == 2
+                                           and e.args[0].is_Number and e.args[1].is_Atom):
+        return e
+    ue = _UE(_intern(e))
+    return _KEPT.setdefault(ue, ue)
+
+
+def _intern(e):
+    """e with every subexpression (down to the opaque nodes) one object per
+    value: equal products built apart (the two sides of a symmetric
+    matrix, a cross product's terms) would make sympy's == and its cache
+    compare down two equal copies of the graph below them."""
+    if e.is_Atom or isinstance(e, _UE):
+        return e
+    args = tuple(_intern(a) for a in e.args)
+    if any(a is not b for a, b in zip(args, e.args)):
+        # equal arguments: the same canonical form, not re-flattened (a
+        # sum's flatten would make its products anew)
+        e = e.func._from_args(args, e.is_commutative) if (e.is_Add or e.is_Mul) \
+            else e.func(*args)
+    return _KEPT.setdefault(e, e)
+
+
+def _sym_kept(mat):
+    """A symmetric matrix kept from its lower triangle (one node per pair)."""
+    n = mat.shape[0]
+    low = {(i, j): _keep(mat[i, j]) for i in range(n) for j in range(i + 1)}
+    return sm.Matrix(n, n, lambda i, j: low[max(i, j), min(i, j)])
+
+
+def _kept(mat):
+    return mat.applyfunc(_keep)
+
+
+def _is_zero(e):
+    e = sm.expand(e)
+    if e == 0:
+        return True
+    return sm.simplify(e) == 0
+
+
+class _Body:
+    __slots__ = ("body", "joint", "parent", "children", "E", "r", "S", "rel_bias",
+                 "speed_idx", "w", "al", "a", "F", "N", "Ic", "depth", "Ftot", "Ntot",
+                 "rep", "R", "Sw", "rw", "Iw", "r_pp", "r_cc", "mt", "h", "J", "cw", "cv",
+                 "IA", "pA", "U", "Dinv", "uu")
+
+    def __init__(self, body, joint, parent):
+        self.body, self.joint, self.parent = body, joint, parent
+        self.children = []
+
+
+class _Tree:
+    """The System's joint tree, checked, in an order parents first."""
+
+    def __init__(self, system):
+        if not isinstance(system, me.System):
+            raise ModelError(
+                f"formulation='recursive' needs a sympy System, got {type(system).__name__}")
+        self.system = system
+        self.N = system.frame
+        if len(system.u_aux):
+            raise ModelError(
+                f"formulation='recursive' does not take auxiliary speeds (the System has "
+                f"{list(system.u_aux)}): use formulation='kane'")
+        nh, nn = len(system.holonomic_constraints), len(system.nonholonomic_constraints)
+        if len(system.q_dep) != nh:
+            raise ModelError(
+                f"the System has {nh} holonomic constraint(s) and {len(system.q_dep)} "
+                "dependent coordinate(s) (q_dep): formulation='recursive' needs one "
+                "dependent coordinate per holonomic constraint")
+        if len(system.u_dep) != nh + nn:
+            raise ModelError(
+                f"the System has {nh} holonomic and {nn} nonholonomic constraint(s) and "
+                f"{len(system.u_dep)} dependent speed(s) (u_dep): formulation='recursive' "
+                "needs one dependent speed per constraint")
+        self.q = list(system.q)
+        self.u = list(system.u)
+        child_of = {}
+        for j in system.joints:
+            kind = type(j).__name__
+            if kind not in SUPPORTED_JOINTS:
+                raise ModelError(
+                    f"joint {_name(j)!r} is a {kind}: formulation='recursive' takes "
+                    f"{', '.join(SUPPORTED_JOINTS)}")
+            for b in (j.parent, j.child):
+                if not isinstance(b, me.RigidBody):
+                    raise ModelError(
+                        f"body {_name(b)!r} of joint {_name(j)!r} is a {type(b).__name__}: "
+                        "formulation='recursive' takes rigid bodies")
+            if j.child in child_of:
+                raise ModelError(
+                    f"body {_name(j.child)!r} is the child of joints {_name(child_of[j.child])!r} "
+                    f"and {_name(j)!r}: formulation='recursive' takes the joints of a tree; "
+                    "close a loop with holonomic constraints on the tree instead "
+                    "(System.add_holonomic_constraints, with the dependent coordinates "
+                    "and speeds in q_dep and u_dep)")
+            child_of[j.child] = j
+        # the root: the body (or bodies) whose frame is the System's frame
+        self.ground = set()
+        for j in system.joints:
+            if j.parent not in child_of:
+                if j.parent.frame != self.N:
+                    raise ModelError(
+                        f"body {_name(j.parent)!r} (parent of joint {_name(j)!r}) is not "
+                        f"connected to the tree: it is no joint's child and its frame "
+                        f"{j.parent.frame.name!r} is not the System's frame {self.N.name!r}")
+                self.ground.add(j.parent)
+        for b in system.bodies:
+            if b not in child_of and b not in self.ground and not (
+                    isinstance(b, me.RigidBody) and b.frame == self.N):
+                raise ModelError(
+                    f"body {_name(b)!r} is not connected to the tree: no joint has it as "
+                    "its child (formulation='recursive' needs every body joined, through "
+                    "joints, to the System's frame)")
+        # parents first
+        nodes, order = {}, []
+        pending = list(child_of.items())
+        while pending:
+            rest = []
+            for child, j in pending:
+                if j.parent in self.ground:
+                    parent = None
+                elif j.parent in nodes:
+                    parent = nodes[j.parent]
+                else:
+                    rest.append((child, j))
+                    continue
+                n = _Body(child, j, parent)
+                n.depth = 0 if parent is None else parent.depth + 1
+                if parent is not None:
+                    parent.children.append(n)
+                nodes[child] = n
+                order.append(n)
+            if len(rest) == len(pending):     # pragma: no cover - cycles are refused above
+                raise ModelError(f"joints {[_name(j) for _, j in rest]} do not form a tree")
+            pending = rest
+        self.nodes, self.order = nodes, order
+        # joint speeds -> positions in system.u
+        uidx = {s: i for i, s in enumerate(self.u)}
+        for n in order:
+            try:
+                n.speed_idx = [uidx[s] for s in n.joint.speeds]
+            except KeyError as e:
+                raise ModelError(f"speed {e.args[0]} of joint {_name(n.joint)!r} is not one "
+                                 "of the System's speeds") from None
+        self._qdot_map()
+
+    def _qdot_map(self):
+        """q' in q and u, from the System's kinematic equations (solved per
+        block of rows that share coordinates)."""
+        kd = sm.Matrix(self.system.kdes)
+        qd = [qi.diff(_T) for qi in self.q]
+        if kd.shape[0] != len(qd):
+            raise ModelError(f"the System has {kd.shape[0]} kinematic equation(s) for "
+                             f"{len(qd)} coordinate(s)")
+        self.kdes = kd
+        # the coefficients of q' by row, over plain symbols and only for the
+        # q' a row holds (a Jacobian in every q' of every row is quadratic
+        # in n, each entry a derivative by a Derivative)
+        D = [sm.Dummy(f"qd{i}") for i in range(len(qd))]
+        kdD = kd.xreplace(dict(zip(qd, D)))
+        K = sm.zeros(len(qd), len(qd))
+        where = {d: k for k, d in enumerate(D)}
+        for i in range(len(qd)):
+            for d in kdD[i].free_symbols & set(D):
+                K[i, where[d]] = kdD[i].diff(d)
+        rest = kd.xreplace({x: 0 for x in qd})
+        if any(K[i, k] != 0 for i in range(len(qd)) for k in range(len(qd)) if i != k):
+            sol = K.LUsolve(-rest)
+        else:
+            if any(K[i, i] == 0 for i in range(len(qd))):
+                raise ModelError("the System's kinematic equations do not determine every q'")
+            sol = [-rest[i] / K[i, i] for i in range(len(qd))]
+        self.qdot = dict(zip(qd, sol))
+
+
+def equations_of_tree(system):
+    """M, f, q, u, kinematics of a System's joint tree by CRBA and RNEA (see
+    the module docstring).
+
+    Returns
+    -------
+    (M, f, q, u, kdes) : sympy Matrix (nu, nu), Matrix (nu, 1), list, list, Matrix (nq, 1)
+        ``M u' = f`` in the System's speed order, and the System's kinematic
+        equations (``kdes = 0``). With constraints, M and f are the tree's
+        equations for all its speeds (independent, then dependent: the
+        System's order), without the constraint forces, as a Kane model's
+        are; see :func:`constraints_of_tree`.
+    """
+    tree = _walk(system)
+    nu = len(tree.u)
+    zero = sm.zeros(3, 1)
+    for n in tree.order:
+        al_p, a_p = (zero, zero) if n.parent is None else (n.parent.al, n.parent.a)
+        n.al, n.a = _kept(al_p + n.cw), _kept(a_p + _cross(al_p, n.rw) + n.cv)
+    # forces in: each body's F - m a and T - I al - w x I w, plus its
+    # children's (formed with their signs: negating a large sum would make
+    # sympy distribute the -1 over every term)
+    f = sm.zeros(nu, 1)
+    for n in reversed(tree.order):
+        b = n.body
+        Fi = n.F - b.mass * n.a
+        Ni = n.N + (-n.Iw) * n.al + _cross(n.Iw * n.w, n.w)
+        for c in n.children:
+            Fi += c.Ftot
+            Ni += c.Ntot + _cross(c.rw, c.Ftot)
+        n.Ftot, n.Ntot = Fi, Ni = _kept(Fi), _kept(Ni)
+        tau = n.Sw.T * sm.Matrix.vstack(Ni, Fi)
+        for k, idx in enumerate(n.speed_idx):
+            f[idx] = tau[k]
+
+    # ---- CRBA: each subtree's mass, first moment h and inertia J about the
+    # mass centre of its root body (inertial axes; shifted by the joint
+    # vectors, never by absolute positions); a joint's column F = Ic s goes up
+    # the tree as the force of the backward pass does
+    M = sm.zeros(nu, nu)
+    for n in reversed(tree.order):
+        mt, h, J = n.body.mass, sm.zeros(3, 1), n.Iw
+        for c in n.children:
+            d = c.rw
+            dt_, ht, ndt = _skew(d), _skew(c.h), _skew(-d)
+            mt += c.mt
+            h += c.h + c.mt * d
+            J += c.J + (ht * ndt + ndt * ht) + c.mt * (dt_ * ndt)
+        n.mt, n.h, n.J = _keep(mt), _kept(h), _kept(J)
+    for n in tree.order:
+        nj = n.Sw.shape[1]
+        if not nj:
+            continue
+        ht = _skew(n.h)
+        sw, sv = n.Sw[:3, :], n.Sw[3:, :]
+        L = _kept(n.J * sw + ht * sv)
+        P = _kept(n.mt * sv + sm.Matrix.hstack(*[_cross(sw[:, k], n.h) for k in range(nj)]))
+        m = n
+        while m is not None:
+            if m is not n:
+                L = _kept(L + sm.Matrix.hstack(*[_cross(prev.rw, P[:, k]) for k in range(nj)]))
+            blk = m.Sw.T * sm.Matrix.vstack(L, P)    # rows: m's speeds, columns: n's
+            for a_, ia in enumerate(m.speed_idx):
+                for b_, ib in enumerate(n.speed_idx):
+                    M[ia, ib] = blk[a_, b_]
+                    M[ib, ia] = blk[a_, b_]
+            prev, m = m, m.parent
+    _KEPT.clear()
+    return M, f, tree.q, tree.u, tree.kdes
+
+
+def accelerations_of_tree(system):
+    """u' of a System's joint tree by the articulated body algorithm (see
+    the module docstring), for an open tree without constraints.
+
+    Spatial quantities in the inertial frame's axes at each body's mass
+    centre (angular part first; accelerations are those of the mass centres,
+    as in the Newton-Euler equations RNEA uses): per body, inward, its
+    articulated inertia ``IA = [[A, B], [B^T, C]]`` (the blocks kept apart:
+    ``C`` is the subtree's mass times the identity where nothing couples),
+    its bias force ``pA``, ``U = IA S``, ``D = S^T U`` and ``D^-1`` (1 x 1
+    for pins and sliders, up to 3 x 3), ``uu = -S^T pA``; then, outward,
+    ``u'_j = D^-1 (uu - U^T a')`` and the body's acceleration ``a' + S u'_j``
+    (``a'``: the parent's carried to the body, plus the velocity-product
+    part). Every body's quantities are shared opaque nodes (``_keep``): the
+    expression graph, and so the straight-line C, is linear in the bodies.
+
+    Returns
+    -------
+    (ud, q, u, kdes) : sympy Matrix (nu, 1), list, list, Matrix (nq, 1)
+        The accelerations in the System's speed order and the System's
+        kinematic equations (``kdes = 0``).
+    """
+    tree = _walk(system)
+    nu = len(tree.u)
+    # the graph is a few nodes deep per body, inward and outward: the
+    # pipeline's recursive walks (model conversion, CSE) go that deep
+    import sys
+    sys.setrecursionlimit(max(sys.getrecursionlimit(), 2000 + 200 * len(tree.order)))
+    I3 = sm.eye(3)
+    for n in reversed(tree.order):
+        Iw = n.Iw
+        # the body: I a + b - f_ext, b = [w x Iw w; 0] (mass-centre accelerations)
+        A, B, C = Iw, sm.zeros(3, 3), n.body.mass * I3
+        pw, pv = _cross(n.w, Iw * n.w) - n.N, -n.F
+        for c in n.children:
+            # the child's articulated inertia and bias force carried to this
+            # body's mass centre: X^T Ia X, X^T pa (X: motion from here to there)
+            Ac, Bc, Cc = c.IA
+            pcw, pcv = c.pA
+            Rx = _skew(c.rw)
+            RC = Rx * Cc
+            A = A + Ac - Bc * Rx + Rx * Bc.T - RC * Rx
+            B = B + Bc + RC
+            C = C + Cc
+            pw = pw + pcw + _cross(c.rw, pcv)
+            pv = pv + pcv
+        A, B, C, pw, pv = _sym_kept(A), _kept(B), _sym_kept(C), _kept(pw), _kept(pv)
+        nj = n.Sw.shape[1]
+        cw, cv = n.cw, n.cv
+        if nj:
+            sw, sv = n.Sw[:3, :], n.Sw[3:, :]
+            Uw, Uv = _kept(A * sw + B * sv), _kept(B.T * sw + C * sv)
+            D = _sym_kept(sw.T * Uw + sv.T * Uv)
+            n.Dinv = Dinv = _inv_small(D)
+            n.uu = uu = _kept(-(sw.T * pw + sv.T * pv))
+            n.U = (Uw, Uv)
+            # the articulated inertia seen through the joint: IA - U D^-1 U^T,
+            # and its bias pA + Ia c + U D^-1 uu
+            UDw, UDv = _kept(Uw * Dinv), _kept(Uv * Dinv)
+            Aa = A - UDw * Uw.T
+            Ba = B - UDw * Uv.T
+            Ca = C - UDv * Uv.T
+            g = UDw * uu, UDv * uu
+        else:
+            Aa, Ba, Ca = A, B, C
+            g = (sm.zeros(3, 1), sm.zeros(3, 1))
+        Aa, Ba, Ca = _sym_kept(Aa), _kept(Ba), _sym_kept(Ca)
+        n.IA = (Aa, Ba, Ca)
+        n.pA = (_kept(pw + Aa * cw + Ba * cv + g[0]),
+                _kept(pv + Ba.T * cw + Ca * cv + g[1]))
+    ud = sm.zeros(nu, 1)
+    for n in tree.order:
+        if n.parent is None:
+            aw, av = n.cw, n.cv
+        else:
+            pal, pa = n.parent.al, n.parent.a
+            aw = pal + n.cw
+            av = pa + _cross(pal, n.rw) + n.cv
+        aw, av = _kept(aw), _kept(av)
+        nj = n.Sw.shape[1]
+        if nj:
+            Uw, Uv = n.U
+            uj = _kept(n.Dinv * (n.uu - (Uw.T * aw + Uv.T * av)))
+            for k, idx in enumerate(n.speed_idx):
+                ud[idx] = uj[k]
+            aw = aw + n.Sw[:3, :] * uj
+            av = av + n.Sw[3:, :] * uj
+        n.al, n.a = _kept(aw), _kept(av)
+    _KEPT.clear()
+    return ud, tree.q, tree.u, tree.kdes
+
+
+def _inv_small(D):
+    """The inverse of a small symmetric matrix of kept entries, by its
+    adjugate over placeholder symbols (sympy's inv would test the kept
+    entries for zero, a walk down the whole graph)."""
+    k = D.shape[0]
+    if k == 1:
+        return sm.Matrix([[_keep(1 / D[0, 0])]])
+    X = sm.Matrix(k, k, lambda i, j: sm.Symbol(f"_D{min(i, j)}_{max(i, j)}"))
+    sub = {X[i, j]: D[i, j] for i in range(k) for j in range(k)}
+    idet = _keep(1 / _keep(X.det(method="berkowitz").xreplace(sub)))
+    adj = X.adjugate(method="berkowitz").xreplace(sub)
+    return _sym_kept(adj * idet)
+
+
+def _walk(system):
+    """The checked tree with, per body, its joint's kinematics, external
+    loads, orientation R, and (inertial axes, at the mass centres) S, the
+    joint vector, velocities, velocity-product accelerations (absolute: al,
+    a; the joint's own share: cw, cv) and central inertia: what CRBA/RNEA
+    (equations_of_tree) and ABA (accelerations_of_tree) both start from."""
+    # no node of an earlier build in sympy's cache: one equal to a new node
+    # (an ancestor's quantities when the same tree is built again) would be
+    # compared with it down the two graphs
+    _KEPT.clear()
+    from sympy.core.cache import clear_cache
+    clear_cache()
+    tree = _Tree(system)
+    N = tree.N
+    qset = set(tree.q)
+
+    udots = [s.diff(_T) for s in tree.u]
+    # ---- per joint: E, r, S and the velocity-product part of d/dt [w_rel; v_rel]
+    for n in tree.order:
+        j, child, parent = n.joint, n.body, n.joint.parent
+        try:
+            n.E = sm.Matrix(child.frame.dcm(parent.frame))
+            # C_child - C_parent = r_pp (parent's axes) + r_cc (child's axes)
+            n.r_pp = j.child_point.pos_from(parent.masscenter).to_matrix(parent.frame)
+            n.r_cc = child.masscenter.pos_from(j.child_point).to_matrix(child.frame)
+            w_rel = child.frame.ang_vel_in(parent.frame).to_matrix(child.frame)
+        except ValueError as e:
+            raise ModelError(f"joint {_name(j)!r}: sympy cannot relate body "
+                             f"{_name(child)!r} to body {_name(parent)!r} ({e})") from None
+        if any(e.has(_T) for e in n.r_cc):
+            raise ModelError(f"joint {_name(j)!r}: its child point moves in body "
+                             f"{_name(child)!r}")
+        # d/dt in the parent frame of C_child - C_parent, in the child's axes
+        v_rel = n.E * n.r_pp.diff(_T) + _cross(w_rel, n.r_cc)
+        rel = sm.Matrix.vstack(w_rel, v_rel).xreplace(tree.qdot)
+        S = rel.jacobian(list(j.speeds)) if len(j.speeds) else sm.zeros(6, 0)
+        resid = rel - S * _col(j.speeds)
+        if not all(_is_zero(e) for e in resid):
+            raise ModelError(
+                f"joint {_name(j)!r}: the child's motion relative to the parent is not "
+                "linear and homogeneous in the joint's speeds (an explicitly time-"
+                "dependent joint): formulation='recursive' does not take it")
+        if any(e.has(*udots) for e in S):
+            raise ModelError(f"joint {_name(j)!r}: the joint's motion holds speed derivatives")
+        qs = sorted((S.atoms(sm.Function) & qset), key=sm.default_sort_key)
+        if qs:
+            dq = sm.Matrix([tree.qdot[x.diff(_T)] for x in qs])
+            # (dS/dt) u_j: the part of d/dt [w_rel; v_rel] (child's axes) without u'
+            n.rel_bias = (S * _col(j.speeds)).jacobian(qs) * dq
+        else:
+            n.rel_bias = None
+        n.S = S
+
+    # ---- external loads, per body, in its axes at its mass centre
+    known_points, known_frames = {}, {}
+    for n in tree.order:
+        known_points[n.body.masscenter] = n.body
+        known_frames[n.body.frame] = n.body
+    ground_frames = {N} | {g.frame for g in tree.ground}
+    ground_points = {g.masscenter for g in tree.ground} | {system.fixed_point}
+    for j in system.joints:
+        for pt, fr, b in ((j.child_point, j.child_interframe, j.child),
+                          (j.parent_point, j.parent_interframe, j.parent)):
+            if b in tree.ground:
+                ground_points.add(pt)
+                ground_frames.add(fr)
+            else:
+                known_points.setdefault(pt, b)
+                known_frames.setdefault(fr, b)
+
+    def body_of_point(pt, what):
+        if pt in known_points:
+            return known_points[pt]
+        if pt in ground_points:
+            return None
+        for n in tree.order:
+            try:
+                rb = pt.pos_from(n.body.masscenter).to_matrix(n.body.frame)
+            except ValueError:
+                continue
+            if not any(e.has(_T) for e in rb):
+                known_points[pt] = n.body
+                return n.body
+        raise ModelError(
+            f"{what} acts on point {_name(pt)!r}, which the joint tree does not know: "
+            "not a body's mass centre, a joint's point, or a point fixed in a body")
+
+    def body_of_frame(fr, what):
+        if fr in known_frames:
+            return known_frames[fr]
+        if fr in ground_frames:
+            return None
+        for n in tree.order:
+            try:
+                d = fr.dcm(n.body.frame)
+            except ValueError:
+                continue
+            if not any(e.has(_T) for e in d):
+                known_frames[fr] = n.body
+                return n.body
+        raise ModelError(
+            f"{what} acts on frame {_name(fr)!r}, which the joint tree does not know: "
+            "not a body's frame, a joint's frame, or a frame fixed in a body")
+
+    # ---- each body's axes in the inertial frame's: R = A Rot(k, theta) B, the
+    # angles of consecutive joints about one axis summed (a chain of parallel
+    # pins keeps cos(q1 + ... + qn), not a product of n rotations)
+    for n in tree.order:
+        _orientation(n, tree)
+
+    def in_world(vec):
+        out = sm.zeros(3, 1)
+        for comp, frame in vec.args:
+            comp = sm.Matrix(comp)
+            if frame == N:
+                out += comp
+            elif frame in known_frames and frame not in ground_frames:
+                b = tree.nodes[known_frames[frame]]
+                if frame != b.body.frame:
+                    comp = me.Vector([(comp, frame)]).to_matrix(b.body.frame)
+                out += b.R * comp
+            else:
+                out += me.Vector([(comp, frame)]).to_matrix(N)
+        return out
+
+    for n in tree.order:
+        n.F, n.N = sm.zeros(3, 1), sm.zeros(3, 1)
+    loads = list(system.loads)
+    for act in system.actuators:
+        loads.extend(act.to_loads())
+    for ld in loads:
+        if isinstance(ld, me.Force):
+            b = body_of_point(ld.point, f"force {ld}")
+            if b is None:
+                continue
+            n = tree.nodes[b]
+            Fw = in_world(ld.vector)
+            n.F += Fw
+            if ld.point != b.masscenter:
+                rb = ld.point.pos_from(b.masscenter).to_matrix(b.frame)
+                n.N += _cross(n.R * rb, Fw)
+        elif isinstance(ld, me.Torque):
+            b = body_of_frame(ld.frame, f"torque {ld}")
+            if b is None:
+                continue
+            n = tree.nodes[b]
+            n.N += in_world(ld.vector)
+        else:      # pragma: no cover - sympy's loads are Force or Torque
+            raise ModelError(f"load {ld!r} is neither a Force nor a Torque")
+
+    # ---- RNEA with u' = 0, in the inertial frame's axes, at the mass centres:
+    # velocities and velocity-product accelerations out
+    zero = sm.zeros(3, 1)
+    for n in tree.order:
+        R = n.R
+        n.Sw = _kept(sm.Matrix.vstack(R * n.S[:3, :], R * n.S[3:, :])) if n.S.shape[1] \
+            else sm.zeros(6, 0)
+        rel = n.Sw * _col(n.joint.speeds)
+        w_rel, v_rel = rel[:3, :], rel[3:, :]
+        if n.parent is None:
+            w_p, Rp = zero, sm.eye(3)
+        else:
+            w_p, Rp = n.parent.w, n.parent.R
+        r = _kept(Rp * n.r_pp + R * n.r_cc)
+        n.rw = r
+        n.w = _kept(w_p + w_rel)
+        # the joint's share of the velocity-product accelerations: the
+        # body's (al, a) = the parent's carried to it + (cw, cv) at u' = 0
+        cw = _cross(w_p, w_rel)
+        cv = _cross(w_p, _cross(w_p, r)) + _cross(2 * w_p, v_rel) + _cross(w_rel, v_rel)
+        if n.rel_bias is not None:
+            cw += R * n.rel_bias[:3, :]
+            cv += R * n.rel_bias[3:, :]
+        n.cw, n.cv = cw, cv
+        b = n.body
+        n.Iw = _kept(R * _inertia_matrix(b) * R.T)
+    return tree
+
+
+def _inertia_matrix(body):
+    """The body's central inertia in its own axes: read off the dyadic's
+    terms when they are all in those axes (sympy's to_matrix expresses
+    each of the nine components through dot products, the slowest step of
+    the build); to_matrix otherwise."""
+    frame, out = body.frame, sm.zeros(3, 3)
+    for coef, v1, v2 in body.central_inertia.args:
+        idx = []
+        for v in (v1, v2):
+            if len(v.args) != 1 or v.args[0][1] != frame:
+                return body.central_inertia.to_matrix(frame)
+            comps = list(v.args[0][0])
+            nz = [i for i, c in enumerate(comps) if c != 0]
+            if len(nz) != 1 or comps[nz[0]] != 1:
+                return body.central_inertia.to_matrix(frame)
+            idx.append(nz[0])
+        out[idx[0], idx[1]] += coef
+    return out
+
+
+def constraints_of_tree(system):
+    """The System's loop closures and other constraints, for the runtime's
+    constraint machinery (dependent coordinates and speeds, the constrained
+    solve, projection), as a Kane model carries them.
+
+    Returns
+    -------
+    None, or (fc, A, b, nq_dep, nu_dep)
+        ``fc(q) = 0`` (the holonomic constraints), ``A u + b = 0`` (the
+        velocity constraints: the holonomic ones differentiated and the
+        nonholonomic ones, q' replaced by the kinematic equations' solution),
+        and the numbers of dependent coordinates and speeds (last in the
+        System's q and u).
+    """
+    if not isinstance(system, me.System):
+        _Tree(system)           # the error naming what it got
+    nh, nn = len(system.holonomic_constraints), len(system.nonholonomic_constraints)
+    if not nh and not nn:
+        return None
+    tree = _Tree(system)        # the same checks and q' map as equations_of_tree
+    vc = sm.Matrix(system.velocity_constraints).xreplace(tree.qdot)
+    A = vc.jacobian(tree.u)
+    b = vc.xreplace({s: 0 for s in tree.u})
+    fc = sm.Matrix(system.holonomic_constraints) if nh else sm.zeros(0, 1)
+    if any(e.has(*[s.diff(_T) for s in tree.u]) for e in list(A) + list(b)):
+        raise ModelError("the System's velocity constraints hold speed derivatives")
+    return fc, A, b, len(system.q_dep), len(system.u_dep)
+
+
+def _rot(k, th):
+    """Rotation by th about the unit axis k (components in the frame's axes)."""
+    K = _skew(k)
+    return sm.eye(3) + sm.sin(th) * K + (1 - sm.cos(th)) * (K * K)
+
+
+def _orientation(n, tree):
+    """n.R (body axes -> inertial axes) as A Rot(k, theta) B, sharing the
+    angle with the parent when the joint turns about the parent's axis."""
+    if n.parent is None:
+        A, k, th, B = sm.eye(3), None, sm.S.Zero, sm.eye(3)
+        if n.joint.parent.frame != tree.N:     # pragma: no cover - refused in _Tree
+            A = sm.Matrix(tree.N.dcm(n.joint.parent.frame))
+    else:
+        A, k, th, B = n.parent.rep
+    ET = n.E.T                                  # parent axes <- child axes
+    wq = n.S[:3, :]                             # w_rel (child axes) = wq u_j
+    qj = [x for x in n.joint.coordinates]
+    rep = None
+    if not any(e.has(*qj) for e in ET) if qj else True:
+        # no rotation in this joint: a constant ET
+        if all(e == 0 for e in wq):
+            rep = (A, k, th, B * ET)
+    elif len(qj) >= 1 and wq.shape[1] >= 1:
+        # one rotating coordinate about a constant axis?
+        rot = [x for x in qj if any(e.has(x) for e in ET)]
+        cols = [c for c in range(wq.shape[1]) if any(e != 0 for e in wq[:, c])]
+        if len(rot) == 1 and len(cols) == 1 and not any(e.has(_T) for e in wq[:, cols[0]]):
+            q = rot[0]
+            E0T = ET.xreplace({q: 0})
+            kp = E0T * wq[:, cols[0]]           # the axis in the parent's axes
+            if _same(ET, _rot(kp, q) * E0T, q):
+                if k is not None and _same_vec(B * kp, k):
+                    rep = (A, k, th + q, B * E0T)
+                else:
+                    Rp = A * (_rot(k, th) if k is not None else sm.eye(3)) * B
+                    rep = (Rp, kp, q, E0T)
+    if rep is None:
+        Rp = A * (_rot(k, th) if k is not None else sm.eye(3)) * B
+        rep = (Rp * ET, None, sm.S.Zero, sm.eye(3))
+    A, k, th, B = rep
+    n.rep = rep = (_kept(A), k, _keep(th), B)
+    A, k, th, B = rep
+    n.R = _kept(A * (_rot(k, th) if k is not None else sm.eye(3)) * B)
+
+
+def _same(X, Y, q):
+    """X == Y as functions of q (numerically at a few values; both are small
+    rotation matrices in q and constants)."""
+    import random
+    rnd = random.Random(7)
+    free = sorted((X.free_symbols | Y.free_symbols) - {_T}, key=str)
+    for _ in range(3):
+        vals = {s: rnd.uniform(0.2, 1.3) for s in free}
+        vals[q] = rnd.uniform(-2, 2)
+        d = (X - Y).xreplace({q: vals[q]}).xreplace(vals)
+        try:
+            if max(abs(complex(sm.N(e))) for e in d) > 1e-12:
+                return False
+        except TypeError:
+            return False
+    return True
+
+
+def _same_vec(a, b):
+    return all(sm.simplify(x - y) == 0 for x, y in zip(a, b))
