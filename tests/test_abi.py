@@ -22,7 +22,7 @@ from gen.toolchain import host
 from gen.sim import simulator as bindings
 from gen.codegen import render
 from gen.plan.ir import plan
-from gen.core.resources import csrc_dir
+from gen.core.resources import csrc_dir, csrc_file
 
 from conftest import require_eigen
 
@@ -30,12 +30,12 @@ CODES = [s.value for s in abi.STATUSES] + [1, -10, -1000]
 
 
 def test_table_is_the_runtimes():
-    text = (csrc_dir() / "gen_rt_status.h").read_text()
+    text = csrc_file("gen_rt_status.h").read_text()
     assert len(abi.STATUSES) == text.count("    X(")
     values = [s.value for s in abi.STATUSES]
     assert values == list(range(0, -len(values), -1))       # 0, -1, -2, ... no gaps
     assert abi.STATUSES[0].name == "OK"
-    header = (csrc_dir() / "gen_rt.h").read_text()
+    header = csrc_file("gen_rt.h").read_text()
     assert f"#define GEN_RT_STATUS_MIN ({min(values)})" in header
 
 
@@ -231,7 +231,7 @@ def struct_body(text, name):
 def test_runtime_abi_header_is_current():
     """csrc/gen_rt_abi.h (the runtime built alone: ctest, firmware) is what
     gen/codegen/abi.py renders; EOMGEN_UPDATE_GOLDEN=1 rewrites it."""
-    path = csrc_dir() / "gen_rt_abi.h"
+    path = csrc_file("gen_rt_abi.h")
     want = render.runtime_abi_header()
     if os.environ.get("EOMGEN_UPDATE_GOLDEN", "") not in ("", "0"):
         path.write_text(want)

@@ -319,12 +319,12 @@ def test_runtime_object_cache_key_covers_every_runtime_file(tmp_path, monkeypatc
     import shutil
     from gen.toolchain import build as b
     from gen.codegen.backends import RUNTIME_HEADERS, RUNTIME_SOURCES, c_compiler
-    from gen.core.resources import csrc_dir
+    from gen.core.resources import csrc_file
     monkeypatch.setenv("EOMGEN_CACHE", str(tmp_path / "cache"))
     src = tmp_path / "src"
     src.mkdir()
     for f in RUNTIME_SOURCES + RUNTIME_HEADERS + ["gen_rt_config.h", "gen_rt_abi.h"]:
-        shutil.copy(csrc_dir() / f, src / f)
+        shutil.copy(csrc_file(f), src / f)
     cc = c_compiler()
     _, base = b._runtime_objects(src, cc)
     for f in RUNTIME_SOURCES + RUNTIME_HEADERS:

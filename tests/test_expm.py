@@ -23,7 +23,7 @@ import scipy.linalg as sla
 from conftest import require_tool
 
 ROOT = Path(__file__).resolve().parent.parent
-CSRC = ROOT / "csrc"
+CSRC = ROOT / "csrc" / "runtime"
 C_TEST = ROOT / "tests" / "c" / "test_expm.c"
 RT_SOURCES = [CSRC / "gen_rt_expm.c", CSRC / "gen_rt_linalg.c", CSRC / "gen_rt_status.c"]
 C_FLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"]

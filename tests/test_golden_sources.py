@@ -50,8 +50,8 @@ def render(model, backend, real="double"):
     files = {k: v for k, v in out.files.items() if k not in RUNTIME_COPIES}
     # the runtime's structs and codes: the csrc/ copy (tests/test_abi.py keeps
     # that copy current), not a golden file of its own
-    from gen.core.resources import csrc_dir
-    assert files.pop("gen_rt_abi.h") == (csrc_dir() / "gen_rt_abi.h").read_text(), \
+    from gen.core.resources import csrc_file
+    assert files.pop("gen_rt_abi.h") == csrc_file("gen_rt_abi.h").read_text(), \
         "the model's gen_rt_abi.h is not the runtime's csrc/gen_rt_abi.h"
     if backend == "c":
         core = gen.plan.ir.plan(model, derivatives=False)

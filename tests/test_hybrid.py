@@ -404,7 +404,7 @@ def test_hybrid_work_sizes_match_runtime(tmp_path):
     from pathlib import Path
     from gen.codegen.backends import c_compiler
     from gen.intake.hybrid import hybrid_iwork_len, hybrid_work_len
-    csrc = Path(gen.__file__).resolve().parent.parent / "csrc"
+    csrc = Path(gen.__file__).resolve().parent.parent / "csrc" / "runtime"
     sizes = [(1, 1, 0, 1), (3, 3, 0, 2), (2, 2, 1, 1), (2, 2, 1, 3), (7, 6, 2, 4)]
     body = "".join(f'    printf("%d %d\\n", (int)GEN_RT_HYBRID_WORK({a}, {b}, {c}, {d}), '
                    f'(int)GEN_RT_HYBRID_IWORK({a}, {b}, {c}, {d}));\n' for a, b, c, d in sizes)

@@ -16,7 +16,7 @@ from gen.codegen.backends import C_FLAGS, STRICT_FLAGS, c_compiler
 from gen.plan.ldlt import ldlt_program
 from helpers import ldlt_solve_c
 
-CSRC = Path(__file__).resolve().parents[1] / "csrc"
+CSRC = Path(__file__).resolve().parents[1] / "csrc" / "runtime"
 
 
 def _solve_both(tmp_path, monkeypatch, Ms, fs, real="double", flags=()):

@@ -32,9 +32,10 @@ def test_wheel_contents_and_install(tmp_path):
     (whl,) = list(wheels.glob("eomgen-*.whl"))
     names = zipfile.ZipFile(whl).namelist()
     for need in ("gen/templates/c/model.c.j2", "gen/templates/c/model.h.j2",
-                 "gen/templates/common/macros.j2", "gen/csrc/gen_rt.h",
-                 "gen/csrc/gen_rt_linearize.c", "gen/csrc/gen_rt_model.c",
-                 "gen/csrc/gen_rt_status.h", "gen/csrc/eigen/gen_rt_names.h",
+                 "gen/templates/common/macros.j2", "gen/csrc/runtime/gen_rt.h",
+                 "gen/csrc/runtime/gen_rt_linearize.c", "gen/csrc/runtime/gen_rt_model.c",
+                 "gen/csrc/runtime/gen_rt_status.h", "gen/csrc/products/ocp/gen_rt_ocp.c",
+                 "gen/templates/ocp/ocp.c.j2", "gen/csrc/eigen/gen_rt_names.h",
                  "gen/templates/cffi/host.h.j2", "gen/intake/model.py"):
         assert need in names, need
     assert any(n.endswith("entry_points.txt") for n in names)

@@ -125,7 +125,7 @@ def render(plan, real, timings, project, only, *, render_c, env, c_templates,
     template list and runtime sources): the C backend's files for `real`,
     the C model again for the other scalar type under alt_name's prefix,
     the face and the CMake project."""
-    from ..core.resources import csrc_dir
+    from ..core.resources import csrc_file
     name = plan.model.name
     if name in CXX_RESERVED:
         from ..core.errors import ModelError
@@ -149,7 +149,7 @@ def render(plan, real, timings, project, only, *, render_c, env, c_templates,
         if role in roles:
             files[fname.format(name=name)] = env.get_template(tname).render(**ctx)
     for src in RUNTIME_HEADERS if only is None else ():
-        files[Path(src).name] = (csrc_dir() / src).read_text()
+        files[Path(src).name] = csrc_file(src).read_text()
     return dataclasses.replace(main, files=files, backend="eigen")
 
 

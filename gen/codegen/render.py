@@ -29,7 +29,7 @@ from ..core.errors import ModelError
 from ..plan.ir import DERIVATIVE_KERNELS, plan as make_plan
 from ..intake.model import require_model
 from ..sym.printers import kernel_statements, print_kernel_body
-from ..core.resources import csrc_dir, templates_dir
+from ..core.resources import csrc_file, templates_dir
 from ..plan.ldlt import demand_order, ldlt_statements, ldlt_work_index, ldlt_program
 
 __all__ = ["Rendered", "render", "render_files", "generate", "write_atomic", "template_env",
@@ -410,7 +410,7 @@ def render(plan, real="double", backend="c", timings=None, project=True, only=No
              for fname, tname, role in b.templates if role in (only or roles)}
     for src in (b.runtime_files + (b.project_runtime_files if project else ())
                 if only is None else ()):
-        files[Path(src).name] = (csrc_dir() / src).read_text()
+        files[Path(src).name] = csrc_file(src).read_text()
     timings["templates"] = time.perf_counter() - t0
     return Rendered(files, iface, b.name, real, plan.derivatives, timings)
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 from .errors import (ConvergenceError, DivergenceError, InputError, SingularError,
                      SolverError)
-from .resources import csrc_dir
+from .resources import csrc_file
 
 __all__ = ["Status", "STATUSES", "STATUS_UNKNOWN", "EXCEPTIONS", "status_name", "status_value",
            "status_message", "exception_for"]
@@ -29,7 +29,7 @@ class Status:
 
 def _read_statuses():
     """The table of csrc/gen_rt_status.h: X(NAME, value, "message" "...")."""
-    text = (csrc_dir() / "gen_rt_status.h").read_text()
+    text = csrc_file("gen_rt_status.h").read_text()
     body = text[text.index("#define GEN_RT_STATUS_TABLE(X)"):].split("\n\n")[0]
     body = body.replace("\\\n", " ")
     out = []

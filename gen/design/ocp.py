@@ -623,12 +623,12 @@ class OptimalControl:
         return fams
 
     def _key(self):
-        from ..core.resources import csrc_dir, templates_dir
+        from ..core.resources import csrc_file, templates_dir
         m = self.model
         h = hashlib.sha256()
         parts = [__version__, m.fingerprint(), self.method, str(self.nodes), repr(self._pf),
-                 repr(self._fit_keys), (csrc_dir() / "gen_rt_ocp.c").read_text(),
-                 (csrc_dir() / "gen_rt_ocp.h").read_text(),
+                 repr(self._fit_keys), csrc_file("gen_rt_ocp.c").read_text(),
+                 csrc_file("gen_rt_ocp.h").read_text(),
                  (templates_dir() / "ocp" / "ocp.c.j2").read_text(),
                  # the transcription itself (the families are defined here)
                  open(__file__, encoding="utf-8").read()]
@@ -653,7 +653,7 @@ class OptimalControl:
 
         def render():
             from ..codegen.render import template_env
-            from ..core.resources import csrc_dir
+            from ..core.resources import csrc_file
             fams = self._families()
             funcs = []
             meta = []
@@ -671,9 +671,9 @@ class OptimalControl:
                 prefix=prefix, funcs=funcs, families=fam_rows, version=__version__,
                 model=m.name)
             files = {f"{prefix}.c": src,
-                     "gen_rt_ocp.c": (csrc_dir() / "gen_rt_ocp.c").read_text(),
-                     "gen_rt_ocp.h": (csrc_dir() / "gen_rt_ocp.h").read_text(),
-                     "gen_rt_status.h": (csrc_dir() / "gen_rt_status.h").read_text(),
+                     "gen_rt_ocp.c": csrc_file("gen_rt_ocp.c").read_text(),
+                     "gen_rt_ocp.h": csrc_file("gen_rt_ocp.h").read_text(),
+                     "gen_rt_status.h": csrc_file("gen_rt_status.h").read_text(),
                      "meta.json": json.dumps(meta)}
             return files, [f"{prefix}.c", "gen_rt_ocp.c"]
 

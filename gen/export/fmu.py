@@ -456,7 +456,7 @@ def render_fmu(model, description, real="double", headers=()):
     d = description
     rendered = render(make_plan(model, lin=FMU.lin), real=real, backend=FMU, project=False)
     files = {f"sources/{name}": text for name, text in sorted(rendered.files.items())}
-    glue = csrc_dir() / "fmu"
+    glue = csrc_dir() / "products" / "fmu"
     for name in FMU.glue[d.fmi_version]:
         files[f"sources/{name}"] = (glue / name).read_text()
     names = sorted(Path(p).name for p in files) + ["gen_fmu_model.h"]
