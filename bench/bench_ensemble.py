@@ -17,7 +17,7 @@ Printed, all measured in this run (the peers on subsamples, scaled to runs/s):
 
 The initial angles are uniform in [-1, 1] rad, the string lengths uniform in
 [0.8, 1.2] m (per-run constants), from gen.Sampler(seed=0). Nothing is
-asserted (tests/test_ensemble.py checks the numbers).
+asserted (tests/features/test_ensemble.py checks the numbers).
 """
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """Reactions inside the motion: the symbolic elimination against the
 coupled solve, on a model where both apply (issue 33).
 
-The bead on a circular track of tests/test_reactions_coupled.py with its
+The bead on a circular track of tests/physics/test_reactions_coupled.py with its
 auxiliary speed along the track's normal: the normal force's coefficient is
 1, so Model.from_kanes eliminates it exactly (N = m (g cos + R omega^2) put
 into f, today's path); with gen.intake.model._ELIMINATE_CONSTANT = False the same

@@ -20,7 +20,7 @@ no model:
   random consistent states; and for the bicycle the weave and capsize speeds
   against Meijaard et al. 2007.
 
-Nothing is asserted (tests/test_bicycle.py and tests/test_chain3d.py do
+Nothing is asserted (tests/physics/test_bicycle.py and tests/physics/test_chain3d.py do
 that); the numbers are printed and written to --json.
 """
 from __future__ import annotations

@@ -59,7 +59,7 @@ with the load):
   elsewhere (accelerations 40 % off, energy not conserved). In the order
   used here, (rear x, rear y, front z, front y, front x) against (u1, u2, u5,
   u3, u8), the pivots are about (1, 1, -w, w, rf) and sympy's equations agree
-  with eomgen's to 1e-14 (tests/test_bicycle.py). eomgen's numbers do not
+  with eomgen's to 1e-14 (tests/physics/test_bicycle.py). eomgen's numbers do not
   depend on that order: it eliminates with a pivoted LU at run time.
 """
 import math
@@ -333,7 +333,7 @@ def critical_speeds(sim, vals=None, p=None, weave_bracket=(3.0, 5.0),
 
 # Meijaard et al. 2007, Table 2 (p. 1971): the weave and capsize speeds of the
 # benchmark (printed with 14 decimals), for the printout below. The tests keep
-# their own copy of every published number (tests/test_bicycle.py).
+# their own copy of every published number (tests/physics/test_bicycle.py).
 MEIJAARD_WEAVE_SPEED = 4.29238253634111
 MEIJAARD_CAPSIZE_SPEED = 6.02426201538837
 

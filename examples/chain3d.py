@@ -16,7 +16,7 @@ centre in its own frame (z along the rod); its upper end is the lower end of
 rod i - 1 (rod 0 hangs from O). Gravity -g N.z. Hanging at rest (q = 0) is a
 stable equilibrium; the twist about each rod's own axis has no restoring
 torque (zero eigenvalues), and the swings in the x and y planes are those of
-the planar chain of compound pendulums (tests/test_chain3d.py).
+the planar chain of compound pendulums (tests/physics/test_chain3d.py).
 
 Model file: ``model()`` gives n = 12; ``model(n=4)`` any n.
 """

@@ -6,7 +6,7 @@ theta) with an impact on its lower end.
 The gap is the height of the end, y - (L/2) sin(theta). At the impact the C
 runtime solves the impulse with the mass matrix and the gap's gradient: the
 end's normal speed becomes -e times its value, and the centre of mass and the
-rotation change together (tests/test_hybrid.py checks them against the
+rotation change together (tests/features/test_hybrid.py checks them against the
 impulse equations solved by hand). With e = 1 the kinetic energy is kept.
 """
 import numpy as np

@@ -1,4 +1,4 @@
-# EOMGEN_UPDATE_GOLDEN=1 python -m pytest tests/test_golden_sources.py rewrites the golden
+# EOMGEN_UPDATE_GOLDEN=1 python -m pytest tests/golden/test_golden_sources.py rewrites the golden
 # generated sources in tests/golden/sources/ instead of comparing (see that test's docstring).
 # Markers (pyproject.toml): slow, eigen, embedded, fuzz; the fast tier is -m "not slow".
 import os

@@ -11,7 +11,7 @@
  *
  * A runtime function missing here is defined twice in an Eigen build's
  * library, which fails its link (gen.compile links every object into one
- * shared library; tests/test_eigen.py also checks the objects' names).
+ * shared library; tests/features/test_eigen.py also checks the objects' names).
  * Types and static functions need nothing.
  */
 #ifndef GEN_RT_NAMES_H

@@ -7,7 +7,7 @@
  *
  * Rendered from gen/codegen/abi.py (templates/c/gen_rt_abi.h.j2); every generated
  * model carries its own copy. Do not edit: change gen/codegen/abi.py, then
- * EOMGEN_UPDATE_GOLDEN=1 python -m pytest tests/test_abi.py rewrites this
+ * EOMGEN_UPDATE_GOLDEN=1 python -m pytest tests/unit/codegen/test_abi.py rewrites this
  * file (the test fails while it differs from gen/codegen/abi.py).
  * Included by gen_rt.h once gen_rt_real is defined.
  */

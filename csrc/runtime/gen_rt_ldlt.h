@@ -8,7 +8,7 @@
  * vectorizes, and slower to compile (gen.plan.ldlt.LDLT_LOOP_MIN). This is
  * the same factorization in loops: the same IEEE operations in the same
  * order on every entry, so the solution is the unrolled solve's bit for bit
- * (tests/test_ldlt_loop.py):
+ * (tests/unit/plan/test_ldlt_loop.py):
  *
  *   c_ij = M_ij - sum_{k<j} c_ik l_jk      (k ascending; c_ij = l_ij d_j)
  *   d_j  = M_jj - sum_{k<j} c_jk c_jk id_k,   id_j = 1 / d_j,  l_ij = c_ij id_j

@@ -12,7 +12,7 @@
  *   G K_i = f(t0 + ALPHA_i h, Y_i) + sum_{j<i} (C_ij / h) K_j + h GAMMA_i df/dt,
  *   y1 = y0 + sum_j M_j K_j  (= Y_6 + K_6: stiffly accurate),
  *   error estimate = K_6 (the difference to the embedded solution).
- * The tests check orders 4 and 3 numerically (tests/test_engine.py).
+ * The tests check orders 4 and 3 numerically (tests/unit/runtime/test_engine.py).
  */
 #ifndef GEN_RT_RODAS4_H
 #define GEN_RT_RODAS4_H

@@ -96,7 +96,7 @@ for d in (0.05, -0.05):
 
 # %%
 # The gains are the recursion's, written out in numpy over the tracker's own
-# discretizations (``tracker.Ad``, ``tracker.Bd``; ``tests/test_ocp_tracking.py``
+# discretizations (``tracker.Ad``, ``tracker.Bd``; ``tests/features/test_ocp_tracking.py``
 # checks them against an independent reference too):
 P = tracker.P[-1]
 for k in range(len(tracker.t_samples) - 1, -1, -1):
@@ -116,7 +116,7 @@ print("K at t = 0:", tracker.K[0].round(2), " at the end:", tracker.K[-1].round(
 # of ``K`` (4 values), ``x_ref`` (4) and ``r_ref`` (1), 4 bytes each. With
 # ``arm-none-eabi-gcc`` installed, the tracker's object is compiled for the
 # Cortex-M4F (``-mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard
-# -Os``) and its sections measured, as ``tests/test_tracking.py`` does; the
+# -Os``) and its sections measured, as ``tests/features/test_tracking.py`` does; the
 # model's own library is sized in the LQR tutorial. Without it, the sizes
 # are computed from the tables ``to_c`` wrote.
 import shutil

@@ -36,7 +36,7 @@ __all__ = ["Status", "Field", "Struct", "Param", "Function", "Interface", "STATU
 # These facts are written here once. The runtime's own copy (csrc/gen_rt_abi.h:
 # GEN_RT_METHOD_*, GEN_RT_HOLD_*, the structs) and every model's header
 # (<P>_METHOD_*, <P>_HOLD_*) are rendered from them (templates/c/
-# gen_rt_abi.h.j2, model.h.j2); tests/test_abi.py pins the committed
+# gen_rt_abi.h.j2, model.h.j2); tests/unit/codegen/test_abi.py pins the committed
 # csrc/gen_rt_abi.h to this file.
 
 # integration methods: name -> value of <P>_METHOD_<NAME> / sim_options.method

@@ -307,7 +307,7 @@ def _accel_work(n, m):
 
 def hybrid_work_len(nq, nu, mv, nh):
     """Reals of the engine's hybrid scratch: GEN_RT_HYBRID_WORK of
-    csrc/gen_rt.h (tests/test_hybrid.py checks the two agree)."""
+    csrc/gen_rt.h (tests/features/test_hybrid.py checks the two agree)."""
     core = (nu * nu + 2 * nu + 3 * (mv + nh) + (mv + nh) * nu + nq * nq + nq + nh * nu + 2 * nh
             + _accel_work(nu, mv + nh))
     fn = max(core + 2 * nh + nq + nu + 1, nh * (nq + nu) + nq + nu + 1)

@@ -1440,7 +1440,7 @@ def _xreplace_shared(mat, rule, memo):
     terms stay distinct), so it is rebuilt from its new arguments in sympy's
     canonical order (numbers first, then sorted as Add and Mul sort them)
     without re-running their flatten: the same objects, most of the cost
-    gone (tests/test_model_conversion.py)."""
+    gone (tests/unit/intake/test_model.py)."""
     if not rule or not mat.shape[0] * mat.shape[1]:
         return mat
     atomic = (len(set(rule.values())) == len(rule)

@@ -1,5 +1,5 @@
 // The typed C++ face of a model whose reaction enters its motion
-// (namespace bead_e: tests/test_reactions_coupled.py's bead on a curved
+// (namespace bead_e: tests/physics/test_reactions_coupled.py's bead on a curved
 // track, the normal force N solved with omega'), double and float in one
 // program, heap allocation forbidden around every typed call:
 // - for each state on stdin ("theta omega F" per line) prints, for both

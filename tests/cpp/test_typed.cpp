@@ -8,7 +8,7 @@
 // - statuses: NaN input, the singular partition, x unchanged on failure;
 // - then prints, for both types, the rhs, multipliers, linearization and
 //   DOPRI5/RODAS4 runs from one state as hex floats ("<type> <what> v ..."),
-//   which tests/test_eigen.py compares bit for bit with the C backend built
+//   which tests/features/test_eigen.py compares bit for bit with the C backend built
 //   for that type (float: the second copy in this library, pend_e_s_*).
 // Exits 0 after printing "ok", or names each mismatch and exits 1.
 #define EIGEN_RUNTIME_NO_MALLOC
@@ -52,7 +52,7 @@ static void print(const char *type, const char *what, const Eigen::MatrixBase<D>
     std::printf("\n");
 }
 
-// The numbers tests/test_eigen.py checks against the C backend of type S.
+// The numbers tests/features/test_eigen.py checks against the C backend of type S.
 template <typename S>
 static void report(const char *type)
 {

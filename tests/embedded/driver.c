@@ -1,6 +1,6 @@
 /* driver.c - test driver for a generated model, built with a cross compiler
  * (arm-linux-gnueabihf-gcc -static) and run under qemu-arm by
- * tests/test_embedded.py, or natively. Only the model library and stdio.
+ * tests/features/test_embedded.py, or natively. Only the model library and stdio.
  *
  *   driver X0 X1 ... X(NX-1)
  *

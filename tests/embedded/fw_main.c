@@ -3,7 +3,7 @@
  * reference is resolved by a real link. main() evaluates the right-hand side,
  * takes RK4 steps and linearizes on a static state.
  *
- * Build (tests/test_embedded.py):
+ * Build (tests/features/test_embedded.py):
  *   arm-none-eabi-gcc <cpu flags> -Os -DFW_MODEL=<name> -DFW_MODEL_UPPER=<NAME>
  *     -DFW_HEADER='"<name>.h"' -I<generated dir> fw_main.c startup.c
  *     -T cortex_m4.ld -nostartfiles --specs=nano.specs --specs=nosys.specs

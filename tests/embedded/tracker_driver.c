@@ -1,7 +1,7 @@
 /* tracker_driver.c - a trajectory tracker (gen.TrajectoryTracker.to_c) run as
  * a digital controller on a generated model, built with a cross compiler
  * (arm-linux-gnueabihf-gcc -static) and run under qemu-arm by
- * tests/test_tracking.py, or natively. Only the model library, the
+ * tests/features/test_tracking.py, or natively. Only the model library, the
  * tracker's const tables and stdio.
  *
  *   tracker_driver T_END DT X0 X1 ... X(NX-1)

@@ -6,7 +6,7 @@
  * calls in the wrong mode, a singular state) gives fmi2Error and a message
  * through the logger, never a crash; the numbers of the normal paths
  * against closed forms. Built with the FMU's own sources, the strict flags
- * and ASan/UBSan by tests/test_fmu.py.
+ * and ASan/UBSan by tests/features/test_fmu.py.
  */
 #include <math.h>
 #include <stdarg.h>

@@ -4,7 +4,7 @@
  * +x) exported with the start state q2 = 0.6, q1 = 0.8: error paths give
  * fmi3Error and a message, never a crash; the normal paths against closed
  * forms. Built with the FMU's own sources, the strict flags and ASan/UBSan
- * by tests/test_fmu.py.
+ * by tests/features/test_fmu.py.
  */
 #include <math.h>
 #include <stdio.h>

@@ -1,5 +1,5 @@
 """Record the golden numbers of the seed pendulum (C backend, double) in
-tests/golden/seed_numbers.json, checked bit for bit by tests/test_golden_numbers.py.
+tests/golden/seed_numbers.json, checked bit for bit by tests/golden/test_golden_numbers.py.
 
 Run it only when a change of the numbers is intended and explained (say why in the
 commit that updates the JSON):
@@ -45,7 +45,7 @@ RK4_STRIDE = 100
 # --------------------------------------------------------------- fingerprint
 # What decides the bits of the golden numbers: the machine's arithmetic, the
 # C library (its libm: sin, cos, sqrt, atan2), the compiler, its version and
-# the flags gen.compile passes. tests/test_golden_numbers.py compares bit for
+# the flags gen.compile passes. tests/golden/test_golden_numbers.py compares bit for
 # bit only where these match the recorded ones, and to a stated tolerance
 # elsewhere. Python's and numpy's versions are recorded for information only:
 # every number is computed by the compiled C (numpy only carries the float64
@@ -322,11 +322,11 @@ def main(argv=None):
     doc = {
         "format": FORMAT,
         "about": "golden numbers of the seed pendulum, C backend, double; "
-                 "floats are float.hex(); checked bit for bit by tests/test_golden_numbers.py; "
+                 "floats are float.hex(); checked bit for bit by tests/golden/test_golden_numbers.py; "
                  "regenerate with tests/golden/make_golden.py only for an intended change",
         "recorded_with": {"commit": _git_head(pkg.parent), "python": platform.python_version(),
                           "numpy": np.__version__, "machine": platform.machine()},
-        # bit for bit where this matches (tests/test_golden_numbers.py)
+        # bit for bit where this matches (tests/golden/test_golden_numbers.py)
         "fingerprint": fingerprint(),
         "rk4_stride": RK4_STRIDE,
         "models": {},
