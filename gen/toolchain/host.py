@@ -33,13 +33,14 @@ from ..codegen.abi import ABI_TAG, host_interface
 from ..core.cache import cache_dir, cache_error, find_entry_file, new_build_dir, publish
 from ..core.errors import BuildError
 
-__all__ = ["host_module", "host_sources", "open_model", "load", "HOST_FLAGS"]
+__all__ = ["host_module", "host_sources", "open_model", "open_library", "load", "HOST_FLAGS"]
 
 # the host is glue: every call forwards to the model's table
 HOST_FLAGS = ["-O2"]
 _lock = threading.Lock()
 _modules = {}          # real -> loaded module
 _libraries = {}        # path -> ctypes handle (kept open for the process)
+_products = {}         # (path, cdef) -> (ffi, lib) of open_library
 
 
 # hand-written parts of the host (csrc/host): declarations, definitions, and
@@ -189,3 +190,25 @@ def load(built):
     (gen.toolchain.build.Built) as a pointer of the host module for its scalar type."""
     host = host_module(built.interface.real)
     return host, open_model(built.path, built.interface.name, host)
+
+
+def open_library(path, cdef):
+    """(ffi, lib): a product's shared library (an OCP's, a CasADi
+    function's) opened through cffi's ABI mode with the cdef rendered from
+    its interface description. One pair per (path, cdef), kept open for the
+    life of the process; a library that cannot be loaded is a BuildError
+    naming it."""
+    key = (str(path), cdef)
+    with _lock:
+        hit = _products.get(key)
+        if hit is not None:
+            return hit
+        import cffi
+        ffi = cffi.FFI()
+        ffi.cdef(cdef)
+        try:
+            lib = ffi.dlopen(str(path))
+        except OSError as e:
+            raise BuildError(f"cannot load the library {path}: {e}") from None
+        _products[key] = (ffi, lib)
+        return ffi, lib
