@@ -1,1 +1,2 @@
-"""design"""
+"""Products that design with the model: optimal control by direct collocation,
+trajectory tracking."""

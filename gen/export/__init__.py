@@ -1,1 +1,2 @@
-"""export"""
+"""Products that hand the model to other tools: FMUs, CasADi functions, the PyDy
+drop-in, verification against sympy."""
