@@ -258,7 +258,6 @@ def _readme_example():
     return block.split("```python\n", 1)[1].split("```", 1)[0]
 
 
-@pytest.mark.slow
 def test_readme_example_is_the_documented_one_and_runs(tmp_path, monkeypatch):
     """The README's 20-line example is docs/snippets/first_model.py (the
     getting-started page includes that file), and it runs: the pendulum's

@@ -120,20 +120,3 @@ def _cases():
 def test_guide_runs(name, tmp_path, monkeypatch):
     monkeypatch.setenv("MPLBACKEND", "Agg")
     run_guide(GUIDES / name, tmp_path)
-
-
-def test_readme_python_api_section_runs(tmp_path, monkeypatch):
-    """The README's 20-line example and its "The Python API" section after it
-    (events, a controller, an input table, RODAS4, a System with joints), in
-    one namespace, by the same rules."""
-    text = (ROOT / "README.md").read_text()
-    start, end = text.index("## A model in 20 lines"), text.index("## Documentation")
-    part = tmp_path / "readme_api.md"
-    part.write_text(text[start:end])
-    runs = [b for b in blocks(part) if b[3]]
-    assert len(runs) == 3, [b[2] for b in runs]
-    monkeypatch.setenv("MPLBACKEND", "Agg")
-    ns = run_guide(part, tmp_path)
-    sol = ns["sol"]
-    assert isinstance(sol, ns["gen"].Solution) and sol.method == "rodas4"
-    assert ns["arm"].state_names == ["q1", "q2", "u1", "u2"]
