@@ -31,7 +31,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "examples")]
 import casadi as ca  # noqa: E402
 import sympy as sm  # noqa: E402
 
-import gen.export.casadi as gc  # noqa: E402
+import gen.casadi as gc  # noqa: E402
 import n_link_cart  # noqa: E402
 
 

@@ -63,7 +63,7 @@ def timed(fn):
 def run(ns, reps, calls, tmp):
     os.environ["EOMGEN_CACHE"] = str(Path(tmp) / "eomgen-cache")
     import gen
-    import gen.export.pydy
+    import gen.pydy
     from pydy.codegen.ode_function_generators import generate_ode_function
     from pydy.models import multi_mass_spring_damper, n_link_pendulum_on_cart
 

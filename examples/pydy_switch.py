@@ -21,7 +21,7 @@ import numpy as np
 from pydy.models import n_link_pendulum_on_cart
 
 import gen
-import gen.export.pydy  # noqa: F401  (gen.pydy also loads on first use)
+import gen.pydy  # noqa: F401  (gen.pydy also loads on first use)
 
 
 def simulate(generator=gen.pydy.ODEFunctionGenerator, n=2, t_end=5.0):

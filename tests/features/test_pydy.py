@@ -22,7 +22,7 @@ from pydy.codegen.ode_function_generators import generate_ode_function  # noqa: 
 from pydy.models import multi_mass_spring_damper, n_link_pendulum_on_cart  # noqa: E402
 
 import gen  # noqa: E402
-import gen.export.pydy  # noqa: E402
+import gen.pydy  # noqa: E402
 from helpers import rel_err  # noqa: E402
 
 try:
