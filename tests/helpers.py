@@ -78,3 +78,21 @@ def cortex_m4_tables(src, cfile, obj, flags, flash):
     assert sec["data"] == 0 and sec["bss"] == 0, sec
     assert sec["rodata"] >= flash, sec
     return sec
+
+
+def test_module(path):
+    """A test file's module by its path under tests/ ("physics/test_auxiliary.py"):
+    its model builders shared with a test of another folder, imported once
+    under its own name (no folder of tests/ needs to be on sys.path)."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+    file = Path(__file__).resolve().parent / path
+    name = "_tests_" + path.replace("/", "_").removesuffix(".py")
+    mod = sys.modules.get(name)
+    if mod is None:
+        spec = importlib.util.spec_from_file_location(name, file)
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[name] = mod
+        spec.loader.exec_module(mod)
+    return mod

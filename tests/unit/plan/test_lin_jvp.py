@@ -33,7 +33,7 @@ def _sim(model, lin):
 
 
 def _skate():
-    from test_implicit_kinematics_constrained import skate
+    skate = test_module("physics/test_implicit_kinematics_constrained.py").skate
     return skate(explicit_kinematics=False, name="skate_jvp")
 
 
