@@ -31,7 +31,6 @@
 #define gen_rt_chol_factor GEN_RT_NAME_(chol_factor)
 #define gen_rt_chol_solve GEN_RT_NAME_(chol_solve)
 #define gen_rt_dopri5_dense GEN_RT_NAME_(dopri5_dense)
-#define gen_rt_dopri5_integrate GEN_RT_NAME_(dopri5_integrate)
 #define gen_rt_dopri5_trial GEN_RT_NAME_(dopri5_trial)
 #define gen_rt_err_norm GEN_RT_NAME_(err_norm)
 #define gen_rt_expm GEN_RT_NAME_(expm)

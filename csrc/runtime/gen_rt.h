@@ -220,8 +220,6 @@ int gen_rt_min_norm_correct(int m, int n, const gen_rt_real *J,
 
 typedef int (*gen_rt_rhs_fn)(void *ctx, gen_rt_real t, const gen_rt_real *x,
                              gen_rt_real *dxdt);
-/* Called after every accepted step (projection); may modify x. */
-typedef int (*gen_rt_post_fn)(void *ctx, gen_rt_real t, gen_rt_real *x);
 
 /* Classic fourth-order Runge-Kutta step, x updated in place.
  * work: GEN_RT_RK4_WORK(nx) reals. */
@@ -229,32 +227,11 @@ typedef int (*gen_rt_post_fn)(void *ctx, gen_rt_real t, gen_rt_real *x);
 int gen_rt_rk4_step(gen_rt_rhs_fn f, void *ctx, int nx, gen_rt_real t,
                     gen_rt_real h, gen_rt_real *work, gen_rt_real *x);
 
-/* Dormand-Prince 5(4) with PI step-size control. */
-typedef struct {
-    gen_rt_real rtol, atol;
-    gen_rt_real h_init;   /* first trial step, <= 0: chosen automatically */
-    gen_rt_real h_min;    /* below this: GEN_RT_ERR_STEP_UNDERFLOW (<= 0: automatic) */
-    gen_rt_real h_max;    /* <= 0: unbounded */
-    long max_steps;       /* bound on attempted steps per call, <= 0: 100000 */
-} gen_rt_dopri5_opts;
-
-typedef struct {
-    long n_accepted, n_rejected, n_rhs;
-    gen_rt_real h_last;   /* step size to continue with */
-} gen_rt_dopri5_stats;
-
+/* Dormand-Prince 5(4): the engine's scratch for one trial step, the seven
+ * stages k, y and ynew of gen_rt_dopri5_trial. */
 #define GEN_RT_DOPRI5_WORK(nx) (9 * (nx))
-/* Integrates x from t0 to t1 exactly (the last step is clipped). On error
- * x holds the last accepted state and *t_reached its time. stats
- * accumulates (zero it before the first call); stats->h_last seeds the next
- * call when opts->h_init <= 0 and h_last > 0. */
-int gen_rt_dopri5_integrate(gen_rt_rhs_fn f, gen_rt_post_fn post, void *ctx,
-                            int nx, gen_rt_real t0, gen_rt_real t1,
-                            const gen_rt_dopri5_opts *opts, gen_rt_real *work,
-                            gen_rt_dopri5_stats *stats, gen_rt_real *t_reached,
-                            gen_rt_real *x);
 
-/* The pieces of the adaptive simulation engine (gen_rt_simulate.c):
+/* The steps of the adaptive simulation engine (gen_rt_simulate.c drives them):
  * gen_rt_err_norm is the scaled RMS norm of an error estimate d,
  * sqrt(mean((d_i / (atol + rtol max(|x_i|, |xnew_i|)))^2)). */
 gen_rt_real gen_rt_err_norm(int nx, const gen_rt_real *x, const gen_rt_real *xnew,

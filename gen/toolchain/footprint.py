@@ -269,8 +269,7 @@ def _indirect_targets(p):
               "reaction_solve": f"{p}_reaction_solve"}
     out = {caller: [member.get(k, f"{p}_k_{k}") for k in ks]
            for caller, ks in _RUNTIME_INDIRECT.items()}
-    for integrator in ("gen_rt_rk4_step", "gen_rt_dopri5_integrate", "gen_rt_dopri5_trial",
-                       "gen_rt_rodas4_trial"):
+    for integrator in ("gen_rt_rk4_step", "gen_rt_dopri5_trial", "gen_rt_rodas4_trial"):
         out[integrator] = list(_CALLBACKS)
     # any other caller is runtime code the compiler inlined somewhere else (at
     # -O3 gen_rt_model_rhs into rhs_cb, say): it may reach any kernel. The
