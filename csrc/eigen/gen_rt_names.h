@@ -12,7 +12,8 @@
  * A runtime function missing here is defined twice in an Eigen build's
  * library, which fails its link (gen.compile links every object into one
  * shared library; tests/features/test_eigen.py also checks the objects' names).
- * Types and static functions need nothing.
+ * Types and static functions need nothing; the runtime's private functions
+ * (gen_rt_private.h: external, hidden) are renamed as well.
  */
 #ifndef GEN_RT_NAMES_H
 #define GEN_RT_NAMES_H
@@ -41,6 +42,7 @@
 #define gen_rt_hybrid_reset GEN_RT_NAME_(hybrid_reset)
 #define gen_rt_hybrid_rhs GEN_RT_NAME_(hybrid_rhs)
 #define gen_rt_hybrid_values GEN_RT_NAME_(hybrid_values)
+#define gen_rt_kkt_matrix GEN_RT_NAME_(kkt_matrix)
 #define gen_rt_linearize GEN_RT_NAME_(linearize)
 #define gen_rt_lu_factor GEN_RT_NAME_(lu_factor)
 #define gen_rt_lu_solve GEN_RT_NAME_(lu_solve)

@@ -2,22 +2,9 @@
  * classic RK4 step, one Dormand-Prince 5(4) trial step with its continuous
  * extension, the cubic Hermite interpolant, one RODAS4 trial step, and the
  * scaled error norm. The simulation engine (gen_rt_simulate.c) drives them. */
-#include <math.h>
-#include "gen_rt.h"
+#include "gen_rt_private.h"
 #include "gen_rt_dopri5.h"
 #include "gen_rt_rodas4.h"
-
-#ifdef GEN_RT_REAL_FLOAT
-#define RT_POW powf
-#define RT_FABS fabsf
-#define RT_SQRT sqrtf
-#else
-#define RT_POW pow
-#define RT_FABS fabs
-#define RT_SQRT sqrt
-#endif
-
-static gen_rt_real rt_max(gen_rt_real a, gen_rt_real b) { return a > b ? a : b; }
 
 int gen_rt_rk4_step(gen_rt_rhs_fn f, void *ctx, int nx, gen_rt_real t,
                     gen_rt_real h, gen_rt_real *work, gen_rt_real *x)

@@ -8,29 +8,13 @@
  *
  * As in gen_rt_model.c: inputs are assumed checked by the caller, work
  * arrays are the caller's, sized by the GEN_RT_MODEL_*_WORK macros. */
-#include <math.h>
-#include <stddef.h>
-
-#include "gen_rt.h"
+#include "gen_rt_private.h"
 
 /* the methods and holds of gen/codegen/abi.py (gen_rt_abi.h) are those this file
  * implements (method_ok, input_check): one added there fails the build here */
 #if GEN_RT_METHOD_COUNT != 3 || GEN_RT_HOLD_COUNT != 2
 #error "gen/codegen/abi.py lists a method or table hold that gen_rt_simulate.c does not implement"
 #endif
-
-static int finite_n(int n, const gen_rt_real *v)
-{
-    return n <= 0 || gen_rt_all_finite(n, v);
-}
-
-static void copy_n(int n, const gen_rt_real *src, gen_rt_real *dst)
-{
-    int i;
-    for (i = 0; i < n; ++i) dst[i] = src[i];
-}
-
-#define NX_(m) ((m)->nq + (m)->nu)
 
 /* ------------------------------------------------------------------ */
 /* Integration                                                        */
@@ -134,7 +118,7 @@ static int input_at(const gen_rt_model *m, const gen_rt_input *in, gen_rt_real t
         if (in->r_max && r[i] > in->r_max[i]) r[i] = in->r_max[i];
     }
     if (in->controller && in->controller(in->ctx, t, x, r)) return GEN_RT_ERR_CONTROLLER;
-    if (!finite_n(nr, r)) return GEN_RT_ERR_NONFINITE_INPUT;
+    if (!rt_finite(nr, r)) return GEN_RT_ERR_NONFINITE_INPUT;
     return GEN_RT_OK;
 }
 
@@ -145,17 +129,17 @@ static int input_check(const gen_rt_model *m, const gen_rt_input *in)
     if (in->n_table < 0 || (in->hold != GEN_RT_HOLD_ZOH && in->hold != GEN_RT_HOLD_LINEAR))
         return GEN_RT_ERR_BAD_ARG;
     rows = in->n_gain > 0 ? in->n_gain : 1;    /* a schedule's rows */
-    if (!finite_n(1, &in->period) || in->period < 0) return GEN_RT_ERR_BAD_ARG;
-    if (in->n_gain < 0 || (in->n_gain > 0 && !(finite_n(1, &in->t_gain)
-                                               && finite_n(1, &in->dt_gain) && in->dt_gain > 0)))
+    if (!rt_finite(1, &in->period) || in->period < 0) return GEN_RT_ERR_BAD_ARG;
+    if (in->n_gain < 0 || (in->n_gain > 0 && !(rt_finite(1, &in->t_gain)
+                                               && rt_finite(1, &in->dt_gain) && in->dt_gain > 0)))
         return GEN_RT_ERR_BAD_ARG;
     if (in->n_table > 0) {
         if (!in->t_table || (nr > 0 && !in->r_table)) return GEN_RT_ERR_NULL;
-        if (!finite_n(in->n_table, in->t_table) || !finite_n(in->n_table * nr, in->r_table))
+        if (!rt_finite(in->n_table, in->t_table) || !rt_finite(in->n_table * nr, in->r_table))
             return GEN_RT_ERR_NONFINITE_INPUT;
         for (i = 1; i < in->n_table; ++i)
             if (!(in->t_table[i] > in->t_table[i - 1])) return GEN_RT_ERR_BAD_ARG;
-    } else if (in->r && !finite_n(rows * nr, in->r)) {
+    } else if (in->r && !rt_finite(rows * nr, in->r)) {
         return GEN_RT_ERR_NONFINITE_INPUT;
     }
     for (i = 0; i < nr; ++i) {     /* bounds: infinite allowed, NaN or lo > hi not */
@@ -163,8 +147,8 @@ static int input_check(const gen_rt_model *m, const gen_rt_input *in)
         if (lo != lo || hi != hi) return GEN_RT_ERR_NONFINITE_INPUT;
         if (in->r_min && in->r_max && lo > hi) return GEN_RT_ERR_BAD_ARG;
     }
-    if (in->K && !finite_n(rows * nr * ns, in->K)) return GEN_RT_ERR_NONFINITE_INPUT;
-    if (in->x_op && !finite_n(rows * NX_(m), in->x_op)) return GEN_RT_ERR_NONFINITE_INPUT;
+    if (in->K && !rt_finite(rows * nr * ns, in->K)) return GEN_RT_ERR_NONFINITE_INPUT;
+    if (in->x_op && !rt_finite(rows * RT_NX(m), in->x_op)) return GEN_RT_ERR_NONFINITE_INPUT;
     return GEN_RT_OK;
 }
 
@@ -194,7 +178,7 @@ int gen_rt_model_step_rk4(const gen_rt_model *m, gen_rt_real t, gen_rt_real h,
                           const gen_rt_real *r, const gen_rt_real *p, int project,
                           gen_rt_real *work, int *iwork, gen_rt_real *x)
 {
-    int nx = NX_(m), st;
+    int nx = RT_NX(m), st;
     gen_rt_real *rk = work, *xn = rk + GEN_RT_RK4_WORK(nx);
     model_ctx c;
     c.m = m; c.r = r; c.p = p;
@@ -203,14 +187,14 @@ int gen_rt_model_step_rk4(const gen_rt_model *m, gen_rt_real t, gen_rt_real h,
     c.in = NULL; c.r_buf = c.r_held = NULL; c.t_seg = t; c.t0 = t;
     c.t_sampled = t; c.sampled = 0;
     c.n_active = 0; c.active = NULL; c.hw = NULL; c.hiw = NULL;
-    copy_n(nx, x, xn);
+    rt_copy(nx, x, xn);
     st = gen_rt_rk4_step(rhs_cb, &c, nx, t, h, rk, xn);
     if (st) return st;
     if (project) {
         st = gen_rt_model_project(m, t + h, p, c.proj_tol, c.proj_max_iter, c.work, xn);
         if (st) return st;
     }
-    copy_n(nx, xn, x);
+    rt_copy(nx, xn, x);
     return GEN_RT_OK;
 }
 
@@ -289,18 +273,6 @@ typedef struct {
     int *hiw;
 } engine;
 
-static gen_rt_real rt_abs(gen_rt_real a) { return a < 0 ? -a : a; }
-static gen_rt_real rt_max2(gen_rt_real a, gen_rt_real b) { return a > b ? a : b; }
-static gen_rt_real rt_min2(gen_rt_real a, gen_rt_real b) { return a < b ? a : b; }
-
-#ifdef GEN_RT_REAL_FLOAT
-#define RT_POW powf
-#define RT_SQRT sqrtf
-#else
-#define RT_POW pow
-#define RT_SQRT sqrt
-#endif
-
 /* err^(-1/q): the step-size factor's power, q = 5 (DOPRI5) or 4 (RODAS4) */
 static gen_rt_real inv_root(gen_rt_real err, int q)
 {
@@ -340,7 +312,7 @@ static int project_(engine *e, gen_rt_real t, gen_rt_real *x)
 /* the state at t + theta h inside the step just taken (not projected) */
 static void dense_at(const engine *e, gen_rt_real theta, gen_rt_real *out)
 {
-    if (theta >= 1) { copy_n(e->nx, e->xn, out); return; }
+    if (theta >= 1) { rt_copy(e->nx, e->xn, out); return; }
     if (e->dense_kind == DENSE_DOPRI5)
         gen_rt_dopri5_dense(e->nx, e->h, theta, e->x, e->d_x1, e->d_k, out);
     else
@@ -373,18 +345,18 @@ static int first_step(engine *e, gen_rt_real t, const gen_rt_real *x, const gen_
     d0 = scaled_rms(e, x, x);
     d1 = scaled_rms(e, x, f0);
     h0 = (d0 < GEN_RT_C(1e-5) || d1 < GEN_RT_C(1e-5)) ? GEN_RT_C(1e-6) : GEN_RT_C(0.01) * d0 / d1;
-    if (e->t_span > 0) h0 = rt_min2(h0, e->t_span);
+    if (e->t_span > 0) h0 = rt_min(h0, e->t_span);
     for (i = 0; i < e->nx; ++i) y1[i] = x[i] + h0 * f0[i];
     if ((st = rhs_cb(e->c, t + h0, y1, f1))) return st;
     e->s->n_rhs += 1;
     for (i = 0; i < e->nx; ++i) f1[i] -= f0[i];
     d2 = scaled_rms(e, x, f1) / h0;
     if (d1 <= GEN_RT_C(1e-15) && d2 <= GEN_RT_C(1e-15))
-        h1 = rt_max2(GEN_RT_C(1e-6), h0 * GEN_RT_C(1e-3));
+        h1 = rt_max(GEN_RT_C(1e-6), h0 * GEN_RT_C(1e-3));
     else
-        h1 = RT_POW(GEN_RT_C(0.01) / rt_max2(d1, d2), GEN_RT_C(1.0) / (gen_rt_real)q);
-    h = rt_min2(100 * h0, h1);
-    if (e->t_span > 0) h = rt_min2(h, e->t_span);
+        h1 = RT_POW(GEN_RT_C(0.01) / rt_max(d1, d2), GEN_RT_C(1.0) / (gen_rt_real)q);
+    h = rt_min(100 * h0, h1);
+    if (e->t_span > 0) h = rt_min(h, e->t_span);
     e->h_next = h;
     return GEN_RT_OK;
 }
@@ -403,7 +375,7 @@ static int control_(engine *e, int st, gen_rt_real err, gen_rt_real hh, int last
     if (st || !(err <= GEN_RT_C(1.0))) {
         e->s->n_rejected += 1;
         if (st == 0 && err == err)
-            fac = rt_max2(GEN_RT_C(0.2), GEN_RT_C(0.9) * inv_root(err, q));
+            fac = rt_max(GEN_RT_C(0.2), GEN_RT_C(0.9) * inv_root(err, q));
         else
             fac = GEN_RT_C(0.25); /* a failed evaluation: shrink towards it */
         e->h_next = hh * fac;
@@ -411,16 +383,16 @@ static int control_(engine *e, int st, gen_rt_real err, gen_rt_real hh, int last
         return 0;
     }
     if (q == 5) {
-        gen_rt_real e0 = rt_max2(err, GEN_RT_C(1e-10));
+        gen_rt_real e0 = rt_max(err, GEN_RT_C(1e-10));
         fac = GEN_RT_C(0.9) * RT_POW(e0, -GEN_RT_C(0.17)) * RT_POW(e->err_old, GEN_RT_C(0.04));
-        e->err_old = rt_max2(err, GEN_RT_C(1e-4));
+        e->err_old = rt_max(err, GEN_RT_C(1e-4));
     } else {
         fac = err > 0 ? GEN_RT_C(0.9) * inv_root(err, q) : fac_max;
     }
-    fac = rt_min2(e->rejected_last ? GEN_RT_C(1.0) : fac_max, rt_max2(GEN_RT_C(0.2), fac));
+    fac = rt_min(e->rejected_last ? GEN_RT_C(1.0) : fac_max, rt_max(GEN_RT_C(0.2), fac));
     /* a clipped step says little about the natural step */
-    e->h_next = (last && fac >= GEN_RT_C(1.0)) ? rt_max2(hh * fac, h_nat) : hh * fac;
-    if (o->h_max > 0) e->h_next = rt_min2(e->h_next, o->h_max);
+    e->h_next = (last && fac >= GEN_RT_C(1.0)) ? rt_max(hh * fac, h_nat) : hh * fac;
+    if (o->h_max > 0) e->h_next = rt_min(e->h_next, o->h_max);
     e->rejected_last = 0;
     e->s->n_accepted += 1;
     return 1;
@@ -460,13 +432,13 @@ static int step_(engine *e, gen_rt_real t, gen_rt_real t_stop)
     const gen_rt_model *m = c->m;
     int nx = e->nx, i, st;
     gen_rt_real hmin = o->h_min > 0 ? o->h_min
-                                    : 64 * GEN_RT_EPS * rt_max2(GEN_RT_C(1.0), rt_abs(t_stop));
+                                    : 64 * GEN_RT_EPS * rt_max(GEN_RT_C(1.0), rt_abs(t_stop));
     e->t = t;
     if (cancelled_(o)) return GEN_RT_ERR_CANCELLED;
     if (o->method == GEN_RT_METHOD_RK4) {
         gen_rt_real *rk = e->iw, *f1 = rk + GEN_RT_RK4_WORK(nx);
         gen_rt_real h = t_stop - t;
-        copy_n(nx, e->x, e->xn);
+        rt_copy(nx, e->x, e->xn);
         st = gen_rt_rk4_step(rhs_cb, c, nx, t, h, rk, e->xn);
         e->s->n_rhs += 4;
         if (!st) st = project_(e, t_stop, e->xn);
@@ -495,7 +467,7 @@ static int step_(engine *e, gen_rt_real t, gen_rt_real t_stop)
             e->f0_valid = 1;
         }
         if (e->h_next <= 0 && (st = first_step(e, t, e->x, k, 5, y, ynew))) return st;
-        if (o->h_max > 0) e->h_next = rt_min2(e->h_next, o->h_max);
+        if (o->h_max > 0) e->h_next = rt_min(e->h_next, o->h_max);
         for (;;) {
             gen_rt_real hh, err = 0;
             int last = 0;
@@ -511,7 +483,7 @@ static int step_(engine *e, gen_rt_real t, gen_rt_real t_stop)
             e->h = hh;
             break;
         }
-        copy_n(nx, ynew, e->xn);
+        rt_copy(nx, ynew, e->xn);
         if ((st = project_(e, e->t1, e->xn))) return st;
         /* k7 = f(t1, ynew) starts the next step unless projection moved it */
         for (i = 0; i < nx; ++i)
@@ -529,7 +501,7 @@ static int step_(engine *e, gen_rt_real t, gen_rt_real t_stop)
         const gen_rt_real *r;
         gen_rt_real dt;
         if (e->f0_valid) {
-            copy_n(nx, f1, f0);
+            rt_copy(nx, f1, f0);
         } else {
             if ((st = rhs_cb(c, t, e->x, f0))) return st;
             e->s->n_rhs += 1;
@@ -561,12 +533,12 @@ static int step_(engine *e, gen_rt_real t, gen_rt_real t_stop)
         }
         /* df/dt by a forward difference (the inputs' time dependence too),
          * with Hairer's increment sqrt(eps max(1e-5, |t|)) */
-        dt = RT_SQRT(GEN_RT_EPS * rt_max2(GEN_RT_C(1e-5), rt_abs(t)));
+        dt = RT_SQRT(GEN_RT_EPS * rt_max(GEN_RT_C(1e-5), rt_abs(t)));
         if ((st = rhs_cb(c, t + dt, e->x, ft))) return st;
         e->s->n_rhs += 1;
         for (i = 0; i < nx; ++i) dfdt[i] = (ft[i] - f0[i]) / dt;
         if (e->h_next <= 0 && (st = first_step(e, t, e->x, f0, 4, ynew, ft))) return st;
-        if (o->h_max > 0) e->h_next = rt_min2(e->h_next, o->h_max);
+        if (o->h_max > 0) e->h_next = rt_min(e->h_next, o->h_max);
         for (;;) {
             gen_rt_real hh, err = 0;
             int last = 0;
@@ -584,7 +556,7 @@ static int step_(engine *e, gen_rt_real t, gen_rt_real t_stop)
                 /* f at the new state: the interpolant's end and the next f0
                  * (a failure there rejects the step) */
                 gen_rt_real t1 = last ? t_stop : t + hh;
-                copy_n(nx, ynew, e->xn);
+                rt_copy(nx, ynew, e->xn);
                 st = project_(e, t1, e->xn);
                 if (!st) {
                     st = rhs_cb(c, t1, e->xn, f1);
@@ -614,13 +586,13 @@ static int hybrid_check(const gen_rt_model *m, const gen_rt_events *ev);
 
 static int events_check(const gen_rt_model *m, const gen_rt_events *ev)
 {
-    int i, nx = NX_(m), st;
+    int i, nx = RT_NX(m), st;
     if (!ev || ev->n == 0) return hybrid_check(m, ev);
     if (ev->n < 0 || ev->capacity < 0) return GEN_RT_ERR_BAD_ARG;
     if ((st = hybrid_check(m, ev))) return st;
     if (!ev->which || !ev->direction) return GEN_RT_ERR_NULL;
     if (ev->capacity > 0 && (!ev->log_which || !ev->log_t || !ev->log_x)) return GEN_RT_ERR_NULL;
-    if (ev->level && !finite_n(ev->n, ev->level)) return GEN_RT_ERR_NONFINITE_INPUT;
+    if (ev->level && !rt_finite(ev->n, ev->level)) return GEN_RT_ERR_NONFINITE_INPUT;
     for (i = 0; i < ev->n; ++i) {
         if (ev->which[i] < 0 || ev->which[i] >= nx + m->ny) return GEN_RT_ERR_BAD_ARG;
         if (ev->direction[i] < -1 || ev->direction[i] > 1) return GEN_RT_ERR_BAD_ARG;
@@ -649,7 +621,7 @@ static int outputs_(engine *e, gen_rt_real t, const gen_rt_real *x, gen_rt_real 
     if (!e->need_y) return GEN_RT_OK;
     if ((st = inputs_now(e->c, t, x, &r))) return st;
     c->m->outputs(x, x + c->m->nq, r, c->p, t, y);
-    return finite_n(c->m->ny, y) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+    return rt_finite(c->m->ny, y) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
 }
 
 /* the hybrid event values (nh) at (t, x): gaps and guards, the forces of
@@ -695,7 +667,7 @@ static int crosses(int dir, gen_rt_real ga, gen_rt_real gb)
 static int event_root(engine *e, int i, gen_rt_real lo, gen_rt_real hi, gen_rt_real glo,
                       gen_rt_real ghi, gen_rt_real *theta)
 {
-    gen_rt_real tol = 4 * GEN_RT_EPS * rt_max2(GEN_RT_C(1.0), rt_max2(rt_abs(e->t), rt_abs(e->t1)));
+    gen_rt_real tol = 4 * GEN_RT_EPS * rt_max(GEN_RT_C(1.0), rt_max(rt_abs(e->t), rt_abs(e->t1)));
     int it, side = 0, st;
     for (it = 0; it < 300 && ghi != 0; ++it) {
         gen_rt_real mid, gm, tm;
@@ -735,8 +707,8 @@ static void log_event_(engine *e, int which, gen_rt_real t, const gen_rt_real *x
     if (s->n_events < ev->capacity) {
         ev->log_which[s->n_events] = which;
         ev->log_t[s->n_events] = t;
-        copy_n(e->nx, xb, ev->log_x + (long)s->n_events * e->nx);
-        if (ev->log_x_after) copy_n(e->nx, xa, ev->log_x_after + (long)s->n_events * e->nx);
+        rt_copy(e->nx, xb, ev->log_x + (long)s->n_events * e->nx);
+        if (ev->log_x_after) rt_copy(e->nx, xa, ev->log_x_after + (long)s->n_events * e->nx);
     }
     s->n_events += 1;
 }
@@ -756,7 +728,7 @@ static int hybrid_jump_(engine *e, int k, gen_rt_real t, int *jumped)
     const gen_rt_real *r;
     int st, what = 0;
     *jumped = 0;
-    copy_n(e->nx, e->xe, e->xb);
+    rt_copy(e->nx, e->xe, e->xb);
     if ((st = inputs_now(c, t, e->xe, &r))) return st;
     st = gen_rt_hybrid_jump(c->m, t, r, c->p, k, c->proj_tol, c->proj_max_iter, c->work,
                             e->active, e->rows, e->hvi, e->hw, e->hiw, e->xe, &what);
@@ -796,7 +768,7 @@ static int events_(engine *e, int *stop, int *jump, gen_rt_real *te)
             if (d > 0 && e->hva[i] >= 0 && e->gd[i] < 0) e->hva[i] = -GEN_RT_EPS * GEN_RT_EPS;
         }
     }
-    copy_n(e->nx, e->x, e->xa);
+    rt_copy(e->nx, e->x, e->xa);
     while (a < 1) {
         int best = -1;
         gen_rt_real th_best = 2, t_ev;
@@ -847,7 +819,7 @@ static void engine_init(engine *e, model_ctx *c, const gen_rt_sim_options *o,
                         gen_rt_real *w, int *iwork, gen_rt_real *ybuf)
 {
     const gen_rt_model *m = c->m;
-    int nx = NX_(m), i;
+    int nx = RT_NX(m), i;
     e->c = c; e->o = o; e->ev = ev; e->s = s;
     e->nx = nx; e->ny = m->ny; e->need_y = 0;
     if (ev && ev->n > 0 && m->ny > 0 && m->outputs)
@@ -900,7 +872,7 @@ int gen_rt_model_advance(const gen_rt_model *m, gen_rt_real t0, gen_rt_real t1,
                          const gen_rt_sim_options *o, gen_rt_real *work, int *iwork,
                          gen_rt_sim_stats *s, gen_rt_real *x)
 {
-    int nx = NX_(m), st;
+    int nx = RT_NX(m), st;
     gen_rt_real t = t0;
     model_ctx c;
     engine e;
@@ -916,23 +888,23 @@ int gen_rt_model_advance(const gen_rt_model *m, gen_rt_real t0, gen_rt_real t1,
         st = step_(&e, t, t1);
         if (st) {
             s->t_last = t;
-            copy_n(nx, x, s->x_last);
+            rt_copy(nx, x, s->x_last);
             s->h_next = e.h_next;
             return st;
         }
-        copy_n(nx, e.xn, x);
+        rt_copy(nx, e.xn, x);
         t = e.t1;
     }
     s->t_last = t1;
     s->h_next = e.h_next;
-    copy_n(nx, x, s->x_last);
+    rt_copy(nx, x, s->x_last);
     return GEN_RT_OK;
 }
 
 int gen_rt_simulate_rows(gen_rt_real t0, gen_rt_real t_end, gen_rt_real dt)
 {
     long n;
-    if (!(dt > 0) || !(t_end >= t0) || !finite_n(1, &t0) || !finite_n(1, &t_end))
+    if (!(dt > 0) || !(t_end >= t0) || !rt_finite(1, &t0) || !rt_finite(1, &t_end))
         return GEN_RT_ERR_BAD_ARG;
     if ((t_end - t0) / dt > GEN_RT_C(1e9)) return GEN_RT_ERR_BAD_ARG;
     n = (long)((t_end - t0) / dt);
@@ -987,7 +959,7 @@ static int emit_row(engine *e, const row_sink *o, int k, int last, gen_rt_real t
         long j = s->n_out;
         if (j >= o->capacity) return GEN_RT_ERR_OUTPUT_FULL;
         o->t_out[j] = tk;
-        copy_n(nx, xr, o->x_out + j * nx);
+        rt_copy(nx, xr, o->x_out + j * nx);
         if (o->lam_out)
             for (i = 0; i < mv; ++i) o->lam_out[j * ldl + i] = o->lam[i];
         if (o->r_out)
@@ -1002,7 +974,7 @@ static void stats_reset(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_rea
 {
     s->n_accepted = 0; s->n_rejected = 0; s->n_rhs = 0; s->n_jac = 0;
     s->n_out = 0; s->n_events = 0; s->terminal = -1; s->t_last = t0; s->h_next = 0;
-    copy_n(NX_(m), x0, s->x_last);
+    rt_copy(RT_NX(m), x0, s->x_last);
 }
 
 /* simulate, simulate_input and simulate_events: in == NULL for a constant
@@ -1014,7 +986,7 @@ static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t
                      gen_rt_real *t_out, gen_rt_real *x_out, gen_rt_real *lam_out,
                      gen_rt_real *r_out, gen_rt_sim_stats *s)
 {
-    int nx = NX_(m), nr = m->nr, mv = m->mv, rows, k, st;
+    int nx = RT_NX(m), nr = m->nr, mv = m->mv, rows, k, st;
     gen_rt_real *x = work, *dx = x + nx, *lam = dx + nx, *w = lam + mv + 1;
     gen_rt_real *rb = w + GEN_RT_MODEL_SIM_CORE_WORK_(m->nq, m->nu, m->mc, mv, nr,
                                                       m->explicit_kinematics, m->accel);
@@ -1024,7 +996,7 @@ static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t
     row_sink out;
     gen_rt_real t = t0;
     stats_reset(m, x0, t0, s);
-    copy_n(nx, x0, x);
+    rt_copy(nx, x0, x);
     rows = gen_rt_simulate_rows(t0, t_end, dt);
     if (rows < 0) return rows;
     if (o->every < 0 || o->final_only < 0 || !method_ok(o)) return GEN_RT_ERR_BAD_ARG;
@@ -1043,7 +1015,7 @@ static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t
     out.rows = rows; out.capacity = capacity; out.t0 = t0; out.t_end = t_end; out.dt = dt;
     out.t_out = t_out; out.x_out = x_out; out.lam_out = lam_out; out.r_out = r_out;
     out.dx = dx; out.lam = lam;
-#define FAIL_AT_(tf, xf) do { s->t_last = (tf); copy_n(nx, (xf), s->x_last); return st; } while (0)
+#define FAIL_AT_(tf, xf) do { s->t_last = (tf); rt_copy(nx, (xf), s->x_last); return st; } while (0)
     if ((st = project_(&e, t0, x))) return st;
     if (in && in->period > 0 && (st = sample_(&e, t0, x))) FAIL_AT_(t0, x);
     if ((st = emit_row(&e, &out, 0, rows == 1, t0, x))) FAIL_AT_(t0, x);
@@ -1078,14 +1050,14 @@ static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t
             if ((st = emit_row(&e, &out, k, 1, te, e.xe))) FAIL_AT_(t, x);
             s->t_last = te;
             s->h_next = e.h_next;
-            copy_n(nx, e.xe, s->x_last);
+            rt_copy(nx, e.xe, s->x_last);
             return GEN_RT_OK;
         }
         if (jump) {
             /* a hybrid jump at te: on from the state after it, the step
              * size history reset (the adaptive methods choose a first step
              * again; RK4 finishes its step from te) */
-            copy_n(nx, e.xe, x);
+            rt_copy(nx, e.xe, x);
             t = te;
             e.f0_valid = 0;
             e.rejected_last = 0;
@@ -1095,13 +1067,13 @@ static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t
         }
         /* the inputs may change at a break: f at t1 is evaluated afresh */
         if (in && t_stop < t_end && e.t1 == t_stop) e.f0_valid = 0;
-        copy_n(nx, e.xn, x);
+        rt_copy(nx, e.xn, x);
         t = e.t1;
     }
 #undef FAIL_AT_
     s->t_last = t_end;
     s->h_next = e.h_next;
-    copy_n(nx, x, s->x_last);
+    rt_copy(nx, x, s->x_last);
     return GEN_RT_OK;
 }
 
