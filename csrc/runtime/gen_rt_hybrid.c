@@ -1,7 +1,7 @@
 /* gen_rt_hybrid.c - impacts, resets and persistent contact of a hybrid
  * model (hybrid={...}, gen/intake/hybrid.py): the dynamics with contacts held as
  * constraints, their forces, the impulse solve at an impact and the reset
- * map. The simulation engine (gen_rt_simulate.c) locates the events and
+ * map. The simulation engine (gen_rt_events.c) locates the events and
  * calls these; no model knowledge here beyond the kernels of gen_rt_hybrid.
  *
  * Model form with the active contacts k (g_k held at zero):

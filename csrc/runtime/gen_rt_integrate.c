@@ -1,7 +1,7 @@
 /* gen_rt_integrate.c - the steps of the integrators, over a callback: one
  * classic RK4 step, one Dormand-Prince 5(4) trial step with its continuous
  * extension, the cubic Hermite interpolant, one RODAS4 trial step, and the
- * scaled error norm. The simulation engine (gen_rt_simulate.c) drives them. */
+ * scaled error norm. The simulation engine (gen_rt_engine.c) drives them. */
 #include "gen_rt_private.h"
 #include "gen_rt_dopri5.h"
 #include "gen_rt_rodas4.h"

@@ -1,7 +1,7 @@
 /* gen_rt_model.c - what the public API does with a model at one point:
  * evaluation, the right-hand side, projection and consistent states, and
  * linearization, over the kernels of a gen_rt_model (integration: the
- * engine of gen_rt_simulate.c).
+ * engine of gen_rt_engine.c and gen_rt_simulate.c).
  *
  * Inputs are assumed checked by the caller (the generated wrappers): the
  * pointers the sizes call for are non-NULL and every input is finite. Work
