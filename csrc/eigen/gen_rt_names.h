@@ -12,7 +12,8 @@
  * A runtime function missing here is defined twice in an Eigen build's
  * library, which fails its link (gen.compile links every object into one
  * shared library; tests/features/test_eigen.py also checks the objects' names).
- * Types and static functions need nothing.
+ * Types and static functions need nothing; the runtime's private functions
+ * (gen_rt_private.h: external, hidden) are renamed as well.
  */
 #ifndef GEN_RT_NAMES_H
 #define GEN_RT_NAMES_H
@@ -31,9 +32,15 @@
 #define gen_rt_chol_factor GEN_RT_NAME_(chol_factor)
 #define gen_rt_chol_solve GEN_RT_NAME_(chol_solve)
 #define gen_rt_dopri5_dense GEN_RT_NAME_(dopri5_dense)
-#define gen_rt_dopri5_integrate GEN_RT_NAME_(dopri5_integrate)
 #define gen_rt_dopri5_trial GEN_RT_NAME_(dopri5_trial)
+#define gen_rt_engine_dense GEN_RT_NAME_(engine_dense)
+#define gen_rt_engine_init GEN_RT_NAME_(engine_init)
+#define gen_rt_engine_method_ok GEN_RT_NAME_(engine_method_ok)
+#define gen_rt_engine_project GEN_RT_NAME_(engine_project)
+#define gen_rt_engine_step GEN_RT_NAME_(engine_step)
 #define gen_rt_err_norm GEN_RT_NAME_(err_norm)
+#define gen_rt_events_check GEN_RT_NAME_(events_check)
+#define gen_rt_events_step GEN_RT_NAME_(events_step)
 #define gen_rt_expm GEN_RT_NAME_(expm)
 #define gen_rt_hermite GEN_RT_NAME_(hermite)
 #define gen_rt_hybrid_impulse GEN_RT_NAME_(hybrid_impulse)
@@ -42,6 +49,13 @@
 #define gen_rt_hybrid_reset GEN_RT_NAME_(hybrid_reset)
 #define gen_rt_hybrid_rhs GEN_RT_NAME_(hybrid_rhs)
 #define gen_rt_hybrid_values GEN_RT_NAME_(hybrid_values)
+#define gen_rt_input_at GEN_RT_NAME_(input_at)
+#define gen_rt_input_check GEN_RT_NAME_(input_check)
+#define gen_rt_input_gain_row GEN_RT_NAME_(input_gain_row)
+#define gen_rt_input_next_break GEN_RT_NAME_(input_next_break)
+#define gen_rt_input_now GEN_RT_NAME_(input_now)
+#define gen_rt_input_sample GEN_RT_NAME_(input_sample)
+#define gen_rt_kkt_matrix GEN_RT_NAME_(kkt_matrix)
 #define gen_rt_linearize GEN_RT_NAME_(linearize)
 #define gen_rt_lu_factor GEN_RT_NAME_(lu_factor)
 #define gen_rt_lu_solve GEN_RT_NAME_(lu_solve)
@@ -77,6 +91,7 @@
 #define gen_rt_reactions_lin GEN_RT_NAME_(reactions_lin)
 #define gen_rt_rk4_step GEN_RT_NAME_(rk4_step)
 #define gen_rt_rodas4_trial GEN_RT_NAME_(rodas4_trial)
+#define gen_rt_sim_ctx_init GEN_RT_NAME_(sim_ctx_init)
 #define gen_rt_simulate_rows GEN_RT_NAME_(simulate_rows)
 #define gen_rt_simulate_rows_kept GEN_RT_NAME_(simulate_rows_kept)
 #define gen_rt_status_message GEN_RT_NAME_(status_message)

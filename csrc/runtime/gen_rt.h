@@ -220,8 +220,6 @@ int gen_rt_min_norm_correct(int m, int n, const gen_rt_real *J,
 
 typedef int (*gen_rt_rhs_fn)(void *ctx, gen_rt_real t, const gen_rt_real *x,
                              gen_rt_real *dxdt);
-/* Called after every accepted step (projection); may modify x. */
-typedef int (*gen_rt_post_fn)(void *ctx, gen_rt_real t, gen_rt_real *x);
 
 /* Classic fourth-order Runge-Kutta step, x updated in place.
  * work: GEN_RT_RK4_WORK(nx) reals. */
@@ -229,32 +227,11 @@ typedef int (*gen_rt_post_fn)(void *ctx, gen_rt_real t, gen_rt_real *x);
 int gen_rt_rk4_step(gen_rt_rhs_fn f, void *ctx, int nx, gen_rt_real t,
                     gen_rt_real h, gen_rt_real *work, gen_rt_real *x);
 
-/* Dormand-Prince 5(4) with PI step-size control. */
-typedef struct {
-    gen_rt_real rtol, atol;
-    gen_rt_real h_init;   /* first trial step, <= 0: chosen automatically */
-    gen_rt_real h_min;    /* below this: GEN_RT_ERR_STEP_UNDERFLOW (<= 0: automatic) */
-    gen_rt_real h_max;    /* <= 0: unbounded */
-    long max_steps;       /* bound on attempted steps per call, <= 0: 100000 */
-} gen_rt_dopri5_opts;
-
-typedef struct {
-    long n_accepted, n_rejected, n_rhs;
-    gen_rt_real h_last;   /* step size to continue with */
-} gen_rt_dopri5_stats;
-
+/* Dormand-Prince 5(4): the engine's scratch for one trial step, the seven
+ * stages k, y and ynew of gen_rt_dopri5_trial. */
 #define GEN_RT_DOPRI5_WORK(nx) (9 * (nx))
-/* Integrates x from t0 to t1 exactly (the last step is clipped). On error
- * x holds the last accepted state and *t_reached its time. stats
- * accumulates (zero it before the first call); stats->h_last seeds the next
- * call when opts->h_init <= 0 and h_last > 0. */
-int gen_rt_dopri5_integrate(gen_rt_rhs_fn f, gen_rt_post_fn post, void *ctx,
-                            int nx, gen_rt_real t0, gen_rt_real t1,
-                            const gen_rt_dopri5_opts *opts, gen_rt_real *work,
-                            gen_rt_dopri5_stats *stats, gen_rt_real *t_reached,
-                            gen_rt_real *x);
 
-/* The pieces of the adaptive simulation engine (gen_rt_simulate.c):
+/* The steps of the adaptive simulation engine (gen_rt_engine.c drives them):
  * gen_rt_err_norm is the scaled RMS norm of an error estimate d,
  * sqrt(mean((d_i / (atol + rtol max(|x_i|, |xnew_i|)))^2)). */
 gen_rt_real gen_rt_err_norm(int nx, const gen_rt_real *x, const gen_rt_real *xnew,
@@ -337,6 +314,8 @@ int gen_rt_linearize(const gen_rt_lin_dims *d, const gen_rt_lin_blocks *b,
                      gen_rt_real *B_lin);
 
 /* ---- a model, and everything done with it (gen_rt_model.c) -----------
+ * (the simulation engine behind step_rk4, advance and simulate*:
+ * gen_rt_input.c, gen_rt_engine.c, gen_rt_events.c, gen_rt_simulate.c)
  * A generated model is a gen_rt_model: its sizes, its coordinate partition,
  * its kernels (straight-line code printed by the generator) and which
  * acceleration solve it uses (decided by the generator). The functions
@@ -358,7 +337,7 @@ typedef struct {
 } gen_rt_lin_out;
 
 /* Hybrid behaviour of a model (hybrid={...}, gen/intake/hybrid.py; the engine in
- * gen_rt_hybrid.c and gen_rt_simulate.c): n declarations, each an impact
+ * gen_rt_hybrid.c and gen_rt_events.c): n declarations, each an impact
  * (a gap g(q, t) >= 0) or a reset (a guard of the state and a map). */
 #define GEN_RT_HYBRID_IMPACT 0
 #define GEN_RT_HYBRID_RESET 1
@@ -491,7 +470,7 @@ typedef struct gen_rt_model {
 #define GEN_RT_MODEL_CB_WORK_(nq, nu, mc, mv, nr, ek, acc)                      \
     GEN_RT_MAX_(GEN_RT_MODEL_RHS_WORK(nq, nu, mc, mv, nr, ek, acc),             \
                 GEN_RT_MODEL_PROJECT_WORK(nq, nu, mc, mv, nr, ek, acc))
-/* the simulation engine's method scratch (gen_rt_simulate.c): RK4 and the
+/* the simulation engine's method scratch (gen_rt_engine.c): RK4 and the
  * end derivative, DOPRI5's stages, or RODAS4's f0, f1, df/dt, ynew, J, Jr,
  * stages and the Jacobian's work */
 #define GEN_RT_ENGINE_WORK_(nq, nu, mc, mv, nr, ek, acc)                        \
@@ -597,9 +576,12 @@ int gen_rt_model_project(const gen_rt_model *m, gen_rt_real t, const gen_rt_real
 int gen_rt_model_consistent_state(const gen_rt_model *m, gen_rt_real t,
                                   const gen_rt_real *p, gen_rt_real tol, int max_iter,
                                   gen_rt_real *work, int *iwork, gen_rt_real *x);
+/* one classic RK4 step of size h with r held, projected when project != 0
+ * (gen_rt_engine.c) */
 int gen_rt_model_step_rk4(const gen_rt_model *m, gen_rt_real t, gen_rt_real h,
                           const gen_rt_real *r, const gen_rt_real *p, int project,
                           gen_rt_real *work, int *iwork, gen_rt_real *x);
+/* x from t0 to t1 by the engine with r held, no rows (gen_rt_simulate.c) */
 int gen_rt_model_advance(const gen_rt_model *m, gen_rt_real t0, gen_rt_real t1,
                          const gen_rt_real *r, const gen_rt_real *p,
                          const gen_rt_sim_options *o, gen_rt_real *work, int *iwork,

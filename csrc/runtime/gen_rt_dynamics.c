@@ -1,6 +1,6 @@
 /* gen_rt_dynamics.c - accelerations (and multipliers) of a constrained model:
  *   M u' = f + A^T lam,   A u' + a = 0.                                     */
-#include "gen_rt.h"
+#include "gen_rt_private.h"
 
 #ifndef GEN_RT_PARTITION_CMAX
 #ifdef GEN_RT_REAL_FLOAT
@@ -10,16 +10,10 @@
 #endif
 #endif
 
-int gen_rt_accel_kkt(int n, int m, const gen_rt_real *M, const gen_rt_real *f,
-                     const gen_rt_real *A, const gen_rt_real *a,
-                     gen_rt_real *work, int *iwork, gen_rt_real *ud,
-                     gen_rt_real *lam)
+void gen_rt_kkt_matrix(int n, int m, const gen_rt_real *M, const gen_rt_real *A,
+                       gen_rt_real *K)
 {
-    int N = n + m, i, j, st;
-    gen_rt_real *K = work, *z = work + N * N;
-    if (n <= 0 || m < 0) return GEN_RT_ERR_BAD_ARG;
-    if (!M || !f || !work || !iwork || !ud || (m > 0 && (!A || !a)))
-        return GEN_RT_ERR_NULL;
+    int N = n + m, i, j;
     for (i = 0; i < N; ++i)
         for (j = 0; j < N; ++j) {
             gen_rt_real v = 0;
@@ -28,6 +22,19 @@ int gen_rt_accel_kkt(int n, int m, const gen_rt_real *M, const gen_rt_real *f,
             else if (j < n) v = A[(i - n) * n + j];
             K[i * N + j] = v;
         }
+}
+
+int gen_rt_accel_kkt(int n, int m, const gen_rt_real *M, const gen_rt_real *f,
+                     const gen_rt_real *A, const gen_rt_real *a,
+                     gen_rt_real *work, int *iwork, gen_rt_real *ud,
+                     gen_rt_real *lam)
+{
+    int N = n + m, i, st;
+    gen_rt_real *K = work, *z = work + N * N;
+    if (n <= 0 || m < 0) return GEN_RT_ERR_BAD_ARG;
+    if (!M || !f || !work || !iwork || !ud || (m > 0 && (!A || !a)))
+        return GEN_RT_ERR_NULL;
+    gen_rt_kkt_matrix(n, m, M, A, K);
     for (i = 0; i < n; ++i) z[i] = f[i];
     for (i = 0; i < m; ++i) z[n + i] = -a[i];
     st = gen_rt_lu_factor(N, K, iwork, 0);

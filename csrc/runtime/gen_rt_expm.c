@@ -2,7 +2,7 @@
  * diagonal Pade approximant, Higham 2005) and the zero-order-hold
  * discretization built on it. No libm: the scaling is by exact powers of
  * two, found by doubling. */
-#include "gen_rt_expm.h"
+#include "gen_rt_private.h"
 
 /* Coefficients b_0..b_m of p_m(x) = sum b_k x^k, r_m(x) = p_m(x) / p_m(-x)
  * the [m/m] Pade approximant of exp (b_k = (2m-k)! m! / ((2m)! k! (m-k)!),
@@ -55,8 +55,6 @@ static const expm_degree expm_degrees[] = {
 };
 #endif
 #define EXPM_NDEG ((int)(sizeof expm_degrees / sizeof expm_degrees[0]))
-
-static gen_rt_real rt_abs(gen_rt_real x) { return x < 0 ? -x : x; }
 
 /* max over the columns c0..c1-1 of the sum of |a_ij| over the rows
  * 0..rows-1 of a row-major array with ld columns (the 1-norm of that

@@ -1,7 +1,7 @@
 /* gen_rt_hybrid.c - impacts, resets and persistent contact of a hybrid
  * model (hybrid={...}, gen/intake/hybrid.py): the dynamics with contacts held as
  * constraints, their forces, the impulse solve at an impact and the reset
- * map. The simulation engine (gen_rt_simulate.c) locates the events and
+ * map. The simulation engine (gen_rt_events.c) locates the events and
  * calls these; no model knowledge here beyond the kernels of gen_rt_hybrid.
  *
  * Model form with the active contacts k (g_k held at zero):
@@ -11,15 +11,7 @@
  *   W_k u+ + w_k = -e_k (W_k u- + w_k)   (k in S; e = 0 for k in C),
  * both solved as one KKT system (gen_rt_accel_kkt). Work: the caller's,
  * GEN_RT_HYBRID_WORK / GEN_RT_HYBRID_IWORK (gen_rt.h). */
-#include <stddef.h>
-
-#include "gen_rt.h"
-
-static void copy_n(int n, const gen_rt_real *src, gen_rt_real *dst)
-{
-    int i;
-    for (i = 0; i < n; ++i) dst[i] = src[i];
-}
+#include "gen_rt_private.h"
 
 /* the layout of the hybrid work */
 typedef struct {
@@ -83,8 +75,8 @@ int gen_rt_hybrid_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x
     }
     st = kkt_(nu, mv + na, &L);
     if (st) return st;
-    copy_n(nq, L.qd, dxdt);
-    copy_n(nu, L.ud, dxdt + nq);
+    rt_copy(nq, L.qd, dxdt);
+    rt_copy(nu, L.ud, dxdt + nq);
     if (lam_c) {
         na = 0;
         for (k = 0; k < nh; ++k) lam_c[k] = active[k] ? L.lam[mv + na++] : 0;
@@ -159,7 +151,7 @@ int gen_rt_hybrid_impulse(const gen_rt_model *m, gen_rt_real t, const gen_rt_rea
     }
     st = kkt_(nu, mv + na, &L);
     if (st) return st;
-    copy_n(nu, L.ud, u);
+    rt_copy(nu, L.ud, u);
     if (impulse) {
         na = 0;
         for (k = 0; k < nh; ++k) impulse[k] = rows[k] ? L.lam[mv + na++] : 0;
@@ -182,29 +174,26 @@ int gen_rt_hybrid_reset(const gen_rt_model *m, gen_rt_real t, const gen_rt_real 
     if (!gen_rt_all_finite(nx, xr)) return GEN_RT_ERR_NONFINITE_MODEL;
     /* the map must land on the constraints (to a tolerance loose enough for
      * a map written by hand): |f_c| and |A u + b| relative to the state */
-    for (i = 0; i < nx; ++i) scale = scale > (xr[i] < 0 ? -xr[i] : xr[i]) ? scale
-                                                                           : (xr[i] < 0 ? -xr[i] : xr[i]);
+    for (i = 0; i < nx; ++i) scale = rt_max(scale, rt_abs(xr[i]));
     if (mc) {
         gen_rt_real *fc = xr + nx;
         (void)nres;
         m->constraints(xr, p, t, fc);
-        for (i = 0; i < mc; ++i) res = res > (fc[i] < 0 ? -fc[i] : fc[i]) ? res : (fc[i] < 0 ? -fc[i] : fc[i]);
+        for (i = 0; i < mc; ++i) res = rt_max(res, rt_abs(fc[i]));
     }
     if (mv) {
         gen_rt_real *fv = xr + nx + mc;
         m->velocity_constraints(xr, xr + nq, p, t, fv);
-        for (i = 0; i < mv; ++i) res = res > (fv[i] < 0 ? -fv[i] : fv[i]) ? res : (fv[i] < 0 ? -fv[i] : fv[i]);
+        for (i = 0; i < mv; ++i) res = rt_max(res, rt_abs(fv[i]));
     }
     if (!(res <= GEN_RT_HYBRID_RESET_TOL * scale)) return GEN_RT_ERR_INCONSISTENT_RESET;
-    copy_n(nx, xr, x);
+    rt_copy(nx, xr, x);
     if ((mc || mv) && pwork) {
         st = gen_rt_model_project(m, t, p, proj_tol, proj_max_iter, pwork, x);
         if (st) return GEN_RT_ERR_INCONSISTENT_RESET;
     }
     return GEN_RT_OK;
 }
-
-static gen_rt_real abs_(gen_rt_real a) { return a < 0 ? -a : a; }
 
 int gen_rt_hybrid_jump(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *r,
                        const gen_rt_real *p, int k, gen_rt_real proj_tol, int proj_max_iter,
@@ -231,7 +220,7 @@ int gen_rt_hybrid_jump(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *
      * of zero) and every contact held */
     hy->values(x, x + nq, p, t, g);
     if ((st = gen_rt_hybrid_rates(m, t, x, p, work, iwork, gd))) return st;
-    for (j = 0; j < nq; ++j) gscale = gscale > abs_(x[j]) ? gscale : abs_(x[j]);
+    for (j = 0; j < nq; ++j) gscale = rt_max(gscale, rt_abs(x[j]));
     for (j = 0; j < nh; ++j) {
         int dir = hy->direction[j];
         gen_rt_real v = gd[j];
@@ -243,12 +232,12 @@ int gen_rt_hybrid_jump(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *
         /* a gap at zero that barely opens (slower than rest_speed) is a
          * contact coming to rest as well (an importer's root finding can
          * stop there on the rounding of the gap) */
-        if (!closing && !(j == k && abs_(v) <= hy->rest_speed[j])) continue;
-        if (j == k || abs_(g[j]) <= 1024 * GEN_RT_EPS * gscale) {
+        if (!closing && !(j == k && rt_abs(v) <= hy->rest_speed[j])) continue;
+        if (j == k || rt_abs(g[j]) <= 1024 * GEN_RT_EPS * gscale) {
             rows[j] = 1;
             /* the Zeno rule: e = 0, or an impact slower than rest_speed,
              * holds the contact (while its force pushes) */
-            if (hy->restitution[j] > 0 && abs_(v) > hy->rest_speed[j])
+            if (hy->restitution[j] > 0 && rt_abs(v) > hy->rest_speed[j])
                 er[j] = hy->restitution[j];
             else
                 er[j] = -1;

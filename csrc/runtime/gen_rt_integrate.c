@@ -1,21 +1,10 @@
-/* gen_rt_integrate.c - classic RK4 and Dormand-Prince 5(4). */
-#include <math.h>
-#include "gen_rt.h"
+/* gen_rt_integrate.c - the steps of the integrators, over a callback: one
+ * classic RK4 step, one Dormand-Prince 5(4) trial step with its continuous
+ * extension, the cubic Hermite interpolant, one RODAS4 trial step, and the
+ * scaled error norm. The simulation engine (gen_rt_engine.c) drives them. */
+#include "gen_rt_private.h"
 #include "gen_rt_dopri5.h"
 #include "gen_rt_rodas4.h"
-
-#ifdef GEN_RT_REAL_FLOAT
-#define RT_POW powf
-#define RT_FABS fabsf
-#define RT_SQRT sqrtf
-#else
-#define RT_POW pow
-#define RT_FABS fabs
-#define RT_SQRT sqrt
-#endif
-
-static gen_rt_real rt_max(gen_rt_real a, gen_rt_real b) { return a > b ? a : b; }
-static gen_rt_real rt_min(gen_rt_real a, gen_rt_real b) { return a < b ? a : b; }
 
 int gen_rt_rk4_step(gen_rt_rhs_fn f, void *ctx, int nx, gen_rt_real t,
                     gen_rt_real h, gen_rt_real *work, gen_rt_real *x)
@@ -180,99 +169,5 @@ int gen_rt_rodas4_trial(gen_rt_rhs_fn f, void *ctx, int nx, gen_rt_real t, gen_r
     for (i = 0; i < nx; ++i) ynew[i] = y[i] + K6[i];
     if (!gen_rt_all_finite(nx, ynew)) return GEN_RT_ERR_DIVERGED;
     *err = gen_rt_err_norm(nx, x, ynew, K6, rtol, atol);
-    return GEN_RT_OK;
-}
-
-int gen_rt_dopri5_integrate(gen_rt_rhs_fn f, gen_rt_post_fn post, void *ctx,
-                            int nx, gen_rt_real t0, gen_rt_real t1,
-                            const gen_rt_dopri5_opts *opts, gen_rt_real *work,
-                            gen_rt_dopri5_stats *stats, gen_rt_real *t_reached,
-                            gen_rt_real *x)
-{
-    gen_rt_real *k = work, *y = work + 7 * nx, *ynew = y + nx;
-    gen_rt_real t = t0, h, span = t1 - t0, hmin;
-    long max_steps, attempts = 0;
-    int i, st, rejected_last = 0;
-    if (!f || !opts || !work || !stats || !x) return GEN_RT_ERR_NULL;
-    if (t_reached) *t_reached = t0;
-    if (nx <= 0 || !(opts->rtol >= 0) || !(opts->atol >= 0) ||
-        !(opts->rtol > 0 || opts->atol > 0) || !(span >= 0))
-        return GEN_RT_ERR_BAD_ARG;
-    if (span == 0) return GEN_RT_OK;
-    max_steps = opts->max_steps > 0 ? opts->max_steps : 100000L;
-    hmin = opts->h_min > 0 ? opts->h_min
-                           : GEN_RT_C(64.0) * GEN_RT_EPS * rt_max(GEN_RT_C(1.0), RT_FABS(t1));
-    if ((st = f(ctx, t, x, k))) return st;
-    stats->n_rhs += 1;
-    if (opts->h_init > 0) h = opts->h_init;
-    else if (stats->h_last > 0) h = stats->h_last;
-    else {
-        /* Hairer's starting-step heuristic, max norms */
-        gen_rt_real d0 = 0, d1 = 0;
-        for (i = 0; i < nx; ++i) {
-            gen_rt_real sc = opts->atol + opts->rtol * RT_FABS(x[i]);
-            d0 = rt_max(d0, RT_FABS(x[i]) / sc);
-            d1 = rt_max(d1, RT_FABS(k[i]) / sc);
-        }
-        h = (d0 < GEN_RT_C(1e-5) || d1 < GEN_RT_C(1e-5)) ? GEN_RT_C(1e-6)
-                                                        : GEN_RT_C(0.01) * d0 / d1;
-        h = rt_min(h, span);
-    }
-    if (opts->h_max > 0) h = rt_min(h, opts->h_max);
-    while (t < t1) {
-        gen_rt_real err = 0, hs, h_nat = h;
-        int last = 0;
-        if (attempts >= max_steps) { if (t_reached) *t_reached = t; return GEN_RT_ERR_MAX_STEPS; }
-        ++attempts;
-        if (t + h >= t1 || t + GEN_RT_C(1.0001) * h >= t1) { h = t1 - t; last = 1; }
-        st = gen_rt_dopri5_trial(f, ctx, nx, t, h, x, opts->rtol, opts->atol, k, y, ynew, &err);
-        stats->n_rhs += 6;
-        if (st || !(err <= GEN_RT_C(1.0))) {
-            /* rejected: a failed evaluation (singular / non-finite) counts as
-             * an infinite error, so the step shrinks towards it */
-            stats->n_rejected += 1;
-            if (st == 0 && err == err)
-                hs = h * rt_max(GEN_RT_C(0.2), GEN_RT_C(0.9) * RT_POW(err, -GEN_RT_C(0.2)));
-            else
-                hs = h * GEN_RT_C(0.25);
-            if (hs < hmin) {
-                if (t_reached) *t_reached = t;
-                return st ? st : GEN_RT_ERR_STEP_UNDERFLOW;
-            }
-            h = hs;
-            rejected_last = 1;
-            continue;
-        }
-        /* accepted */
-        t = last ? t1 : t + h;
-        for (i = 0; i < nx; ++i) x[i] = ynew[i];
-        stats->n_accepted += 1;
-        if (post) {
-            if ((st = post(ctx, t, x))) { if (t_reached) *t_reached = t; return st; }
-        }
-        {
-            gen_rt_real fac = err > 0 ? GEN_RT_C(0.9) * RT_POW(err, -GEN_RT_C(0.2))
-                                      : GEN_RT_C(5.0);
-            fac = rt_min(rejected_last ? GEN_RT_C(1.0) : GEN_RT_C(5.0), rt_max(GEN_RT_C(0.2), fac));
-            h = h * fac;
-            /* a clipped final step says little about the natural step */
-            stats->h_last = (last && fac >= GEN_RT_C(1.0)) ? rt_max(h, h_nat) : h;
-        }
-        if (opts->h_max > 0) h = rt_min(h, opts->h_max);
-        rejected_last = 0;
-        if (t < t1) {
-            /* first same as last: k7 = f(t, ynew) is the next k1 unless
-             * post moved the state */
-            int same = 1;
-            for (i = 0; i < nx; ++i) same &= (x[i] == ynew[i]);
-            if (same) {
-                for (i = 0; i < nx; ++i) k[i] = k[6 * nx + i];
-            } else {
-                if ((st = f(ctx, t, x, k))) { if (t_reached) *t_reached = t; return st; }
-                stats->n_rhs += 1;
-            }
-        }
-    }
-    if (t_reached) *t_reached = t1;
     return GEN_RT_OK;
 }

@@ -1,7 +1,5 @@
 /* gen_rt_linalg.c - small dense LU (partial pivoting) and Cholesky. */
-#include "gen_rt.h"
-
-static gen_rt_real rt_abs(gen_rt_real x) { return x < 0 ? -x : x; }
+#include "gen_rt_private.h"
 
 gen_rt_real gen_rt_max_abs(int n, const gen_rt_real *v)
 {

@@ -8,14 +8,7 @@
  * and the accelerations and multipliers from the differentiated dynamics
  *   [M  -A^T] [du' ]     [Rq dq + Ru du + Rr dr]
  *   [A    0 ] [dlam] = - [Sq dq + Su du        ].                          */
-#include "gen_rt.h"
-
-static gen_rt_real *take(gen_rt_real **p, int n)
-{
-    gen_rt_real *r = *p;
-    *p += n;
-    return r;
-}
+#include "gen_rt_private.h"
 
 int gen_rt_linearize(const gen_rt_lin_dims *d, const gen_rt_lin_blocks *b,
                      gen_rt_real *work, int *iwork, gen_rt_real *A_lin,
@@ -35,21 +28,21 @@ int gen_rt_linearize(const gen_rt_lin_dims *d, const gen_rt_lin_blocks *b,
     if (mc > 0 && (!b->Jc || !d->q_dep)) return GEN_RT_ERR_NULL;
     if ((niq > 0 && !d->q_ind) || (niu > 0 && !d->u_ind)) return GEN_RT_ERR_NULL;
 
-    Q = take(&w, nq * niq);
-    Jd = take(&w, mc * mc);
-    X = take(&w, mc * niq);
-    Uu = take(&w, nu * niu);
-    Uq = take(&w, nu * niq);
-    Ad = take(&w, mv * mv);
-    Y = take(&w, mv * ns);
-    Dq = take(&w, nq * ns);
-    T1 = take(&w, nq * ns);
-    K = take(&w, N * N);
-    G = take(&w, N * (ns + nr));
-    T2 = take(&w, nu * ns);
-    T3 = take(&w, nu * niq);
-    VqQ = take(&w, mv * niq);
-    Kf = take(&w, nq * nq);
+    Q = rt_take(&w, nq * niq);
+    Jd = rt_take(&w, mc * mc);
+    X = rt_take(&w, mc * niq);
+    Uu = rt_take(&w, nu * niu);
+    Uq = rt_take(&w, nu * niq);
+    Ad = rt_take(&w, mv * mv);
+    Y = rt_take(&w, mv * ns);
+    Dq = rt_take(&w, nq * ns);
+    T1 = rt_take(&w, nq * ns);
+    K = rt_take(&w, N * N);
+    G = rt_take(&w, N * (ns + nr));
+    T2 = rt_take(&w, nu * ns);
+    T3 = rt_take(&w, nu * niq);
+    VqQ = rt_take(&w, mv * niq);
+    Kf = rt_take(&w, nq * nq);
 
     /* 1. coordinates: dq = Q dq_ind */
     for (i = 0; i < nq * niq; ++i) Q[i] = 0;
@@ -103,14 +96,7 @@ int gen_rt_linearize(const gen_rt_lin_dims *d, const gen_rt_lin_blocks *b,
     if ((st = gen_rt_lu_solve(nq, Kf, iwork, ns, Dq))) return st;
 
     /* 4. dynamics: KKT matrix and the right-hand sides */
-    for (i = 0; i < N; ++i)
-        for (j = 0; j < N; ++j) {
-            gen_rt_real v = 0;
-            if (i < nu && j < nu) v = b->M[i * nu + j];
-            else if (i < nu) v = -b->A[(j - nu) * nu + i];
-            else if (j < nu) v = b->A[(i - nu) * nu + j];
-            K[i * N + j] = v;
-        }
+    gen_rt_kkt_matrix(nu, mv, b->M, b->A, K);
     /* rows of R: Rq Q + Ru Uq | Ru Uu | Rr */
     gen_rt_matmul(nu, nq, niq, b->Rq, Q, T3);
     gen_rt_matmul(nu, nu, niq, b->Ru, Uq, T2);

@@ -1,28 +1,14 @@
-/* gen_rt_model.c - everything the public API does with a model: evaluation,
- * the right-hand side, projection and consistent states, integration and
- * linearization, over the kernels of a gen_rt_model.
+/* gen_rt_model.c - what the public API does with a model at one point:
+ * evaluation, the right-hand side, projection and consistent states, and
+ * linearization, over the kernels of a gen_rt_model (integration: the
+ * engine of gen_rt_engine.c and gen_rt_simulate.c).
  *
  * Inputs are assumed checked by the caller (the generated wrappers): the
  * pointers the sizes call for are non-NULL and every input is finite. Work
  * arrays are the caller's, sized by the GEN_RT_MODEL_*_WORK macros of
  * gen_rt.h. The arithmetic is laid out so that a generated model gives the
  * same numbers, bit for bit, as the code the generator used to inline. */
-#include <stddef.h>
-
-#include "gen_rt.h"
-
-static int finite_n(int n, const gen_rt_real *v)
-{
-    return gen_rt_finite_n(n, v);
-}
-
-static void copy_n(int n, const gen_rt_real *src, gen_rt_real *dst)
-{
-    int i;
-    for (i = 0; i < n; ++i) dst[i] = src[i];
-}
-
-#define NX_(m) ((m)->nq + (m)->nu)
+#include "gen_rt_private.h"
 
 /* ------------------------------------------------------------------ */
 /* Evaluation                                                         */
@@ -32,7 +18,7 @@ int gen_rt_model_eval_mass_matrix(const gen_rt_model *m, const gen_rt_real *q,
                                   const gen_rt_real *p, gen_rt_real t, gen_rt_real *M)
 {
     m->mass_matrix(q, p, t, M);
-    return finite_n(m->nu * m->nu, M) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+    return rt_finite(m->nu * m->nu, M) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
 }
 
 int gen_rt_model_eval_forcing(const gen_rt_model *m, const gen_rt_real *q,
@@ -40,7 +26,7 @@ int gen_rt_model_eval_forcing(const gen_rt_model *m, const gen_rt_real *q,
                               const gen_rt_real *p, gen_rt_real t, gen_rt_real *f)
 {
     m->forcing(q, u, r, p, t, f);
-    return finite_n(m->nu, f) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+    return rt_finite(m->nu, f) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
 }
 
 /* q' from the kinematic equations' outputs: explicit, qd holds q' (checked);
@@ -50,8 +36,8 @@ static int solve_kinematics(const gen_rt_model *m, gen_rt_real *Kqd, int *piv, g
 {
     int nq = m->nq;
     if (m->explicit_kinematics)
-        return finite_n(nq, qd) ? GEN_RT_OK : GEN_RT_ERR_SINGULAR_KINEMATICS;
-    if (!finite_n(nq * nq, Kqd) || !finite_n(nq, qd)) return GEN_RT_ERR_SINGULAR_KINEMATICS;
+        return rt_finite(nq, qd) ? GEN_RT_OK : GEN_RT_ERR_SINGULAR_KINEMATICS;
+    if (!rt_finite(nq * nq, Kqd) || !rt_finite(nq, qd)) return GEN_RT_ERR_SINGULAR_KINEMATICS;
     if (gen_rt_lu_factor(nq, Kqd, piv, 0) || gen_rt_lu_solve(nq, Kqd, piv, 1, qd))
         return GEN_RT_ERR_SINGULAR_KINEMATICS;
     return GEN_RT_OK;
@@ -70,7 +56,7 @@ int gen_rt_model_eval_constraints(const gen_rt_model *m, const gen_rt_real *q,
 {
     if (!m->mc) return GEN_RT_OK;
     m->constraints(q, p, t, fc);
-    return finite_n(m->mc, fc) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+    return rt_finite(m->mc, fc) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
 }
 
 int gen_rt_model_eval_constraint_jacobian(const gen_rt_model *m, const gen_rt_real *q,
@@ -79,7 +65,7 @@ int gen_rt_model_eval_constraint_jacobian(const gen_rt_model *m, const gen_rt_re
 {
     if (!m->mc) return GEN_RT_OK;
     m->constraint_jacobian(q, p, t, work, Jc);
-    return finite_n(m->mc * m->nq, Jc) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+    return rt_finite(m->mc * m->nq, Jc) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
 }
 
 int gen_rt_model_eval_velocity_constraints(const gen_rt_model *m, const gen_rt_real *q,
@@ -88,7 +74,7 @@ int gen_rt_model_eval_velocity_constraints(const gen_rt_model *m, const gen_rt_r
 {
     if (!m->mv) return GEN_RT_OK;
     m->velocity_constraints(q, u, p, t, fv);
-    return finite_n(m->mv, fv) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+    return rt_finite(m->mv, fv) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
 }
 
 int gen_rt_model_eval_velocity_constraint_matrix(const gen_rt_model *m,
@@ -98,7 +84,7 @@ int gen_rt_model_eval_velocity_constraint_matrix(const gen_rt_model *m,
 {
     if (!m->mv) return GEN_RT_OK;
     m->velocity_constraint_matrix(q, p, t, A, b);
-    return (finite_n(m->mv * m->nu, A) && finite_n(m->mv, b)) ? GEN_RT_OK
+    return (rt_finite(m->mv * m->nu, A) && rt_finite(m->mv, b)) ? GEN_RT_OK
                                                              : GEN_RT_ERR_NONFINITE_MODEL;
 }
 
@@ -111,7 +97,7 @@ int gen_rt_model_eval_energy(const gen_rt_model *m, const gen_rt_real *q,
         return GEN_RT_ERR_BAD_ARG; /* the model was generated without an energy expression */
     }
     m->energy(q, u, p, t, E);
-    return finite_n(1, E) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+    return rt_finite(1, E) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
 }
 
 /* ------------------------------------------------------------------ */
@@ -127,7 +113,7 @@ static int rhs_(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
  * configuration of the model */
 static int failure_at_(const gen_rt_model *m, const gen_rt_real *x, int st)
 {
-    if (!gen_rt_all_finite(NX_(m), x) || gen_rt_max_abs(NX_(m), x) > GEN_RT_DIVERGED_ABS)
+    if (!gen_rt_all_finite(RT_NX(m), x) || gen_rt_max_abs(RT_NX(m), x) > GEN_RT_DIVERGED_ABS)
         return GEN_RT_ERR_DIVERGED;
     return st;
 }
@@ -154,7 +140,7 @@ static int rhs_(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
         m->rhs_terms(q, u, r, p, t, m->explicit_kinematics ? NULL : Kqd, dxdt, M, f, NULL,
                      NULL);
         if ((st = solve_kinematics(m, Kqd, iwork, dxdt))) return st;
-        if (!finite_n(nu * nu, M) || !finite_n(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
+        if (!rt_finite(nu * nu, M) || !rt_finite(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
         return m->reaction_solve(q, u, r, p, t, M, f, dxdt + nq, NULL);
     }
     if (m->accel == GEN_RT_ACCEL_LDLT && m->explicit_kinematics) {
@@ -183,16 +169,16 @@ static int rhs_(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
          * or inf in f. So a finite solution means finite M and f, and only a
          * failure pays for the checks that name the culprit. */
         st = m->mass_solve(M, f, dxdt + nq);
-        if (!st && finite_n(nu, dxdt + nq)) return GEN_RT_OK;
-        if (!finite_n(nu * nu, M) || !finite_n(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
+        if (!st && rt_finite(nu, dxdt + nq)) return GEN_RT_OK;
+        if (!rt_finite(nu * nu, M) || !rt_finite(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
         /* an overflowing solution (a tiny mass under a large force) is
          * singular, as with LU */
         return st ? st : GEN_RT_ERR_SINGULAR;
     }
     if (mv && m->accel_terms) m->accel_terms(q, u, dxdt, p, t, a);
-    if (!finite_n(nu * nu, M) || !finite_n(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
+    if (!rt_finite(nu * nu, M) || !rt_finite(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
     if (mv) {
-        if (!finite_n(mv * nu, A) || !finite_n(mv, a)) return GEN_RT_ERR_NONFINITE_MODEL;
+        if (!rt_finite(mv * nu, A) || !rt_finite(mv, a)) return GEN_RT_ERR_NONFINITE_MODEL;
         if (m->accel == GEN_RT_ACCEL_PARTITIONED)
             /* Kane: eliminate the dependent speeds through the partition */
             return gen_rt_accel_partitioned(nu, mv, m->u_ind, m->u_dep, M, f, A, a, w, iw,
@@ -213,13 +199,13 @@ int gen_rt_model_eval_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_rea
         const int nq = m->nq, nu = m->nu;
         st = m->rhs_solve(x, x + nq, r, p, t, work, NULL, NULL, work + nq);
         if (!st && gen_rt_finite_n(nq + nu, work)) {
-            copy_n(nq + nu, work, dxdt);
+            rt_copy(nq + nu, work, dxdt);
             return GEN_RT_OK;
         }
     }
-    st = rhs_(m, t, x, r, p, work + NX_(m), iwork, work, lam);
+    st = rhs_(m, t, x, r, p, work + RT_NX(m), iwork, work, lam);
     if (st) return failure_at_(m, x, st);
-    copy_n(NX_(m), work, dxdt);
+    rt_copy(RT_NX(m), work, dxdt);
     return GEN_RT_OK;
 }
 
@@ -229,7 +215,7 @@ int gen_rt_model_eval_auxiliary_forces(const gen_rt_model *m, gen_rt_real t,
                                        gen_rt_real *F)
 {
     int na = m->na, i, st;
-    gen_rt_real *dx = work, *Fm = dx + NX_(m), *g = Fm + na * na, *w = g + na;
+    gen_rt_real *dx = work, *Fm = dx + RT_NX(m), *g = Fm + na * na, *w = g + na;
     if (na <= 0 || !m->auxiliary) return GEN_RT_OK;
     if (m->reaction_solve) {
         /* the reactions enter the motion: they come with u' from the
@@ -239,24 +225,24 @@ int gen_rt_model_eval_auxiliary_forces(const gen_rt_model *m, gen_rt_real t,
         gen_rt_real *M = w, *f = M + nu * nu, *Kqd = f + nu;
         m->rhs_terms(x, x + m->nq, r, p, t, m->explicit_kinematics ? NULL : Kqd, dx, M, f,
                      NULL, NULL);
-        if (!finite_n(nu * nu, M) || !finite_n(nu, f))
+        if (!rt_finite(nu * nu, M) || !rt_finite(nu, f))
             return failure_at_(m, x, GEN_RT_ERR_NONFINITE_MODEL);
         st = m->reaction_solve(x, x + m->nq, r, p, t, M, f, dx + m->nq, g);
         if (st) return failure_at_(m, x, st);
-        copy_n(na, g, F);
+        rt_copy(na, g, F);
         return GEN_RT_OK;
     }
     /* u' of the real speeds, then the auxiliary equations at them */
     st = gen_rt_model_rhs(m, t, x, r, p, w, iwork, dx, NULL);
     if (st) return st;
     m->auxiliary(x, x + m->nq, dx + m->nq, r, p, t, Fm, g);
-    if (!finite_n(na * na, Fm) || !finite_n(na, g)) return GEN_RT_ERR_NONFINITE_MODEL;
+    if (!rt_finite(na * na, Fm) || !rt_finite(na, g)) return GEN_RT_ERR_NONFINITE_MODEL;
     for (i = 0; i < na; ++i) g[i] = -g[i];
     /* a singular F (finite): the reactions are not determined here */
     if (gen_rt_lu_factor(na, Fm, iwork, 0) || gen_rt_lu_solve(na, Fm, iwork, 1, g) ||
-        !finite_n(na, g))
+        !rt_finite(na, g))
         return GEN_RT_ERR_SINGULAR_REACTIONS;
-    copy_n(na, g, F);
+    rt_copy(na, g, F);
     return GEN_RT_OK;
 }
 
@@ -270,7 +256,7 @@ static int constraint_jacobian_at(const gen_rt_model *m, const gen_rt_real *q,
                                   gen_rt_real *Jc)
 {
     m->constraint_jacobian(q, p, t, fc, Jc);
-    return (finite_n(m->mc, fc) && finite_n(m->mc * m->nq, Jc)) ? GEN_RT_OK
+    return (rt_finite(m->mc, fc) && rt_finite(m->mc * m->nq, Jc)) ? GEN_RT_OK
                                                                 : GEN_RT_ERR_NONFINITE_MODEL;
 }
 
@@ -279,19 +265,19 @@ static int velocity_matrix_at(const gen_rt_model *m, const gen_rt_real *q, const
                               gen_rt_real t, gen_rt_real *A, gen_rt_real *b)
 {
     m->velocity_constraint_matrix(q, p, t, A, b);
-    return (finite_n(m->mv * m->nu, A) && finite_n(m->mv, b)) ? GEN_RT_OK
+    return (rt_finite(m->mv * m->nu, A) && rt_finite(m->mv, b)) ? GEN_RT_OK
                                                              : GEN_RT_ERR_NONFINITE_MODEL;
 }
 
 int gen_rt_model_project(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *p,
                          gen_rt_real tol, int max_iter, gen_rt_real *work, gen_rt_real *x)
 {
-    int nq = m->nq, nu = m->nu, mc = m->mc, mv = m->mv, nx = NX_(m), i, j, st;
+    int nq = m->nq, nu = m->nu, mc = m->mc, mv = m->mv, nx = RT_NX(m), i, j, st;
     int nw = (mc * mc + mc > mv * mv + mv ? mc * mc + mc : mv * mv + mv) + 1;
     gen_rt_real *xc = work, *w = xc + nx, *fc = w + nw, *Jc = fc + mc, *q0 = Jc + mc * nq,
                 *A = q0 + nq, *b = A + mv * nu, *res = b + mv;
     if (!mc && !mv) return GEN_RT_OK;
-    copy_n(nx, x, xc);
+    rt_copy(nx, x, xc);
     if (mc) {
         int it, converged = 0;
         if (max_iter <= 0) max_iter = 10;
@@ -299,7 +285,7 @@ int gen_rt_model_project(const gen_rt_model *m, gen_rt_real t, const gen_rt_real
         for (it = 0; it < max_iter; ++it) {
             gen_rt_real dmax = 0;
             if ((st = constraint_jacobian_at(m, xc, p, t, fc, Jc))) return st;
-            copy_n(nq, xc, q0);
+            rt_copy(nq, xc, q0);
             st = gen_rt_min_norm_correct(mc, nq, Jc, fc, w, xc);
             if (st) return st;
             for (i = 0; i < nq; ++i) {
@@ -322,8 +308,8 @@ int gen_rt_model_project(const gen_rt_model *m, gen_rt_real t, const gen_rt_real
         st = gen_rt_min_norm_correct(mv, nu, A, res, w, xc + nq);
         if (st) return st;
     }
-    if (!finite_n(nx, xc)) return GEN_RT_ERR_NONFINITE_MODEL;
-    copy_n(nx, xc, x);
+    if (!rt_finite(nx, xc)) return GEN_RT_ERR_NONFINITE_MODEL;
+    rt_copy(nx, xc, x);
     return GEN_RT_OK;
 }
 
@@ -331,12 +317,12 @@ int gen_rt_model_consistent_state(const gen_rt_model *m, gen_rt_real t,
                                   const gen_rt_real *p, gen_rt_real tol, int max_iter,
                                   gen_rt_real *work, int *iwork, gen_rt_real *x)
 {
-    int nq = m->nq, nu = m->nu, mc = m->mc, mv = m->mv, nx = NX_(m), i, j, st;
+    int nq = m->nq, nu = m->nu, mc = m->mc, mv = m->mv, nx = RT_NX(m), i, j, st;
     gen_rt_real *xc = work, *fc = xc + nx, *Jc = fc + mc, *Jd = Jc + mc * nq,
                 *A = Jd + mc * mc, *b = A + mv * nu, *Ad = b + mv, *rhs = Ad + mv * mv;
     int *piv = iwork, *piv2 = iwork + mc;
     if (!mc && !mv) return GEN_RT_OK;
-    copy_n(nx, x, xc);
+    rt_copy(nx, x, xc);
     if (mc) {
         int it, converged = 0;
         if (max_iter <= 0) max_iter = 50;
@@ -375,8 +361,8 @@ int gen_rt_model_consistent_state(const gen_rt_model *m, gen_rt_real t,
         if (st) return st;
         for (j = 0; j < mv; ++j) xc[nq + m->u_dep[j]] = rhs[j];
     }
-    if (!finite_n(nx, xc)) return GEN_RT_ERR_NONFINITE_MODEL;
-    copy_n(nx, xc, x);
+    if (!rt_finite(nx, xc)) return GEN_RT_ERR_NONFINITE_MODEL;
+    rt_copy(nx, xc, x);
     return GEN_RT_OK;
 }
 
@@ -415,7 +401,7 @@ int gen_rt_model_eval_outputs(const gen_rt_model *m, gen_rt_real t, const gen_rt
 {
     if (m->ny <= 0 || !m->outputs) return GEN_RT_OK;
     m->outputs(x, x + m->nq, r, p, t, y);
-    return finite_n(m->ny, y) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+    return rt_finite(m->ny, y) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
 }
 
 /* Y: ny (nq + nu + nr) reals for the output Jacobians, or NULL */
@@ -448,7 +434,7 @@ static int linearize_(const gen_rt_model *m, const gen_rt_real *x_op,
         gen_rt_real *qdt = scratch, *Kt = qdt + nq;
         m->rhs_terms(q, u, r_op, p, t, m->explicit_kinematics ? NULL : Kt, qdt, M, f, A, a);
     }
-    if (!finite_n(nu * nu, M) || !finite_n(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
+    if (!rt_finite(nu * nu, M) || !rt_finite(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
     if (m->reaction_solve) {
         /* u' of the coupled solve (lin_terms then writes the blocks of its
          * derivative, by the implicit function theorem) */
@@ -456,12 +442,12 @@ static int linearize_(const gen_rt_model *m, const gen_rt_real *x_op,
         lam[0] = 0;
     } else if (mv) {
         if (m->accel_terms) m->accel_terms(q, u, qd, p, t, a);
-        if (!finite_n(mv * nu, A) || !finite_n(mv, a)) return GEN_RT_ERR_NONFINITE_MODEL;
+        if (!rt_finite(mv * nu, A) || !rt_finite(mv, a)) return GEN_RT_ERR_NONFINITE_MODEL;
         st = gen_rt_accel_kkt(nu, mv, M, f, A, a, scratch, iwork, ud, lam);
         if (st) return st;
     } else if (m->accel == GEN_RT_ACCEL_LDLT) {
         if ((st = m->mass_solve(M, f, ud))) return st;
-        if (!finite_n(nu, ud)) return GEN_RT_ERR_SINGULAR;
+        if (!rt_finite(nu, ud)) return GEN_RT_ERR_SINGULAR;
         lam[0] = 0;
     } else {
         st = gen_rt_accel_kkt(nu, 0, M, f, NULL, NULL, scratch, iwork, ud, NULL);
@@ -486,10 +472,10 @@ static int linearize_(const gen_rt_model *m, const gen_rt_real *x_op,
         b.ny = ny; b.Yq = Yq; b.Yu = Yu; b.Yr = nr ? Yr : NULL;
         b.C_lin = C_lin; b.D_lin = nr ? D_lin : NULL;
     }
-    if (!finite_n(nq * nq, Kq) || !finite_n(nu * nq, Rq) || !finite_n(nu * nu, Ru) ||
-        !finite_n(mv * nq, Sq) || !finite_n(mv * nu, Su) || !finite_n(mc * nq, Jc) ||
-        !finite_n(mv * nq, Vq) || !finite_n(nu * nr, Rr) ||
-        (b.Sqd && !finite_n(mv * nq, Sqd)))
+    if (!rt_finite(nq * nq, Kq) || !rt_finite(nu * nq, Rq) || !rt_finite(nu * nu, Ru) ||
+        !rt_finite(mv * nq, Sq) || !rt_finite(mv * nu, Su) || !rt_finite(mc * nq, Jc) ||
+        !rt_finite(mv * nq, Vq) || !rt_finite(nu * nr, Rr) ||
+        (b.Sqd && !rt_finite(mv * nq, Sqd)))
         return GEN_RT_ERR_NONFINITE_MODEL;
     return gen_rt_linearize(&d, &b, scratch + sw, iwork, A_lin, nr ? B_lin : Bdummy);
 }
@@ -501,7 +487,7 @@ int gen_rt_model_linearize_discrete(const gen_rt_model *m, const gen_rt_real *x_
 {
     int ns = m->nq - m->mc + m->nu - m->mv, nr = m->nr, st;
     gen_rt_real *A = work, *B = A + ns * ns, *w = B + ns * nr + 1;
-    if (!(dt > 0) || !finite_n(1, &dt)) return GEN_RT_ERR_BAD_ARG;
+    if (!(dt > 0) || !rt_finite(1, &dt)) return GEN_RT_ERR_BAD_ARG;
     st = gen_rt_model_linearize(m, x_op, r_op, p, t, w, iwork, A, B);
     if (st) return st;
     return gen_rt_c2d_zoh(ns, nr, A, nr ? B : NULL, dt, w, iwork, Ad, Bd);

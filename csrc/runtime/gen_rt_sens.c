@@ -10,25 +10,8 @@
  * the linearization is. */
 #include <stddef.h>
 
+#include "gen_rt_private.h"
 #include "gen_rt_sens.h"
-
-static int finite_n(int n, const gen_rt_real *v)
-{
-    return n <= 0 || gen_rt_all_finite(n, v);
-}
-
-static void copy_n(int n, const gen_rt_real *src, gen_rt_real *dst)
-{
-    int i;
-    for (i = 0; i < n; ++i) dst[i] = src[i];
-}
-
-static gen_rt_real *take(gen_rt_real **w, int n)
-{
-    gen_rt_real *r = *w;
-    *w += n;
-    return r;
-}
 
 /* the blocks of lin_terms that the elimination of the step's output
  * convention needs after the Jacobian (they live in the core work) */
@@ -52,24 +35,25 @@ static int jacobian_at(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *
     int nx = nq + nu, N = nu + mv, nc = nx + nr, i, j, k, st;
     const gen_rt_real *q = x, *u = x + nq, *qd = dx, *ud = dx + nq;
     gen_rt_real *w = work;
-    gen_rt_real *Kqd = take(&w, nq * nq), *Kq = take(&w, nq * nq), *Kf = take(&w, nq * nq),
-                *Ku = take(&w, nq * nu), *Rq = take(&w, nu * nq), *M = take(&w, nu * nu),
-                *Ru = take(&w, nu * nu), *Rr = take(&w, nu * nr + 1), *A = take(&w, mv * nu + 1),
-                *Su = take(&w, mv * nu + 1), *Sq = take(&w, mv * nq + 1),
-                *Vq = take(&w, mv * nq + 1), *Sqd = take(&w, mv * nq + 1),
-                *Jc = take(&w, mc * nq + 1), *Dq = take(&w, nq * nx), *K = take(&w, N * N),
-                *G = take(&w, N * nc);
+    gen_rt_real *Kqd = rt_take(&w, nq * nq), *Kq = rt_take(&w, nq * nq),
+                *Kf = rt_take(&w, nq * nq), *Ku = rt_take(&w, nq * nu),
+                *Rq = rt_take(&w, nu * nq), *M = rt_take(&w, nu * nu),
+                *Ru = rt_take(&w, nu * nu), *Rr = rt_take(&w, nu * nr + 1),
+                *A = rt_take(&w, mv * nu + 1), *Su = rt_take(&w, mv * nu + 1),
+                *Sq = rt_take(&w, mv * nq + 1), *Vq = rt_take(&w, mv * nq + 1),
+                *Sqd = rt_take(&w, mv * nq + 1), *Jc = rt_take(&w, mc * nq + 1),
+                *Dq = rt_take(&w, nq * nx), *K = rt_take(&w, N * N), *G = rt_take(&w, N * nc);
     const int use_sqd = mv > 0 && m->accel_terms != NULL;
     gen_rt_lin_out o;
 
     o.Kqd = Kqd; o.Ku = Ku; o.M = M; o.A = A; o.Kq = Kq; o.Rq = Rq; o.Ru = Ru; o.Rr = Rr;
     o.Sq = Sq; o.Su = Su; o.Vq = Vq; o.Jc = Jc; o.Sqd = Sqd;
     m->lin_terms(q, u, qd, ud, lam, r, p, t, &o);
-    if (!finite_n(nq * nq, Kqd) || !finite_n(nq * nq, Kq) || !finite_n(nq * nu, Ku) ||
-        !finite_n(nu * nu, M) || !finite_n(nu * nq, Rq) || !finite_n(nu * nu, Ru) ||
-        !finite_n(nu * nr, Rr) || !finite_n(mv * nu, A) || !finite_n(mv * nq, Sq) ||
-        !finite_n(mv * nu, Su) || !finite_n(mv * nq, Vq) || !finite_n(mc * nq, Jc) ||
-        (use_sqd && !finite_n(mv * nq, Sqd)))
+    if (!rt_finite(nq * nq, Kqd) || !rt_finite(nq * nq, Kq) || !rt_finite(nq * nu, Ku) ||
+        !rt_finite(nu * nu, M) || !rt_finite(nu * nq, Rq) || !rt_finite(nu * nu, Ru) ||
+        !rt_finite(nu * nr, Rr) || !rt_finite(mv * nu, A) || !rt_finite(mv * nq, Sq) ||
+        !rt_finite(mv * nu, Su) || !rt_finite(mv * nq, Vq) || !rt_finite(mc * nq, Jc) ||
+        (use_sqd && !rt_finite(mv * nq, Sqd)))
         return GEN_RT_ERR_NONFINITE_MODEL;
 
     /* q' rows: Kqd dq' = -[Kq | Ku] [dq; du] */
@@ -77,19 +61,12 @@ static int jacobian_at(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *
         for (j = 0; j < nq; ++j) Dq[i * nx + j] = -Kq[i * nq + j];
         for (j = 0; j < nu; ++j) Dq[i * nx + nq + j] = -Ku[i * nu + j];
     }
-    copy_n(nq * nq, Kqd, Kf);
+    rt_copy(nq * nq, Kqd, Kf);
     if (gen_rt_lu_factor(nq, Kf, iwork, 0) || gen_rt_lu_solve(nq, Kf, iwork, nx, Dq))
         return GEN_RT_ERR_SINGULAR_KINEMATICS;
 
     /* u' rows: the KKT matrix and the right-hand sides, columns [dq, du, dr] */
-    for (i = 0; i < N; ++i)
-        for (j = 0; j < N; ++j) {
-            gen_rt_real v = 0;
-            if (i < nu && j < nu) v = M[i * nu + j];
-            else if (i < nu) v = -A[(j - nu) * nu + i];
-            else if (j < nu) v = A[(i - nu) * nu + j];
-            K[i * N + j] = v;
-        }
+    gen_rt_kkt_matrix(nu, mv, M, A, K);
     for (i = 0; i < nu; ++i) {
         gen_rt_real *g = G + i * nc;
         for (j = 0; j < nq; ++j) g[j] = -Rq[i * nq + j];
@@ -112,16 +89,16 @@ static int jacobian_at(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *
     }
     if ((st = gen_rt_lu_factor(N, K, iwork, 0))) return st;
     if ((st = gen_rt_lu_solve(N, K, iwork, nc, G))) return st;
-    if (!finite_n(nq * nx, Dq) || !finite_n(nu * nc, G)) return GEN_RT_ERR_SINGULAR;
+    if (!rt_finite(nq * nx, Dq) || !rt_finite(nu * nc, G)) return GEN_RT_ERR_SINGULAR;
 
     for (i = 0; i < nq; ++i) {
-        copy_n(nx, Dq + i * nx, Jx + i * ldx);
+        rt_copy(nx, Dq + i * nx, Jx + i * ldx);
         if (Jr)
             for (j = 0; j < nr; ++j) Jr[i * ldr + j] = 0; /* the kinematics hold no inputs */
     }
     for (i = 0; i < nu; ++i) {
-        copy_n(nx, G + i * nc, Jx + (nq + i) * ldx);
-        if (Jr) copy_n(nr, G + i * nc + nx, Jr + (nq + i) * ldr);
+        rt_copy(nx, G + i * nc, Jx + (nq + i) * ldx);
+        if (Jr) rt_copy(nr, G + i * nc + nx, Jr + (nq + i) * ldr);
     }
     if (cb) {
         cb->A = A; cb->Vq = Vq; cb->Jc = Jc;
@@ -152,9 +129,9 @@ static int elimination(const gen_rt_model *m, const sens_constraint_blocks *cb,
     int nq = m->nq, nu = m->nu, mc = m->mc, mv = m->mv, nx = nq + nu;
     int niq = nq - mc, niu = nu - mv, ns = niq + niu, i, j, k, st;
     gen_rt_real *w = work;
-    gen_rt_real *Jd = take(&w, mc * mc), *X = take(&w, mc * niq), *Ad = take(&w, mv * mv),
-                *Y = take(&w, mv * ns);
-    for (i = 0; i < nx * ns; ++i) E[i] = 0;
+    gen_rt_real *Jd = rt_take(&w, mc * mc), *X = rt_take(&w, mc * niq),
+                *Ad = rt_take(&w, mv * mv), *Y = rt_take(&w, mv * ns);
+    rt_zero(nx * ns, E);
     for (k = 0; k < niq; ++k) E[m->q_ind[k] * ns + k] = 1;
     for (k = 0; k < niu; ++k) E[(nq + m->u_ind[k]) * ns + niq + k] = 1;
     /* coordinates: Jc_dep dq_dep = -Jc_ind dq_ind */
@@ -184,7 +161,7 @@ static int elimination(const gen_rt_model *m, const sens_constraint_blocks *cb,
         for (j = 0; j < mv; ++j)
             for (k = 0; k < ns; ++k) E[(nq + m->u_dep[j]) * ns + k] = -Y[j * ns + k];
     }
-    return finite_n(nx * ns, E) ? GEN_RT_OK : GEN_RT_ERR_SINGULAR;
+    return rt_finite(nx * ns, E) ? GEN_RT_OK : GEN_RT_ERR_SINGULAR;
 }
 
 int gen_rt_model_step_sensitivity(const gen_rt_model *m, gen_rt_real t, gen_rt_real h,
@@ -196,10 +173,11 @@ int gen_rt_model_step_sensitivity(const gen_rt_model *m, gen_rt_real t, gen_rt_r
     int nx = nq + nu, nc = nx + nr, niq = nq - mc, ns = nq - mc + nu - mv;
     int i, j, k, s, st;
     gen_rt_real *w = work;
-    gen_rt_real *k1 = take(&w, nx), *k2 = take(&w, nx), *k3 = take(&w, nx),
-                *k4 = take(&w, nx), *y = take(&w, nx), *lam = take(&w, mv + 1),
-                *J = take(&w, nx * nc), *Y = take(&w, nx * nc), *D = take(&w, nx * nc),
-                *S = take(&w, nx * nc), *E = take(&w, nx * ns), *out = take(&w, ns * (ns + nr));
+    gen_rt_real *k1 = rt_take(&w, nx), *k2 = rt_take(&w, nx), *k3 = rt_take(&w, nx),
+                *k4 = rt_take(&w, nx), *y = rt_take(&w, nx), *lam = rt_take(&w, mv + 1),
+                *J = rt_take(&w, nx * nc), *Y = rt_take(&w, nx * nc),
+                *D = rt_take(&w, nx * nc), *S = rt_take(&w, nx * nc),
+                *E = rt_take(&w, nx * ns), *out = rt_take(&w, ns * (ns + nr));
     gen_rt_real *sw = w; /* rhs, or the Jacobian's core work then the elimination's */
     gen_rt_real *kst[4];
     gen_rt_real h2 = GEN_RT_C(0.5) * h;
@@ -227,8 +205,8 @@ int gen_rt_model_step_sensitivity(const gen_rt_model *m, gen_rt_real t, gen_rt_r
                                   iwork, E)))
                 return st;
             /* dk_1 = [Jx, Jr] */
-            copy_n(nx * nc, J, D);
-            for (i = 0; i < nx * nc; ++i) S[i] = D[i];
+            rt_copy(nx * nc, J, D);
+            rt_copy(nx * nc, D, S);
         } else {
             /* Y = [I, 0] + c dk_{s-1} (D), then dk_s = Jx Y + [0, Jr] */
             for (i = 0; i < nx; ++i)
@@ -267,11 +245,11 @@ int gen_rt_model_step_sensitivity(const gen_rt_model *m, gen_rt_real t, gen_rt_r
         }
         for (j = 0; j < nr; ++j) out[k * (ns + nr) + ns + j] = f[nx + j];
     }
-    if (!finite_n(ns * (ns + nr), out)) return GEN_RT_ERR_DIVERGED;
-    copy_n(nx, y, x);
+    if (!rt_finite(ns * (ns + nr), out)) return GEN_RT_ERR_DIVERGED;
+    rt_copy(nx, y, x);
     for (k = 0; k < ns; ++k) {
-        copy_n(ns, out + k * (ns + nr), Fx + k * ns);
-        if (nr && Fr) copy_n(nr, out + k * (ns + nr) + ns, Fr + k * nr);
+        rt_copy(ns, out + k * (ns + nr), Fx + k * ns);
+        if (nr && Fr) rt_copy(nr, out + k * (ns + nr) + ns, Fr + k * nr);
     }
     return GEN_RT_OK;
 }

@@ -45,10 +45,10 @@ __all__ = ["Backend", "CBackend", "EigenBackend", "FmuBackend", "CasadiBackend",
 # the C runtime every C-backend model links (csrc/)
 RUNTIME_SOURCES = ["gen_rt_status.c", "gen_rt_linalg.c", "gen_rt_dynamics.c",
                    "gen_rt_project.c", "gen_rt_integrate.c", "gen_rt_linearize.c",
-                   "gen_rt_model.c", "gen_rt_simulate.c", "gen_rt_expm.c", "gen_rt_sens.c",
-                   "gen_rt_hybrid.c"]
+                   "gen_rt_model.c", "gen_rt_input.c", "gen_rt_engine.c", "gen_rt_events.c",
+                   "gen_rt_simulate.c", "gen_rt_expm.c", "gen_rt_sens.c", "gen_rt_hybrid.c"]
 RUNTIME_HEADERS = ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h", "gen_rt_rodas4.h", "gen_rt_expm.h",
-                   "gen_rt_sens.h", "gen_rt_ldlt.h"]
+                   "gen_rt_sens.h", "gen_rt_ldlt.h", "gen_rt_private.h"]
 # the standalone simulator's runtime (main.c's program: the project's binary
 # only, never a library's)
 RUNTIME_MAIN = ["gen_rt_main.c", "gen_rt_main.h"]

@@ -16,7 +16,7 @@ code has no recursion and no dynamic stack: a cycle or a function with a
 ``dynamic`` (unbounded) frame is an error (FootprintError), never a number;
 ``dynamic,bounded`` (stack realignment on x86-64) counts with GCC's bound. The only
 indirect calls are the integrators calling the runtime's right-hand side
-callback (``rhs_cb`` in gen_rt_simulate.c), the user's controller, and the
+callback (``rhs_cb`` in gen_rt_engine.c), the user's controller, and the
 runtime calling the model's kernels through its ``gen_rt_model`` (the
 ``<name>_k_*`` kernels, their adapters and the unrolled mass solve, the
 only other functions whose address is taken); an indirect call counts as
@@ -226,9 +226,9 @@ _RUNTIME_INDIRECT = {
     "gen_rt_model_consistent_state": ["constraint_jacobian", "velocity_constraint_matrix"],
     "gen_rt_model_linearize": ["rhs_terms", "accel_terms", "lin_terms", "mass_solve",
                                "reaction_solve"],
-    # the user's controller callback (simulate_input): its stack is the
-    # user's own and not part of the model's report
-    "input_at": [],
+    # the user's controller callback (simulate_input, gen_rt_input.c): its
+    # stack is the user's own and not part of the model's report
+    "gen_rt_input_at": [],
     "gen_rt_model_jacobian": ["rhs_terms", "accel_terms", "mass_solve", "rhs_solve", "lin_terms",
                               "reaction_solve"],
     "jacobian_at": ["lin_terms"],
@@ -241,7 +241,7 @@ _RUNTIME_INDIRECT = {
     "gen_rt_model_linearize_outputs": ["rhs_terms", "accel_terms", "lin_terms", "mass_solve",
                                        "output_jacobian", "reaction_solve"],
     "gen_rt_model_eval_outputs": ["outputs"],
-    # the simulation engine (gen_rt_simulate.c): output events
+    # the simulation engine (gen_rt_events.c): output events
     "outputs_": ["outputs"],
     # hybrid={...} (gen_rt_hybrid.c, and the engine's jumps)
     "gen_rt_hybrid_rhs": ["rhs_terms", "accel_terms", "hybrid_jacobian", "hybrid_bias"],
@@ -256,7 +256,7 @@ _RUNTIME_INDIRECT = {
                      "velocity_constraints", "constraint_jacobian", "rhs_terms", "accel_terms",
                      "hybrid_bias"],
 }
-# what the integrators call back (gen_rt_simulate.c)
+# what the integrators call back (gen_rt_engine.c)
 _CALLBACKS = ["rhs_cb"]
 
 
@@ -269,8 +269,7 @@ def _indirect_targets(p):
               "reaction_solve": f"{p}_reaction_solve"}
     out = {caller: [member.get(k, f"{p}_k_{k}") for k in ks]
            for caller, ks in _RUNTIME_INDIRECT.items()}
-    for integrator in ("gen_rt_rk4_step", "gen_rt_dopri5_integrate", "gen_rt_dopri5_trial",
-                       "gen_rt_rodas4_trial"):
+    for integrator in ("gen_rt_rk4_step", "gen_rt_dopri5_trial", "gen_rt_rodas4_trial"):
         out[integrator] = list(_CALLBACKS)
     # any other caller is runtime code the compiler inlined somewhere else (at
     # -O3 gen_rt_model_rhs into rhs_cb, say): it may reach any kernel. The

@@ -2,8 +2,9 @@
  * planar pendulum in Cartesian coordinates, checked against the exact
  * solution in polar coordinates; a free particle with a full mass matrix;
  * gen_rt_accel_reactions and gen_rt_reactions_columns on a system solved by
- * hand. */
+ * hand; the KKT matrix every KKT solve assembles (gen_rt_kkt_matrix). */
 #include "test_common.h"
+#include "gen_rt_private.h"
 
 #define PM 1.3   /* mass */
 #define PL 0.7   /* length */
@@ -301,8 +302,31 @@ static void test_reactions_lin(void)
                                    Rq, Ru, NULL, Mo), GEN_RT_OK);
 }
 
+/* gen_rt_kkt_matrix: [M, -A^T; A, 0] entry by entry (n = 3, m = 2, every
+ * entry of M and A distinct), and M alone without constraints (A NULL) */
+static void test_kkt_matrix(void)
+{
+    const gen_rt_real M[9] = {1, 2, 3, 4, 5, 6, 7, 8, 9};
+    const gen_rt_real A[6] = {11, 12, 13, 14, 15, 16};
+    const gen_rt_real want[25] = {1,  2,  3,  -11, -14,
+                                  4,  5,  6,  -12, -15,
+                                  7,  8,  9,  -13, -16,
+                                  11, 12, 13, 0,   0,
+                                  14, 15, 16, 0,   0};
+    gen_rt_real K[25];
+    int i;
+    for (i = 0; i < 25; ++i) K[i] = -99;
+    gen_rt_kkt_matrix(3, 2, M, A, K);
+    for (i = 0; i < 25; ++i) CHECK_NEAR(K[i], want[i], 0.0);
+    for (i = 0; i < 25; ++i) K[i] = -99;
+    gen_rt_kkt_matrix(3, 0, M, NULL, K);
+    for (i = 0; i < 9; ++i) CHECK_NEAR(K[i], M[i], 0.0);
+    CHECK_NEAR(K[9], -99.0, 0.0); /* nothing written beyond 3 x 3 */
+}
+
 int main(void)
 {
+    test_kkt_matrix();
     test_reactions();
     test_reactions_lin();
     test_pendulum();

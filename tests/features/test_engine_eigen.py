@@ -1,7 +1,7 @@
 """The simulation engine of the Eigen backend against the C backend's,
 through the same cffi wrapper and the same Simulator.
 
-There is one engine (csrc/gen_rt_simulate.c and the rest of the C runtime):
+There is one engine (csrc/runtime/gen_rt_engine.c and the rest of the C runtime):
 the Eigen backend's library is the C backend's model and runtime plus the
 typed C++ face (gen/codegen/eigen.py). So every run here is the same on both
 backends bit for bit: the output times, the states, the inputs, the event
