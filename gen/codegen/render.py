@@ -396,7 +396,12 @@ def render(plan, real="double", backend="c", timings=None, project=True, only=No
     (the model library's sources, with the derivative kernels when the plan
     has them, else their stand-ins). only: a set of template roles ("model",
     "lin", "stub", "project") to render, nothing else (no runtime files).
-    Nothing is written and nothing is stored on the model."""
+    Nothing is written and nothing is stored on the model.
+
+    With a product's backend (Backend.product), plan is the face's
+    ProductPlan (gen/codegen/product_abi.py): the Rendered holds its files
+    (its templates, the headers of its interface, its runtime files) and
+    its bound ProductInterface; project and only do not apply."""
     if real not in ("double", "float"):
         raise ModelError(f"real must be 'double' or 'float', got {real!r}")
     b = get_backend(backend)
