@@ -3,7 +3,9 @@
     model -> plan (gen/plan/ir.py) -> render (gen/codegen/render.py) -> build (gen/toolchain/build.py)
           -> load (gen/toolchain/host.py) -> Simulator (gen/sim/simulator.py)
 
-compile() runs it (gen.compile is this function). A model is compiled
+compile() runs it (gen.compile is this function); product() runs the same
+stages for a product's library (a face's ProductPlan, gen/design):
+render -> build -> gen.toolchain.host.load_product. A model is compiled
 without its derivative kernels when its backend can add them later
 (Backend.lazy_derivatives): the Simulator gets derive(), which plans and
 renders them (derivatives_source), builds the complete library
@@ -19,12 +21,12 @@ from .codegen.backends import get_backend
 from .sim.simulator import Simulator
 from .toolchain.build import build, build_derivatives
 from .core.errors import ModelError
-from .toolchain.host import load
+from .toolchain.host import load, load_product
 from .plan.ir import DERIVATIVE_KERNELS, plan as make_plan, with_derivatives
 from .intake.model import require_model
 from .codegen.render import render
 
-__all__ = ["compile", "derivatives_source", "simulator"]
+__all__ = ["compile", "derivatives_source", "simulator", "product"]
 
 
 def derivatives_source(plan, real="double", timings=None):
@@ -118,6 +120,19 @@ def compile(model, backend="c", real="double", verbose=False, sources=None,  # n
     sim.build_info = {"module": str(built.path), "derivatives": built.derivatives, **timings,
                       "backend": b.name}
     return sim
+
+
+def product(plan, backend, real="double", timings=None):
+    """A product's library through the pipeline: its ProductPlan rendered
+    by its backend (gen.codegen.render.render), built and cached by content
+    (gen.toolchain.build.build) and opened with the cdef of its interface
+    (gen.toolchain.host.load_product). Returns (Built, ffi, lib)."""
+    b = get_backend(backend, need="product")
+    timings = {} if timings is None else timings
+    rendered = render(plan, real=real, backend=b, timings=timings)
+    built = build(rendered, timings=timings)
+    ffi, lib = load_product(built)
+    return built, ffi, lib
 
 
 def _read_sources(folder, expected, name, backend):

@@ -18,24 +18,36 @@ its name.
     FMU    "fmu"    the C model with the FMI glue, for gen.export_fmu (gen/export/fmu.py)
     CasADi "casadi" the C model with CasADi's external-function wrappers (gen/export/casadi.py)
 
+and the products' libraries (ProductBackend: rendered from a face's
+ProductPlan, their C interface described once, gen/codegen/product_abi.py):
+
+    OCP     "ocp"     an optimal control problem's kernels over the node loop
+                      (csrc/products/ocp, gen/design/ocp)
+    Tracker "tracker" a trajectory tracker's const tables (gen/design/tracking.py)
+
 A new backend is a subclass here (its templates under templates/<name>/)
 and one line in BACKENDS.
 """
 from __future__ import annotations
 
 import copy
+import math
 import os
 import shutil
 import sys
 import sysconfig
 from pathlib import Path
 
+import numpy as np
+
 from . import eigen as eigen_face
 from .eigen import CXX_RESERVED, eigen_version, find_eigen
+from .product_abi import CConst, CEnum, CField, CFunction, CStruct, ProductInterface
 from ..core.errors import BuildError, ModelError
 from ..sym.printers import ModelCPrinter
 
-__all__ = ["Backend", "CBackend", "EigenBackend", "FmuBackend", "CasadiBackend", "BACKENDS", "get_backend",
+__all__ = ["Backend", "CBackend", "EigenBackend", "FmuBackend", "CasadiBackend", "ProductBackend",
+           "OcpBackend", "TrackerBackend", "BACKENDS", "get_backend",
            "backend_names", "c_compiler", "cxx_compiler", "eigen_include_dir",
            "RUNTIME_SOURCES", "RUNTIME_HEADERS", "RUNTIME_MAIN", "EIGEN_RUNTIME_HEADERS", "C_FLAGS",
            "C_LIN_FLAGS", "RUNTIME_FLAGS", "STRICT_FLAGS", "CXX_FLAGS", "CXX_STRICT_FLAGS",
@@ -194,6 +206,8 @@ class Backend:
     tag = ""
     #: its library links with the C++ compiler
     link_cxx = False
+    #: a product's library (ProductBackend): rendered from a ProductPlan
+    product = False
 
     def __repr__(self):
         return f"<backend {self.name!r}>"
@@ -413,8 +427,197 @@ class CasadiBackend(CBackend):
         return [(f, cc, [*C_FLAGS, "-fPIC", *extra]) for f, extra in own]
 
 
+# ------------------------------------------------------------ the products
+class ProductBackend(Backend):
+    """A product's library (gen/design: optimal control, tracking; the next
+    products'): rendered by gen.codegen.render.render from the ProductPlan
+    its face makes, through its templates (data, as every backend's) and
+    the headers of its interface; built by gen.toolchain.build.build by its
+    recipe and cached by content like a model library; opened by
+    gen.toolchain.host.load_product with the cdef of the same interface.
+
+    A product sets: name; interface (gen/codegen/product_abi.py, the one
+    description of its C interface); templates, its own files ((file with
+    {name}, template, role)); runtime_files, its hand-written runtime
+    (csrc/products/<name>/), copied beside them and compiled with them;
+    and overrides names() (the values its interface is bound with) and
+    context() (what its templates need beyond the plan's data) when it
+    needs to."""
+    product = True
+    loadable = False
+    project = False
+    lazy_derivatives = False
+    stack_limit = False
+    #: ProductInterface: its C interface, with placeholders ({name}, ...)
+    interface = None
+    #: its runtime files are compiled with its own files, not shared
+    runtime_sources = ()
+
+    def printer(self, symbol_map, real):
+        return ModelCPrinter(symbol_map, real)
+
+    def names(self, plan, real):
+        """The values its interface is bound with: {name} the library's
+        prefix and the plan's names."""
+        return {"name": plan.name, **plan.names}
+
+    def context(self, plan, iface, real):
+        """What its templates need beyond the shared context (the plan's
+        data, the printed kernels, the bound interface)."""
+        return {}
+
+    def file_templates(self, iface):
+        """(file, template, role) of everything it renders: its own
+        templates and the headers of its interface (the library's header,
+        and its types' header when its runtime includes them)."""
+        out = list(self.templates) + [("{name}.h", "common/product.h.j2", "product")]
+        if iface.types_header:
+            out.append((iface.types_header, "common/product_types.h.j2", "product"))
+        return out
+
+    def cache_parts(self):
+        return [*super().cache_parts(), f"backend={self.name}"]
+
+    def units(self, name, files, derivatives, includes=()):
+        """Every C file, its own and its runtime's, the largest first, as
+        position-independent C."""
+        cc = c_compiler()
+        own = sorted((f for f in files if f.endswith(".c")),
+                     key=lambda f: (-len(files[f].encode()), f))
+        return [(f, cc, [*C_FLAGS, "-fPIC"]) for f in own]
+
+
+class OcpBackend(ProductBackend):
+    """A direct-collocation problem's library (gen.OptimalControl,
+    gen/design/ocp): the generated kernels of every family of the problem
+    (values, sparse Jacobian, Hessian of the Lagrangian) in <name>.c, over
+    the hand-written node loop (csrc/products/ocp/gen_rt_ocp.c), which
+    gathers each instance's locals and scatters into IPOPT's arrays through
+    the caller's index tables (gen_rt_ocp_block)."""
+    name = "ocp"
+    tag = ""
+    templates = (("{name}.c", "ocp/ocp.c.j2", "product"),)
+    runtime_files = ("gen_rt_ocp.c", "gen_rt_ocp.h", "gen_rt_status.h")
+    interface = ProductInterface(
+        product="ocp",
+        doc="the optimal-control kernels of the model '{model}' over the node loop",
+        types_header="gen_rt_ocp_abi.h",
+        enums=(CEnum("what gen_rt_ocp_eval (a library's <prefix>_eval) computes", (
+            CConst("GEN_RT_OCP_OBJECTIVE", 0, "the objective, out[0]"),
+            CConst("GEN_RT_OCP_GRADIENT", 1, "its gradient, one per unknown"),
+            CConst("GEN_RT_OCP_CONSTRAINTS", 2, "the constraints, one per row"),
+            CConst("GEN_RT_OCP_JACOBIAN", 3, "the nonzeros of their Jacobian"),
+            CConst("GEN_RT_OCP_HESSIAN", 4, "the nonzeros of the lower triangle of the "
+                   "Hessian of the Lagrangian"))),),
+        structs=(CStruct(
+            "gen_rt_ocp_block", "One family's instances: where each gathers its locals "
+            "from z, its rows, and where its Jacobian and Hessian nonzeros go.", (
+                CField("family", "int", "index into the families"),
+                CField("ninst", "int", "instances"),
+                CField("gstart", "const int *", "ninst*nv + 1"),
+                CField("gidx", "const int *", "z index, or -1 for the constant 1"),
+                CField("gcoef", "const double *"),
+                CField("data", "const double *", "ninst*nd"),
+                CField("row0", "const int *", "ninst: first constraint row, < 0: objective"),
+                CField("jstart", "const int *", "ninst + 1"),
+                CField("jloc", "const int *", "local Jacobian nonzero"),
+                CField("jslot", "const int *", "global Jacobian nonzero (or gradient entry)"),
+                CField("jcoef", "const double *"),
+                CField("hstart", "const int *", "ninst + 1"),
+                CField("hloc", "const int *"),
+                CField("hslot", "const int *"),
+                CField("hcoef", "const double *"))),),
+        functions=(
+            CFunction("{name}_eval", "int", (
+                ("const gen_rt_ocp_block *", "blocks"), ("int", "nblocks"),
+                ("const double *", "z"), ("const double *", "p"), ("int", "what"),
+                ("const double *", "lam"), ("double", "sigma"), ("double *", "work"),
+                ("int", "nout"), ("double *", "out")),
+                "The problem's what (GEN_RT_OCP_*) at the unknowns z, p the known constants: "
+                "out (nout) zeroed, then filled by the blocks' instances. lam: the "
+                "constraint multipliers and sigma the objective's factor (Hessian only); "
+                "work: {name}_work_len() doubles. Returns 0, GEN_RT_ERR_NULL, or a "
+                "kernel's negative status."),
+            CFunction("{name}_work_len", "int", (),
+                      "The doubles of work {name}_eval needs.")))
+
+    def names(self, plan, real):
+        return {**super().names(plan, real), "model": plan.data["model"]}
+
+
+class TrackerBackend(ProductBackend):
+    """A trajectory tracker's C (gen.TrajectoryTracker.to_c,
+    gen/design/tracking.py): the reference and the gain schedule as const
+    tables in <name>.c, its <name>_input and <name>_step over the model
+    library's <p>_eval_input. It is compiled with its model's sources (a
+    generated project, a firmware), never alone: rendered only."""
+    name = "tracker"
+    tag = "_tracker"
+    templates = (("{name}.c", "tracker/tracker.c.j2", "product"),)
+    interface = ProductInterface(
+        product="tracker",
+        doc="trajectory tracker of the model '{p}'",
+        includes=('"{p}.h"',),
+        macros=(
+            CConst("{N}_N_GAIN", "{n_gain}",
+                   "rows of the tables (the last: the terminal gain, held after the end)"),
+            CConst("{N}_T0", "(({p}_real){t0})", "the time of row 0: {t0_text}"),
+            CConst("{N}_PERIOD", "(({p}_real){period})",
+                   "the sample period, the time between rows: {period_text}"),
+            CConst("{N}_TABLE_BYTES", "{flash}",
+                   "bytes of the const tables (flash): {table_bytes}")),
+        functions=(
+            CFunction("{name}_input", "void", (("{p}_input *", "in"),),
+                      "Fill in (every field) with the tracker: the gain schedule and its "
+                      "period."),
+            CFunction("{name}_step", "int", (("{p}_real", "t"), ("const {p}_real *", "x"),
+                                             ("{p}_real *", "r")),
+                      "The inputs r ({P}_NR) at the sample time t from the state x "
+                      "({P}_NX); 0 or a negative {P}_ERR_* status.")))
+
+    def file_templates(self, iface):
+        # its header's prose is its own (how to run it on a controller)
+        return [("{name}.h", "tracker/tracker.h.j2", "product"), *self.templates]
+
+    def names(self, plan, real):
+        from .render import fmt_real
+        d = plan.data
+        fp = d["footprint"]
+        table = ", ".join(f"{k} {fp[k]}" for k in ("K", "x_ref", "r_ref", "bounds") if fp[k])
+        return {**super().names(plan, real), "N": plan.name.upper(), "P": d["model"].upper(),
+                "n_gain": d["n_gain"], "t0": fmt_real(d["t0"], real),
+                "t0_text": repr(float(d["t0"])), "period": fmt_real(d["period"], real),
+                "period_text": repr(float(d["period"])), "flash": fp["flash"],
+                "table_bytes": table}
+
+    def context(self, plan, iface, real):
+        """The tables as rows of C literals (an infinite bound as HUGE_VAL)."""
+        from .render import fmt_real
+        d = plan.data
+        huge = "HUGE_VALF" if real == "float" else "HUGE_VAL"
+
+        def lit(v):
+            return fmt_real(v, real) if math.isfinite(v) else ("-" if v < 0 else "") + huge
+
+        def rows(a, per):
+            flat = [lit(float(v)) for v in np.asarray(a, dtype=float).ravel()]
+            return [", ".join(flat[i:i + per]) for i in range(0, len(flat), per)]
+        nr = d["nr"]
+        return {"N": plan.name.upper(), "p": d["model"], "P": d["model"].upper(),
+                "K_rows": rows(d["K"], d["ns"]), "x_rows": rows(d["x_op"], d["nx"]),
+                "r_rows": rows(d["r_op"], max(nr, 1)),
+                "r_min": None if d["r_min"] is None else rows(d["r_min"], nr)[0],
+                "r_max": None if d["r_max"] is None else rows(d["r_max"], nr)[0]}
+
+    def units(self, name, files, derivatives, includes=()):
+        raise BuildError(f"the tracker {name!r} is compiled with its model's sources "
+                         "(gen.generate, then TrajectoryTracker.to_c into the same folder), "
+                         "not alone")
+
+
 #: the registry: every backend, by name
-BACKENDS = {b.name: b for b in (CBackend(), EigenBackend(), FmuBackend(), CasadiBackend())}
+BACKENDS = {b.name: b for b in (CBackend(), EigenBackend(), FmuBackend(), CasadiBackend(),
+                                OcpBackend(), TrackerBackend())}
 
 
 def backend_names(need=None):

@@ -8,6 +8,13 @@ deterministic (no timestamps).
     rendered.files        # {file name: text}: the project (sources, CMake, main.c)
     rendered.interface    # gen.codegen.abi.Interface: what the bindings need
     render(plan, project=False).files    # only what gen.build compiles
+
+A product's library renders through the same call: its face's ProductPlan
+(gen/codegen/product_abi.py) and its backend (a ProductBackend):
+
+    rendered = render(product_plan, backend="ocp")
+    rendered.interface    # its ProductInterface, bound: its headers and its cdef
+    product_cdef(rendered.interface)      # the cdef gen.toolchain.host.load_product opens it with
 """
 from __future__ import annotations
 
@@ -33,7 +40,7 @@ from ..core.resources import csrc_file, templates_dir
 from ..plan.ldlt import demand_order, ldlt_statements, ldlt_work_index, ldlt_program
 
 __all__ = ["Rendered", "render", "render_files", "generate", "write_atomic", "template_env",
-           "model_sources"]
+           "model_sources", "product_cdef"]
 
 # the kernels of <name>_lin.c (C backend)
 LIN_KERNELS = DERIVATIVE_KERNELS
@@ -389,11 +396,18 @@ def render(plan, real="double", backend="c", timings=None, project=True, only=No
     (the model library's sources, with the derivative kernels when the plan
     has them, else their stand-ins). only: a set of template roles ("model",
     "lin", "stub", "project") to render, nothing else (no runtime files).
-    Nothing is written and nothing is stored on the model."""
+    Nothing is written and nothing is stored on the model.
+
+    With a product's backend (Backend.product), plan is the face's
+    ProductPlan (gen/codegen/product_abi.py): the Rendered holds its files
+    (its templates, the headers of its interface, its runtime files) and
+    its bound ProductInterface; project and only do not apply."""
     if real not in ("double", "float"):
         raise ModelError(f"real must be 'double' or 'float', got {real!r}")
     b = get_backend(backend)
     timings = {} if timings is None else timings
+    if b.product:            # a product's library (a ProductPlan)
+        return _render_product(plan, b, real, timings)
     if b.composite:          # the Eigen face: the C backend's files and its own
         return b.render(plan, real, timings, project, only, render_c=render,
                         env=template_env())
@@ -413,6 +427,46 @@ def render(plan, real="double", backend="c", timings=None, project=True, only=No
         files[Path(src).name] = csrc_file(src).read_text()
     timings["templates"] = time.perf_counter() - t0
     return Rendered(files, iface, b.name, real, plan.derivatives, timings)
+
+
+def _product_kernel(kernel, backend, real):
+    """A product's kernel as data: its name, its output's name and its
+    printed statements (the arguments are arrays, read as <arg>[i])."""
+    smap = {}
+    for a in kernel.args:
+        for i, s in enumerate(a.symbols):
+            smap[s] = f"{a.name}[{i}]"
+    for s, _ in kernel.assignments:
+        smap[s] = s.name
+    temps, stores = kernel_statements(kernel, backend.printer(smap, real), reads=False)
+    return {"name": kernel.name, "out": f"out_{kernel.outputs[0].name}",
+            "lines": [line for _, line, _ in temps] + stores}
+
+
+def _render_product(plan, b, real, timings):
+    """A product's files: its templates and its interface's headers over
+    the plan's data, its printed kernels and its backend's context, and its
+    runtime files (b: a ProductBackend)."""
+    t0 = time.perf_counter()
+    iface = b.interface.bind(**b.names(plan, real))
+    ctx = {**plan.data, "iface": iface, "name": plan.name, "version": __version__,
+           "real": real, "kernels": [_product_kernel(k, b, real) for k in plan.kernels]}
+    t1 = time.perf_counter()
+    ctx.update(b.context(plan, iface, real))
+    env = template_env()
+    files = {fname.format(name=plan.name): env.get_template(tname).render(**ctx)
+             for fname, tname, _ in b.file_templates(iface)}
+    for src in b.runtime_files:
+        files[Path(src).name] = csrc_file(src).read_text()
+    timings["printing"] = t1 - t0
+    timings["templates"] = time.perf_counter() - t1
+    return Rendered(files, iface, b.name, real, True, timings)
+
+
+def product_cdef(iface):
+    """The cffi cdef of a product's library, rendered from its bound
+    ProductInterface by the macros of its headers."""
+    return template_env().get_template("cffi/product.cdef.j2").render(iface=iface)
 
 
 def render_files(model, real="double", backend="c", timings=None):

@@ -44,8 +44,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..sim.inputs import LinearFeedback
 from ..core.errors import InputError
+from ..core.optional import require
+from ..sim.inputs import LinearFeedback
 
 __all__ = ["TrajectoryTracker"]
 
@@ -237,9 +238,8 @@ class TrajectoryTracker(LinearFeedback):
             On a name that is not a C identifier, a C keyword, or the model's
             own; on an unknown real.
         """
-        from .._version import __version__
+        from ..codegen.render import render
         from ..core.names import validate_name
-        from ..codegen.render import fmt_real, template_env
         try:
             validate_name(name)
         except Exception as e:
@@ -251,31 +251,22 @@ class TrajectoryTracker(LinearFeedback):
         if name == self.sim.name:
             raise InputError(f"the tracker's name {name!r} is the model's: its files would "
                              "replace the model's", "name", None, name)
-        K, x_op, r_op = self.arrays(self.sim)
-        lo, hi = self.bounds(self.sim)
-        huge = "HUGE_VALF" if real == "float" else "HUGE_VAL"
+        return render(self._plan(name, real), real=real, backend="tracker").files
 
-        def lit(v):
-            return fmt_real(v, real) if np.isfinite(v) else ("-" if v < 0 else "") + huge
-
-        def rows(a, per):
-            flat = [lit(v) for v in np.asarray(a, dtype=float).ravel()]
-            return [", ".join(flat[i:i + per]) for i in range(0, len(flat), per)]
-
-        ctx = {"name": name, "N": name.upper(), "p": self.sim.name, "P": self.sim.name.upper(),
-               "version": __version__, "model": self.sim.name, "real": real,
-               "n_gain": self.n_gain, "t0": fmt_real(self.t_gain, real),
-               "period": fmt_real(self.period, real),
-               "period_text": repr(float(self.period)), "t0_text": repr(float(self.t_gain)),
-               "terminal": self.terminal, "ind_names": list(self.sim.independent_state_names),
-               "K_rows": rows(K, self.sim.ns), "x_rows": rows(x_op, self.sim.nx),
-               "r_rows": rows(r_op, max(self.sim.nr, 1)),
-               "nr": self.sim.nr, "footprint": self.footprint(real),
-               "r_min": None if lo is None else rows(lo, self.sim.nr)[0],
-               "r_max": None if hi is None else rows(hi, self.sim.nr)[0]}
-        env = template_env()
-        return {f"{name}.h": env.get_template("c/tracker.h.j2").render(**ctx),
-                f"{name}.c": env.get_template("c/tracker.c.j2").render(**ctx)}
+    def _plan(self, name, real):
+        """The tracker as the tracker backend's ProductPlan
+        (gen/codegen/backends.py TrackerBackend): its tables and what its C
+        says of them, rendered through gen.codegen.render.render."""
+        from ..codegen.product_abi import ProductPlan
+        sim = self.sim
+        K, x_op, r_op = self.arrays(sim)
+        lo, hi = self.bounds(sim)
+        return ProductPlan(name, names={"p": sim.name}, data={
+            "model": sim.name, "n_gain": self.n_gain, "t0": float(self.t_gain),
+            "period": float(self.period), "terminal": self.terminal,
+            "ind_names": list(sim.independent_state_names), "K": K, "x_op": x_op,
+            "r_op": r_op, "r_min": lo, "r_max": hi, "ns": sim.ns, "nx": sim.nx, "nr": sim.nr,
+            "footprint": self.footprint(real or sim.real)})
 
     def to_c(self, path, name="tracker", real=None):
         """Write the tracker as C: ``<name>.h`` and ``<name>.c`` with the
@@ -317,7 +308,7 @@ def _gain(A, B, P, R):
 def _terminal_cost(A, B, Q, R):
     """The DARE's solution at the end, or Q where it has none (the end not
     stabilizable, or Q not detectable)."""
-    from scipy.linalg import solve_discrete_are
+    solve_discrete_are = require("scipy.linalg", "gen.TrajectoryTracker").solve_discrete_are
     try:
         with np.errstate(all="ignore"):
             P = solve_discrete_are(A, B, Q, R)

@@ -33,7 +33,6 @@ it out, and the algorithms live in ``csrc/fmu``.
 from __future__ import annotations
 
 import hashlib
-import importlib.util
 import os
 import platform
 import re
@@ -48,6 +47,7 @@ from ..codegen.backends import get_backend
 from ..toolchain.build import build
 from ..plan.dependencies import dependencies
 from ..core.errors import BuildError, MissingDependencyError, ModelError
+from ..core.optional import require
 from ..plan.ir import plan as make_plan
 from ..intake.model import require_model
 from ..codegen.render import Rendered, mode_for_umask, render, template_env
@@ -273,10 +273,9 @@ def _start_state(model, start):
     return x0
 
 
-def describe(model, fmi_version="2.0", kind="both", real="double", start=None, units=None,
-             cs_method="dopri5"):
-    """The FmuDescription of a model (see export_fmu for the arguments)."""
-    m = model
+def _check_options(m, fmi_version, kind, real, cs_method):
+    """A ModelError naming a bad option (a hybrid model exports as FMI 2.0
+    Model Exchange only)."""
     if fmi_version not in FMI_VERSIONS:
         raise ModelError(f"fmi_version must be one of {', '.join(FMI_VERSIONS)}, "
                          f"got {fmi_version!r}")
@@ -294,13 +293,12 @@ def describe(model, fmi_version="2.0", kind="both", real="double", start=None, u
             "its impacts and resets export as FMI 2.0 Model Exchange (event indicators and "
             f"the state update at the event): kind='me', fmi_version='2.0' (got "
             f"kind={kind!r}, fmi_version={fmi_version!r})")
-    x0 = _start_state(m, start)
-    deps = dependencies(m)
-    nq, nx, ns = m.nq, m.nx, m.ns
-    independent = list(deps.independent)
-    dependent = [i for i in range(nx) if i not in independent]
+    return nh
 
-    # units: by any name of a state, input, constant or output
+
+def _units(m, units):
+    """{(group, index): unit} of units, by any name of a state ("x"), input
+    ("r"), constant ("p") or output ("y")."""
     unit_of = {}
     groups = [("x", m.state_names, m.state_labels), ("r", m.input_names, m.input_labels),
               ("p", m.constant_names, m.constant_labels), ("y", m.output_names, m.output_labels)]
@@ -314,108 +312,115 @@ def describe(model, fmi_version="2.0", kind="both", real="double", start=None, u
             known = [n for _, names, _ in groups for n in names]
             raise ModelError(f"units: unknown name {key!r}; units go to states, inputs, "
                              f"constants and outputs: {', '.join(known)}")
+    return unit_of
 
-    # which outputs: the model's, else the multipliers and constraint residuals
+
+def _outputs_and_tunable(m):
+    """The counts of the output groups (the model's outputs, else the
+    multipliers and constraint residuals) and 1/0 per constant: tunable
+    unless the constraints hold it (a new value would leave the state
+    inconsistent)."""
     if m.ny:
         nout = {"y": m.ny, "lam": 0, "fc": 0, "fv": 0}
     else:
         nout = {"y": 0, "lam": m.mv, "fc": m.mc, "fv": m.mv}
-
-    # tunable constants: those the constraints do not hold (a new value of
-    # one that does would leave the state inconsistent)
     in_constraints = set()
     for mat in (m.fc, m.A, m.b):
         for e in mat:
             in_constraints |= e.free_symbols
-    tunable = [0 if s in in_constraints else 1 for s in m.p]
+    return nout, [0 if s in in_constraints else 1 for s in m.p]
 
-    taken = set()
-    variables = []
-    vr_x = 1
-    vr_der = vr_x + nx
-    vr_r = vr_der + ns
-    vr_p = vr_r + m.nr
-    vr_out = vr_p + m.np
 
-    def add(**kw):
-        kw["name"] = _unique(kw["name"], taken)
-        v = Variable(**kw)
-        variables.append(v)
-        return v
+class _Refs:
+    """The value references: time 0, then the states, the derivatives of
+    the independent ones, the inputs, the constants, the outputs."""
 
+    def __init__(self, m):
+        self.x = 1
+        self.der = self.x + m.nx
+        self.r = self.der + m.ns
+        self.p = self.r + m.nr
+        self.out = self.p + m.np
+
+    def of(self, knowns, with_parameters):
+        """The sorted value references of (kind, index) knowns."""
+        out = []
+        for kind, i in knowns:
+            if kind == "x":
+                out.append(self.x + i)
+            elif kind == "r":
+                out.append(self.r + i)
+            elif with_parameters:
+                out.append(self.p + i)
+        return sorted(out)
+
+
+def _state_variables(m, add, vr, x0, independent, tunable, unit_of):
+    """Time, the states, their derivatives, the inputs and the constants."""
     add(name="time", vr=0, causality="independent", variability="continuous", initial=None,
         start=None, description="time")
-    for i in range(nx):
-        what = "coordinate" if i < nq else "speed"
+    for i in range(m.nx):
+        what = "coordinate" if i < m.nq else "speed"
         ind = i in independent
         desc = (f"{m.state_labels[i]}: {'independent' if ind else 'dependent'} {what}"
                 + (" (a continuous state)" if ind else
                    " (solved from the independent state and the constraints at every "
                    "evaluation; the start value is the guess)"))
-        add(name=m.state_names[i], vr=vr_x + i, causality="local", variability="continuous",
+        add(name=m.state_names[i], vr=vr.x + i, causality="local", variability="continuous",
             initial="exact" if ind else "approx", start=_fmt(x0[i]), description=desc,
             unit=unit_of.get(("x", i)))
     for k, i in enumerate(independent):
         u = unit_of.get(("x", i))
-        add(name=f"der({m.state_names[i]})", vr=vr_der + k, causality="local",
+        add(name=f"der({m.state_names[i]})", vr=vr.der + k, causality="local",
             variability="continuous", initial="calculated", start=None,
             description=f"time derivative of {m.state_labels[i]}",
-            unit=_per_second(u) if u else None, derivative_of=vr_x + i)
+            unit=_per_second(u) if u else None, derivative_of=vr.x + i)
     for k in range(m.nr):
-        add(name=m.input_names[k], vr=vr_r + k, causality="input", variability="continuous",
+        add(name=m.input_names[k], vr=vr.r + k, causality="input", variability="continuous",
             initial=None, start="0.0", description=f"input {m.input_labels[k]}",
             unit=unit_of.get(("r", k)))
     for k in range(m.np):
-        add(name=m.constant_names[k], vr=vr_p + k, causality="parameter",
+        add(name=m.constant_names[k], vr=vr.p + k, causality="parameter",
             variability="tunable" if tunable[k] else "fixed", initial="exact",
             start=_fmt(m.p_values[k]),
             description=f"constant {m.constant_labels[k]}"
             + ("" if tunable[k] else " (fixed: the constraints hold it)"),
             unit=unit_of.get(("p", k)))
+
+
+def _output_variables(m, add, vr, nout, deps, unit_of):
+    """The outputs (the model's, or the multipliers and the constraint
+    residuals); returns the knowns each depends on."""
+    groups = [("y", lambda j: m.output_names[j], lambda j: f"output {m.output_labels[j]}",
+               deps.output),
+              ("lam", lambda j: f"lam{j}",
+               lambda j: f"multiplier of velocity constraint {j} (M u' = f + A^T lam)",
+               deps.multiplier),
+              ("fc", lambda j: f"fc{j}",
+               lambda j: f"residual of configuration constraint {j}, f_c(q, t)",
+               deps.constraint),
+              ("fv", lambda j: f"fv{j}",
+               lambda j: f"residual of velocity constraint {j}, A(q) u + b(q, t)",
+               deps.velocity_constraint)]
     out_deps = []
-    k = 0
-    for j in range(nout["y"]):
-        add(name=m.output_names[j], vr=vr_out + k, causality="output",
-            variability="continuous", initial="calculated", start=None,
-            description=f"output {m.output_labels[j]}", unit=unit_of.get(("y", j)))
-        out_deps.append(deps.output[j])
-        k += 1
-    for j in range(nout["lam"]):
-        add(name=f"lam{j}", vr=vr_out + k, causality="output", variability="continuous",
-            initial="calculated", start=None,
-            description=f"multiplier of velocity constraint {j} (M u' = f + A^T lam)")
-        out_deps.append(deps.multiplier[j])
-        k += 1
-    for j in range(nout["fc"]):
-        add(name=f"fc{j}", vr=vr_out + k, causality="output", variability="continuous",
-            initial="calculated", start=None,
-            description=f"residual of configuration constraint {j}, f_c(q, t)")
-        out_deps.append(deps.constraint[j])
-        k += 1
-    for j in range(nout["fv"]):
-        add(name=f"fv{j}", vr=vr_out + k, causality="output", variability="continuous",
-            initial="calculated", start=None,
-            description=f"residual of velocity constraint {j}, A(q) u + b(q, t)")
-        out_deps.append(deps.velocity_constraint[j])
-        k += 1
+    for g, name, desc, dep in groups:
+        for j in range(nout[g]):
+            add(name=name(j), vr=vr.out + len(out_deps), causality="output",
+                variability="continuous", initial="calculated", start=None,
+                description=desc(j), unit=unit_of.get(("y", j)) if g == "y" else None)
+            out_deps.append(dep[j])
+    return out_deps
+
+
+def _structure(variables, vr, deps, out_deps):
+    """The ModelStructure (outputs, derivatives, initial unknowns) and the
+    variables by value reference, FMI 2.0's indices filled in."""
     for pos, v in enumerate(variables):
         v.index = pos + 1
-
-    def vrs(knowns, with_parameters):
-        out = []
-        for kind_, i in knowns:
-            if kind_ == "x":
-                out.append(vr_x + i)
-            elif kind_ == "r":
-                out.append(vr_r + i)
-            elif with_parameters:
-                out.append(vr_p + i)
-        return sorted(out)
-
-    outputs = [Unknown(vr_out + j, vrs(d, False)) for j, d in enumerate(out_deps)]
-    derivatives = [Unknown(vr_der + k, vrs(d, False)) for k, d in enumerate(deps.derivative)]
-    initial = ([Unknown(vr_der + k, vrs(d, True)) for k, d in enumerate(deps.derivative)]
-               + [Unknown(vr_out + j, vrs(d, True)) for j, d in enumerate(out_deps)])
+    outputs = [Unknown(vr.out + j, vr.of(d, False)) for j, d in enumerate(out_deps)]
+    derivatives = [Unknown(vr.der + k, vr.of(d, False)) for k, d in enumerate(deps.derivative)]
+    initial = ([Unknown(vr.der + k, vr.of(d, True)) for k, d in enumerate(deps.derivative)]
+               + [Unknown(vr.out + j, vr.of(d, True)) for j, d in enumerate(out_deps)])
     initial.sort(key=lambda u: u.vr)
     by_vr = {v.vr: v for v in variables}
     for v in variables:
@@ -424,19 +429,41 @@ def describe(model, fmi_version="2.0", kind="both", real="double", start=None, u
     for u in outputs + derivatives + initial:
         u.index = by_vr[u.vr].index
         u.dependency_indices = [by_vr[k].index for k in u.dependencies]
-    unit_names = [(u, _base_unit(u)) for u in sorted({v.unit for v in variables if v.unit})]
+    return outputs, derivatives, initial, by_vr
 
-    me, cs = kind in ("me", "both"), kind in ("cs", "both")
+
+def describe(model, fmi_version="2.0", kind="both", real="double", start=None, units=None,
+             cs_method="dopri5"):
+    """The FmuDescription of a model (see export_fmu for the arguments)."""
+    m = model
+    nh = _check_options(m, fmi_version, kind, real, cs_method)
+    x0 = _start_state(m, start)
+    deps = dependencies(m)
+    independent = list(deps.independent)
+    dependent = [i for i in range(m.nx) if i not in independent]
+    unit_of = _units(m, units)
+    nout, tunable = _outputs_and_tunable(m)
+    taken, variables, vr = set(), [], _Refs(m)
+
+    def add(**kw):
+        kw["name"] = _unique(kw["name"], taken)
+        variables.append(Variable(**kw))
+
+    _state_variables(m, add, vr, x0, independent, tunable, unit_of)
+    out_deps = _output_variables(m, add, vr, nout, deps, unit_of)
+    outputs, derivatives, initial, by_vr = _structure(variables, vr, deps, out_deps)
+    unit_names = [(u, _base_unit(u)) for u in sorted({v.unit for v in variables if v.unit})]
     token = _token(m, [fmi_version, kind, real, cs_method, x0, sorted(unit_of.items())])
     d = FmuDescription(
         fmi_version=fmi_version, name=m.name, token=token,
         description=(f"{m.name}: equations of motion from sympy.physics.mechanics "
                      f"({'Kane' if m.method == 'kane' else 'Lagrange'}), generated by eomgen"),
-        me=me, cs=cs, real=real, cs_method=cs_method, variables=variables, outputs=outputs,
-        derivatives=derivatives, initial_unknowns=initial, units=unit_names, sources=[],
-        ns=ns, nout=nout, independent=independent, dependent=dependent,
-        x_start=[_fmt(v) for v in x0], p_start=[_fmt(v) for v in m.p_values],
-        tunable=tunable, state_names=list(m.state_names),
+        me=kind in ("me", "both"), cs=kind in ("cs", "both"), real=real, cs_method=cs_method,
+        variables=variables, outputs=outputs, derivatives=derivatives, initial_unknowns=initial,
+        units=unit_names, sources=[], ns=m.ns, nout=nout, independent=independent,
+        dependent=dependent, x_start=[_fmt(v) for v in x0],
+        p_start=[_fmt(v) for v in m.p_values], tunable=tunable,
+        state_names=list(m.state_names),
         # the importer's default tolerance (float resolves about 1e-5)
         default_tolerance=1e-8 if real == "double" else 1e-5)
     d.by_vr = by_vr
@@ -485,12 +512,8 @@ def render_fmu_files(model, description, real="double"):
 def fmi_headers(fmi_version):
     """The folder holding the FMI headers of this version, from the
     installed FMPy (a maintained copy of the standard's headers)."""
-    spec = importlib.util.find_spec("fmpy")
-    if spec is None or not spec.origin:
-        raise MissingDependencyError(
-            "FMU export needs the FMI headers shipped with FMPy, which is not installed: "
-            "pip install eomgen[fmu] (or pip install fmpy)")
-    folder = Path(spec.origin).parent / "c-code"
+    fmpy = require("fmpy", "gen.export_fmu (the FMI headers are FMPy's)")
+    folder = Path(fmpy.__file__).parent / "c-code"
     missing = [h for h in HEADERS[fmi_version] if not (folder / h).is_file()]
     if missing:
         raise MissingDependencyError(
@@ -563,7 +586,7 @@ def _check_start(path, d):
     start values: a start state whose dependent coordinates cannot be solved
     is refused here, with the FMU's own message, not left to the user's
     first simulation."""
-    from fmpy import simulate_fmu
+    simulate_fmu = require("fmpy", "gen.export_fmu").simulate_fmu
     messages = []
 
     def logger(*args):

@@ -218,7 +218,6 @@ def verify(model, samples=20, backend="c", real="double", sources=None, seed=0, 
     """
     require_model(model, "gen.verify")
     from ..pipeline import compile as compile_model
-    from ..plan.linearize import linearize_symbolic
 
     t_start = time.perf_counter()
     if tol is None:
@@ -227,18 +226,36 @@ def verify(model, samples=20, backend="c", real="double", sources=None, seed=0, 
         sim = compile_model(model, backend=backend, real=real, sources=sources)
     m = model
     rng = np.random.default_rng(seed)
-    ref = _reference(m)
-    m_real = _with_real_symbols(m)
-    p = np.array(m.p_values, dtype=float)
-    errs = {}
-    points = {}
-    failures = []
+    errs, points = {}, {}
 
     def note(name, value):
         errs[name] = max(errs.get(name, 0.0), value)
         points[name] = points.get(name, 0) + 1
 
-    states = []
+    ref = _reference(m)
+    m_real = _with_real_symbols(m)
+    p = np.array(m.p_values, dtype=float)
+    states, failures = _sample_states(sim, m, rng, samples)
+    for k, (x, raw) in enumerate(states):
+        r = rng.uniform(-1, 1, m.nr)
+        t = float(rng.uniform(0, 1))
+        try:
+            _check_evaluations(sim, m, ref, x, raw, r, p, t, note)
+            if k < linearize_samples:
+                _check_linearize(sim, m_real, x, r, t, note)
+        except (EomgenError, np.linalg.LinAlgError) as e:
+            failures.append(f"state {k}: {type(e).__name__}: {e}")
+    report = VerifyReport(model=m.name, backend=backend, real=real, tol=tol, samples=samples,
+                          rows=[(name, errs[name], points[name]) for name in errs],
+                          failures=failures)
+    report.seconds = time.perf_counter() - t_start
+    return report
+
+
+def _sample_states(sim, m, rng, samples):
+    """(the random states (x, raw): raw uniform in [-1, 1], x it made
+    consistent on a constrained model; failures): up to 20 tries a state."""
+    states, failures = [], []
     tries = 0
     while len(states) < samples and tries < 20 * samples:
         tries += 1
@@ -252,59 +269,54 @@ def verify(model, samples=20, backend="c", real="double", sources=None, seed=0, 
         states.append((x, raw))
     if len(states) < samples:
         failures.append(f"only {len(states)} of {samples} random states were consistent")
-    for k, (x, raw) in enumerate(states):
-        q, u = x[:m.nq], x[m.nq:]
-        # residuals are checked off the manifold, where they are not ~0
-        qr, ur = raw[:m.nq], raw[m.nq:]
-        r = rng.uniform(-1, 1, m.nr)
-        t = float(rng.uniform(0, 1))
-        try:
-            note("eval_mass_matrix", _rel(sim.mass_matrix(q, t=t), _call(ref["M"], x, r, p, t)))
-            note("eval_forcing", _rel(sim.forcing(q, u, r=r, t=t),
-                                      _call(ref["f"], x, r, p, t).ravel()))
-            xd_ref, lam_ref = _rhs_reference(m, ref, x, r, p, t)
-            note("eval_kinematics", _rel(sim.kinematics(q, u, t=t), xd_ref[:m.nq]))
-            if m.mc:
-                note("eval_constraints", _rel(sim.constraints(qr, t=t),
-                                              _call(ref["fc"], raw, r, p, t).ravel()))
-                note("eval_constraint_jacobian", _rel(sim.constraint_jacobian(q, t=t),
-                                                      _call(ref["Jc"], x, r, p, t)))
-            if m.mv:
-                A_ref = _call(ref["A"], x, r, p, t)
-                b_ref = _call(ref["b"], x, r, p, t).ravel()
-                A_c, b_c = sim.velocity_constraint_matrix(q, t=t)
-                note("eval_velocity_constraint_matrix",
-                     max(_rel(A_c, A_ref), _rel(b_c, b_ref)))
-                fv_ref = _call(ref["A"], raw, r, p, t) @ ur + _call(ref["b"], raw, r, p, t).ravel()
-                note("eval_velocity_constraints", _rel(sim.velocity_constraints(qr, ur, t=t),
-                                                       fv_ref))
-            if m.energy is not None:
-                note("eval_energy", _rel([sim.energy(x, t=t)], _call(ref["E"], x, r, p, t)
-                                         .ravel()))
-            note("eval_rhs", _rel(sim.rhs(t, x, r=r), xd_ref))
-            if m.mv:
-                note("eval_rhs (multipliers)", _rel(sim.multipliers(t, x, r=r), lam_ref))
-            if getattr(m, "aux_G", None) is not None:
-                note("eval_auxiliary_forces", _rel(sim.auxiliary_forces(t, x, r=r), lam_ref))
-            elif getattr(m, "na", 0):
-                ud = xd_ref[m.nq:]
-                Fa = np.array(ref["auxF"](*x, *r, *p, t, *ud), dtype=float)
-                ga = np.array(ref["auxg"](*x, *r, *p, t, *ud), dtype=float).ravel()
-                note("eval_auxiliary_forces", _rel(sim.auxiliary_forces(t, x, r=r),
-                                                   np.linalg.solve(Fa, -ga)))
-            if k < linearize_samples:
-                op = dict(zip(m.state_names, x))
-                A_s, B_s = linearize_symbolic(m_real, op, r_op=dict(zip(m.input_names, r)),
-                                              constants="values", t=t, simplify=False)
-                A_c, B_c = sim.linearize(x, r=r, t=t)
-                e = _rel(A_c, np.array(A_s.evalf(), dtype=float))
-                if m.nr:
-                    e = max(e, _rel(B_c, np.array(B_s.evalf(), dtype=float)))
-                note("linearize", e)
-        except (EomgenError, np.linalg.LinAlgError) as e:
-            failures.append(f"state {k}: {type(e).__name__}: {e}")
-    report = VerifyReport(model=m.name, backend=backend, real=real, tol=tol, samples=samples,
-                          rows=[(name, errs[name], points[name]) for name in errs],
-                          failures=failures)
-    report.seconds = time.perf_counter() - t_start
-    return report
+    return states, failures
+
+
+def _check_evaluations(sim, m, ref, x, raw, r, p, t, note):
+    """Every evaluation at one state against the reference (residuals at
+    raw, off the manifold, where they are not ~0); note(name, error)."""
+    q, u = x[:m.nq], x[m.nq:]
+    qr, ur = raw[:m.nq], raw[m.nq:]
+    note("eval_mass_matrix", _rel(sim.mass_matrix(q, t=t), _call(ref["M"], x, r, p, t)))
+    note("eval_forcing", _rel(sim.forcing(q, u, r=r, t=t), _call(ref["f"], x, r, p, t).ravel()))
+    xd_ref, lam_ref = _rhs_reference(m, ref, x, r, p, t)
+    note("eval_kinematics", _rel(sim.kinematics(q, u, t=t), xd_ref[:m.nq]))
+    if m.mc:
+        note("eval_constraints", _rel(sim.constraints(qr, t=t),
+                                      _call(ref["fc"], raw, r, p, t).ravel()))
+        note("eval_constraint_jacobian", _rel(sim.constraint_jacobian(q, t=t),
+                                              _call(ref["Jc"], x, r, p, t)))
+    if m.mv:
+        A_ref = _call(ref["A"], x, r, p, t)
+        b_ref = _call(ref["b"], x, r, p, t).ravel()
+        A_c, b_c = sim.velocity_constraint_matrix(q, t=t)
+        note("eval_velocity_constraint_matrix", max(_rel(A_c, A_ref), _rel(b_c, b_ref)))
+        fv_ref = _call(ref["A"], raw, r, p, t) @ ur + _call(ref["b"], raw, r, p, t).ravel()
+        note("eval_velocity_constraints", _rel(sim.velocity_constraints(qr, ur, t=t), fv_ref))
+    if m.energy is not None:
+        note("eval_energy", _rel([sim.energy(x, t=t)], _call(ref["E"], x, r, p, t).ravel()))
+    note("eval_rhs", _rel(sim.rhs(t, x, r=r), xd_ref))
+    if m.mv:
+        note("eval_rhs (multipliers)", _rel(sim.multipliers(t, x, r=r), lam_ref))
+    if getattr(m, "aux_G", None) is not None:
+        note("eval_auxiliary_forces", _rel(sim.auxiliary_forces(t, x, r=r), lam_ref))
+    elif getattr(m, "na", 0):
+        ud = xd_ref[m.nq:]
+        Fa = np.array(ref["auxF"](*x, *r, *p, t, *ud), dtype=float)
+        ga = np.array(ref["auxg"](*x, *r, *p, t, *ud), dtype=float).ravel()
+        note("eval_auxiliary_forces", _rel(sim.auxiliary_forces(t, x, r=r),
+                                           np.linalg.solve(Fa, -ga)))
+
+
+def _check_linearize(sim, m_real, x, r, t, note):
+    """linearize at one operating point against gen.linearize_symbolic."""
+    from ..plan.linearize import linearize_symbolic
+    m = m_real
+    op = dict(zip(m.state_names, x))
+    A_s, B_s = linearize_symbolic(m, op, r_op=dict(zip(m.input_names, r)),
+                                  constants="values", t=t, simplify=False)
+    A_c, B_c = sim.linearize(x, r=r, t=t)
+    e = _rel(A_c, np.array(A_s.evalf(), dtype=float))
+    if m.nr:
+        e = max(e, _rel(B_c, np.array(B_s.evalf(), dtype=float)))
+    note("linearize", e)

@@ -1,6 +1,7 @@
 """Build rendered sources into a library (a plain shared library: the
 model's kernels, the runtime and, for a loadable backend, its plugin table
-``<name>_api.c``) in the cache (gen/core/cache.py), keyed by the content of the
+``<name>_api.c``; or a product's library, gen/codegen/backends.py
+ProductBackend) in the cache (gen/core/cache.py), keyed by the content of the
 files, the backend's compile recipe and the generator version. Nothing is
 rendered or loaded here: gen/pipeline.py renders, gen/toolchain/host.py loads.
 
@@ -37,7 +38,7 @@ from ..codegen.backends import (C_FLAGS, C_LIN_FLAGS, RUNTIME_FLAGS, RUNTIME_HEA
 from ..core.cache import cache_dir, cache_error, new_build_dir, publish, write_marker
 from ..core.errors import BuildError
 
-__all__ = ["build", "build_derivatives", "build_plain", "Built", "compile_units", "link_library"]
+__all__ = ["build", "build_derivatives", "Built", "compile_units", "link_library"]
 
 
 @dataclass
@@ -316,7 +317,6 @@ def compile_units(src: Path, objdir: Path, units, backend, name):
     return results[:n_own], runtime
 
 
-
 def _write_sources(tmp, root, files):
     """Write files {name: text} into tmp/src and make tmp/obj; the source
     folder. An OS error is the cache's (cache_error, naming root)."""
@@ -329,33 +329,3 @@ def _write_sources(tmp, root, files):
     except OSError as e:
         raise cache_error(e, root, "write the sources") from None
     return src
-
-def build_plain(modname, render, sources=None):
-    """A plain C library built from files that need none of a model
-    backend's glue (gen.ocp): render() -> (files {name: text}, the C files
-    to compile), called only when the cache (keyed by modname, which the
-    caller derives from the content) has no such library. Returns (the cache
-    folder, the library's path); the rendered files are kept in <folder>/src."""
-    _check_platform()
-    root = cache_dir()
-    final = root / modname
-    libfile = f"lib{modname}.so"
-    lib = _find_library(final, libfile)
-    if lib is not None:
-        return final, lib
-    files, csources = render()
-    tmp = new_build_dir(root, modname)
-    try:
-        src = _write_sources(tmp, root, files)
-        cc = c_compiler()
-        flags = [*C_FLAGS, "-fPIC"]
-        objs = [_cc_object(cc, src, f, tmp / "obj" / (Path(f).stem + ".o"), flags)
-                for f in csources]
-        so = link_library(objs, tmp / libfile)
-        _store(tmp, final, so, src, keep_objects=False)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-    lib = _find_library(final, libfile)
-    if lib is None:
-        raise BuildError(f"the built library {modname} is missing from {final}")
-    return final, lib

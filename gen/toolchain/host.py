@@ -13,6 +13,11 @@ build), and the host is compiled once per installation into the cache
     host = host_module("double")          # the cffi module (ffi, lib)
     api = open_model(path, name, host)    # the model's table, a cdata pointer
     host.lib.eomgen_eval_rhs(api, t, x, r, p, dxdt, lam)
+
+A product's library (an optimal control problem's, gen/codegen/backends.py
+ProductBackend) has no plugin table: it is opened in cffi's ABI mode with
+the cdef rendered from its interface description (load_product,
+open_library).
 """
 from __future__ import annotations
 
@@ -33,7 +38,8 @@ from ..codegen.abi import ABI_TAG, host_interface
 from ..core.cache import cache_dir, cache_error, find_entry_file, new_build_dir, publish
 from ..core.errors import BuildError
 
-__all__ = ["host_module", "host_sources", "open_model", "open_library", "load", "HOST_FLAGS"]
+__all__ = ["host_module", "host_sources", "open_model", "open_library", "load", "load_product",
+           "HOST_FLAGS"]
 
 # the host is glue: every call forwards to the model's table
 HOST_FLAGS = ["-O2"]
@@ -190,6 +196,14 @@ def load(built):
     (gen.toolchain.build.Built) as a pointer of the host module for its scalar type."""
     host = host_module(built.interface.real)
     return host, open_model(built.path, built.interface.name, host)
+
+
+def load_product(built):
+    """(ffi, lib): a built product library (gen.toolchain.build.Built of a
+    ProductBackend's render) opened with the cdef rendered from its
+    interface (gen.codegen.render.product_cdef)."""
+    from ..codegen.render import product_cdef
+    return open_library(built.path, product_cdef(built.interface))
 
 
 def open_library(path, cdef):

@@ -219,7 +219,7 @@ def test_bad_input_is_refused_before_building(cart, monkeypatch):
 
     def no_build(*a, **k):
         raise AssertionError("built despite the error")
-    monkeypatch.setattr(gen.toolchain.build, "build_plain", no_build)
+    monkeypatch.setattr(gen.pipeline, "product", no_build)
     for bad in (sm.Abs(F), sm.Max(F, 0), sm.Piecewise((F, x > 0), (0, True))):
         with pytest.raises(gen.InputError, match="not differentiable"):
             gen.OptimalControl(model, 11, 1.0, objective=bad)
@@ -330,6 +330,53 @@ def test_generated_c_is_strict_clean(cart, tmp_path):
         proc = subprocess.run([c_compiler(), *STRICT_FLAGS, "-c", f, "-o", str(tmp_path / "x.o")],
                               cwd=src, capture_output=True, text=True)
         assert proc.returncode == 0 and not proc.stderr.strip(), proc.stderr
+
+
+def test_library_interface_is_described_once(cart, tmp_path):
+    """The OCP library's C interface (gen_rt_ocp_block, the GEN_RT_OCP_*
+    codes, <prefix>_eval, <prefix>_work_len) is one description
+    (OcpBackend.interface): its headers in the library's sources and the
+    cffi cdef that opens it are rendered from it, and they agree with the C
+    compiler on the struct's layout and the codes' values."""
+    import subprocess
+    from gen.codegen.backends import STRICT_FLAGS, c_compiler, get_backend
+    from gen.codegen.render import product_cdef
+    _, s, model = cart
+    o = swing_up(model, s, 11, "trapezoidal")
+    src = Path(o._lib_path).parent / "src"
+    iface = get_backend("ocp").interface.bind(name=o._prefix, model=model.name)
+    header, types = (src / f"{o._prefix}.h").read_text(), (src / "gen_rt_ocp_abi.h").read_text()
+    cdef = product_cdef(iface)
+    for f in iface.functions:
+        assert f"{f.signature};" in " ".join(header.split()).replace("( ", "(")
+        assert f"{f.signature};" in cdef
+    (struct,) = iface.structs
+    fields = [f.name for f in struct.fields]
+    assert "typedef struct {" in types and all(f"{n};" in types for n in fields)
+    assert "typedef struct {" in cdef and all(f"{n};" in cdef for n in fields)
+    # the compiler's layout of the rendered header against cffi's of the cdef
+    codes = [c.name for e in iface.enums for c in e.members]
+    prog = tmp_path / "layout.c"
+    prog.write_text("#include <stdio.h>\n#include <stddef.h>\n"
+                    f'#include "{o._prefix}.h"\nint main(void)\n{{\n'
+                    '    printf("%d\\n", (int)sizeof(gen_rt_ocp_block));\n'
+                    + "".join(f'    printf("%d\\n", (int)offsetof(gen_rt_ocp_block, {n}));\n'
+                              for n in fields)
+                    + "".join(f'    printf("%d\\n", (int){c});\n' for c in codes)
+                    + "    return 0;\n}\n")
+    exe = tmp_path / "layout"
+    subprocess.run([c_compiler(), *STRICT_FLAGS, "-I", str(src), str(prog), "-o", str(exe)],
+                   check=True)
+    c_side = [int(v) for v in subprocess.run([str(exe)], capture_output=True, text=True,
+                                             check=True).stdout.split()]
+    ffi = o._ffi
+    assert c_side == ([ffi.sizeof("gen_rt_ocp_block")]
+                      + [ffi.offsetof("gen_rt_ocp_block", n) for n in fields]
+                      + [iface.value(c) for c in codes])
+    assert o._what == {"objective": 0, "gradient": 1, "constraints": 2, "jacobian": 3,
+                       "hessian": 4}
+    # content-keyed: the same problem is the same library, found in the cache
+    assert swing_up(model, s, 11, "trapezoidal")._lib_path == o._lib_path
 
 
 # ------------------------------------------- constrained models (branch ocpdae)

@@ -1,4 +1,4 @@
-/* gen_rt_ocp.h - the node loop of a direct-collocation problem (gen.ocp).
+/* gen_rt_ocp.h - the node loop of a direct-collocation problem (gen.OptimalControl).
  *
  * A problem is a list of blocks. A block is one kernel family (generated:
  * the point equations, the defects, the running cost, ...) instantiated at
@@ -16,6 +16,11 @@
 #define GEN_RT_OCP_H
 
 #include "gen_rt_status.h"
+/* gen_rt_ocp_block and the GEN_RT_OCP_* codes: the library's interface,
+ * described once (gen/codegen/backends.py OcpBackend.interface) and
+ * rendered into gen_rt_ocp_abi.h beside this file in every build, as into
+ * the cffi cdef that loads the library */
+#include "gen_rt_ocp_abi.h"
 
 /* the runtime's status codes (as gen_rt.h declares them; this header
  * stands alone: an optimal-control library links no simulator) */
@@ -34,27 +39,6 @@ typedef struct {
     int nv, nrow, nd, njac, nhess;
     gen_rt_ocp_kernel val, jac, hess;
 } gen_rt_ocp_family;
-
-typedef struct {
-    int family;              /* index into the families */
-    int ninst;
-    const int *gstart;       /* ninst*nv + 1 */
-    const int *gidx;         /* z index, or -1 for the constant 1 */
-    const double *gcoef;
-    const double *data;      /* ninst*nd */
-    const int *row0;         /* ninst: first constraint row, < 0: objective */
-    const int *jstart;       /* ninst + 1 */
-    const int *jloc;         /* local Jacobian nonzero */
-    const int *jslot;        /* global Jacobian nonzero (or gradient entry) */
-    const double *jcoef;
-    const int *hstart;       /* ninst + 1 */
-    const int *hloc;
-    const int *hslot;
-    const double *hcoef;
-} gen_rt_ocp_block;
-
-enum { GEN_RT_OCP_OBJECTIVE = 0, GEN_RT_OCP_GRADIENT = 1, GEN_RT_OCP_CONSTRAINTS = 2,
-       GEN_RT_OCP_JACOBIAN = 3, GEN_RT_OCP_HESSIAN = 4 };
 
 /* the size of work gen_rt_ocp_eval needs for these families */
 int gen_rt_ocp_work_len(const gen_rt_ocp_family *fams, int nfam);

@@ -7,14 +7,15 @@ from pathlib import Path
 import pytest
 
 import gen
-from gen.codegen.backends import (BACKENDS, Backend, CBackend, EigenBackend, FmuBackend, backend_names,
-                          get_backend)
+from gen.codegen.backends import C_FLAGS
+from gen.codegen.backends import (BACKENDS, Backend, CBackend, EigenBackend, FmuBackend, OcpBackend,
+                                  ProductBackend, TrackerBackend, backend_names, get_backend)
 
 GEN = Path(gen.__file__).resolve().parent
 
 
 def test_one_object_per_backend_in_one_registry():
-    assert list(BACKENDS) == ["c", "eigen", "fmu", "casadi"]
+    assert list(BACKENDS) == ["c", "eigen", "fmu", "casadi", "ocp", "tracker"]
     assert type(get_backend("c")) is CBackend
     assert type(get_backend("eigen")) is EigenBackend
     assert type(get_backend("fmu")) is FmuBackend
@@ -22,6 +23,10 @@ def test_one_object_per_backend_in_one_registry():
     assert get_backend(b) is b                      # the object is accepted as well
     assert backend_names("loadable") == ["c", "eigen"]
     assert backend_names("project") == ["c", "eigen"]
+    # the products' libraries: rendered from a face's plan, never gen.compile'd
+    assert backend_names("product") == ["ocp", "tracker"]
+    assert type(get_backend("ocp")) is OcpBackend and type(get_backend("tracker")) is TrackerBackend
+    assert all(isinstance(b, ProductBackend) == b.product for b in BACKENDS.values())
     # the capabilities the pipeline asks for
     assert [n for n, b in BACKENDS.items() if b.lazy_derivatives] == ["c"]
     assert [n for n, b in BACKENDS.items() if b.link_cxx] == ["eigen"]
@@ -30,8 +35,13 @@ def test_one_object_per_backend_in_one_registry():
 
 def test_unknown_backend_names_the_known_ones(kane_model, tmp_path):
     with pytest.raises(gen.ModelError, match=r"unknown backend 'cuda': choose one of "
-                                             r"\['c', 'eigen', 'fmu', 'casadi'\]"):
+                                             r"\['c', 'eigen', 'fmu', 'casadi', 'ocp', "
+                                             r"'tracker'\]"):
         get_backend("cuda")
+    # a product's library is not a model's
+    with pytest.raises(gen.ModelError, match=r"unknown backend 'ocp': choose one of "
+                                             r"\['c', 'eigen'\]"):
+        gen.compile(kane_model, backend="ocp")
     # gen.compile loads a library with a plugin table: the FMU has none
     with pytest.raises(gen.ModelError, match=r"unknown backend 'fmu': choose one of "
                                              r"\['c', 'eigen'\]"):
@@ -58,6 +68,21 @@ def test_recipe_is_data_of_the_backend():
     assert all("-fvisibility=hidden" in fl and fl[-2:] == ["-isystem", "/fmi"]
                for _, _, fl in fmu)
     assert get_backend("fmu").library_file("_eomgen_m_fmu_0", "m").startswith("m.")
+    # a product compiles its own files and its runtime's, largest first,
+    # position independent with the model library's flags
+    ocp = get_backend("ocp")
+    units = ocp.units("p", {"p.c": "x" * 50, "gen_rt_ocp.c": "x" * 5, "p.h": "", "gen_rt_ocp.h": ""},
+                      True)
+    assert [(f, fl) for f, _, fl in units] == [("p.c", [*C_FLAGS, "-fPIC"]),
+                                               ("gen_rt_ocp.c", [*C_FLAGS, "-fPIC"])]
+    assert "backend=ocp" in ocp.cache_parts()
+    # its templates are data: its own, then the headers of its interface
+    iface = ocp.interface.bind(name="p", model="m")
+    assert ocp.file_templates(iface) == [("{name}.c", "ocp/ocp.c.j2", "product"),
+                                         ("{name}.h", "common/product.h.j2", "product"),
+                                         ("gen_rt_ocp_abi.h", "common/product_types.h.j2",
+                                          "product")]
+    assert ocp.runtime_files == ("gen_rt_ocp.c", "gen_rt_ocp.h", "gen_rt_status.h")
 
 
 def _sources():

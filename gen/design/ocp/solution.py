@@ -1,0 +1,164 @@
+"""The result of an optimal control problem's solve: the nodes' states and
+inputs, IPOPT's outcome, the transcription's interpolant, a replay through
+the model's simulator and a tracker along it."""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["OptimalSolution"]
+
+
+class OptimalSolution:
+    """The result of :meth:`OptimalControl.solve`.
+
+    Attributes
+    ----------
+    t : ndarray (N,)       node times
+    x : ndarray (N, nx)    states at the nodes
+    r : ndarray (N, nr)    inputs at the nodes
+    p : ndarray            the identified parameters (in ``parameters``' order)
+    objective : float
+    status : int           IPOPT's status (0 solved, 1 acceptable, 2 infeasible, < 0 failed)
+    message : str          the status in words
+    iterations : int
+    build_seconds, solve_seconds : float
+    success : bool         status 0 or 1
+
+    ``sol(t)`` is the state of the transcription's interpolant at t (linear
+    for backward Euler and midpoint, quadratic for trapezoidal, cubic for
+    Hermite-Simpson); ``sol.input(t)`` the inputs (linear; quadratic for
+    Hermite-Simpson). ``t, x = sol`` unpacks.
+    """
+
+    @classmethod
+    def _make(cls, ocp, z, obj, status, message, iterations, solve_seconds):
+        s = cls()
+        lay = ocp._lay
+        s._ocp = ocp
+        s._z = z
+        s._layout_key = ocp._layout_key()
+        s.method = ocp.method
+        T = z[lay.T]
+        N = ocp.nodes
+        s.t = np.linspace(0.0, T, N)
+        s.x = np.array([z[X] for X in lay.X])
+        s.r = np.array([z[R] for R in lay.R]).reshape(N, ocp.model.nr)
+        s.p = z[lay.P].copy()
+        s.objective = obj
+        s.status = status
+        s.message = message
+        s.iterations = iterations
+        s.build_seconds = ocp.build_seconds
+        s.solve_seconds = solve_seconds
+        s.success = status in (0, 1)
+        s.duration = T
+        nx = ocp.model.nx
+        S = np.full((N, nx), np.nan)
+        for k, (si, _, _) in lay.node_point.items():
+            S[k] = z[si]
+        s._S = S
+        s._SM = np.array([z[lay.mid_point[k][0]] for k in range(N - 1)]) if lay.mid_point else None
+        s._XM = np.array([z[X] for X in lay.XM]) if lay.XM else None
+        s._RM = (np.array([z[R] for R in lay.RM]).reshape(len(lay.RM), ocp.model.nr)
+                  if lay.RM else None)
+        return s
+
+    def __iter__(self):
+        return iter((self.t, self.x))
+
+    def __repr__(self):
+        return (f"OptimalSolution(status={self.status}, objective={self.objective:.10g}, "
+                f"iterations={self.iterations}, nodes={len(self.t)}, method={self.method!r})")
+
+    def _locate(self, t):
+        t = np.asarray(t, float)
+        h = self.t[1] - self.t[0]
+        k = np.clip(np.floor(t / h).astype(int), 0, len(self.t) - 2)
+        tau = t - k * h
+        return t, k, tau, h
+
+    def __call__(self, t):
+        """The states at times t (the transcription's interpolant)."""
+        t, k, tau, h = self._locate(t)
+        X = self.x
+        if self.method in ("backward-euler", "midpoint"):
+            a = (tau / h)[..., None]
+            return X[k] * (1 - a) + X[k + 1] * a
+        if self.method == "trapezoidal":
+            s0, s1 = self._S[k], self._S[k + 1]
+            tt = tau[..., None]
+            return X[k] + s0 * tt + (s1 - s0) * tt ** 2 / (2 * h)
+        # Hermite-Simpson: the slope is quadratic through s_k, s_m, s_k+1;
+        # integrate from x_k
+        s0, sm_, s1 = self._S[k], self._SM[k], self._S[k + 1]
+        u = (tau / h)[..., None]
+        # s(u) = s0 (1-u)(1-2u) + 4 sm u (1-u) + s1 u (2u-1)
+        i0 = u - 3 * u ** 2 / 2 + 2 * u ** 3 / 3
+        im = 2 * u ** 2 - 4 * u ** 3 / 3
+        i1 = -u ** 2 / 2 + 2 * u ** 3 / 3
+        return X[k] + h * (s0 * i0 + sm_ * im + s1 * i1)
+
+    def input(self, t):
+        """The inputs at times t: linear between nodes; quadratic through
+        the node and midpoint inputs for Hermite-Simpson.
+
+        Parameters
+        ----------
+        t : float or array_like
+
+        Returns
+        -------
+        ndarray, shape (..., nr)
+        """
+        t, k, tau, h = self._locate(t)
+        u = (tau / h)[..., None]
+        R = self.r
+        if self.method == "hermite-simpson":
+            rm = self._RM[k]
+            return R[k] * (1 - u) * (1 - 2 * u) + 4 * rm * u * (1 - u) + R[k + 1] * u * (2 * u - 1)
+        return R[k] * (1 - u) + R[k + 1] * u
+
+    def replay(self, dt=None, method="dopri5", **options):
+        """The optimal inputs replayed through the model's simulator
+        (``sim.simulate``, the inputs from :meth:`input` at every stage).
+
+        Parameters
+        ----------
+        dt : float, optional
+            The output interval (default: the node spacing).
+        method : str, optional
+            The simulator's method (default "dopri5").
+        **options
+            More ``simulate`` keywords (``rtol``, ``atol``).
+
+        Returns
+        -------
+        gen.Solution
+            Its final state against ``x[-1]`` measures the transcription's error.
+        """
+        sim = self._ocp.simulator
+        x0 = self.x[0]
+        p = self._ocp._pvec()
+        for j, i in enumerate(self._ocp._pf):
+            p[i] = self.p[j]
+        dt = dt or (self.t[1] - self.t[0])
+        return sim.simulate(x0, float(self.t[-1]), dt, r=lambda t, x: self.input(t),
+                            p=p, method=method, input_period=0, **options)
+
+    def tracker(self, Q, R, period):
+        """A time-varying LQR along this trajectory (gen.tracking).
+
+        Parameters
+        ----------
+        Q, R : array_like
+            State and input weights.
+        period : float
+            The sampling period of the discrete Riccati recursion.
+
+        Returns
+        -------
+        gen.design.tracking.TrajectoryTracker
+        """
+        from ..tracking import TrajectoryTracker
+        return TrajectoryTracker(self._ocp.simulator, self.t, self.x, self.r, Q, R, period,
+                                 p=self._ocp._pvec())
