@@ -17,6 +17,7 @@ import gen
 from gen.codegen.render import model_sources
 import rolling_disc
 import seed_pendulum as sp
+from helpers import test_module
 from conftest import require_eigen, require_tool
 
 pytestmark = pytest.mark.fuzz

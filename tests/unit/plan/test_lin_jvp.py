@@ -13,6 +13,7 @@ import gen
 import gen.plan.ir as ir
 import rolling_disc
 import seed_pendulum
+from helpers import test_module
 from gen.sim.simulator import Simulator
 from gen.toolchain.build import build
 from gen.toolchain.host import load
