@@ -80,7 +80,7 @@ def cortex_m4_tables(src, cfile, obj, flags, flash):
     return sec
 
 
-def test_module(path):
+def load_test_file(path):
     """A test file's module by its path under tests/ ("physics/test_auxiliary.py"):
     its model builders shared with a test of another folder, imported once
     under its own name (no folder of tests/ needs to be on sys.path)."""

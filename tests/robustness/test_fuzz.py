@@ -17,7 +17,7 @@ import gen
 from gen.codegen.render import model_sources
 import rolling_disc
 import seed_pendulum as sp
-from helpers import test_module
+from helpers import load_test_file
 from conftest import require_eigen, require_tool
 
 pytestmark = pytest.mark.fuzz
@@ -28,7 +28,7 @@ HARNESS = Path(__file__).resolve().parents[1] / "fuzz" / "harness.c"
 def _box_friction():
     """sympy's box on the ground with friction -mu N: an auxiliary speed
     whose reaction is in the motion (eval_auxiliary_forces, NA = 1)."""
-    box_on_ground = test_module("physics/test_auxiliary.py").box_on_ground
+    box_on_ground = load_test_file("physics/test_auxiliary.py").box_on_ground
     system, consts, F, _ = box_on_ground(friction=True)
     return gen.Model.from_kanes(system, constants=consts, inputs=[F], name="box_fric")
 
@@ -37,7 +37,7 @@ def _bead_coupled():
     """A bead on a curved track whose normal force N enters the motion with
     a coefficient in theta and omega: u' and N from one linear system per
     call (gen_rt_accel_reactions; singular where the track is vertical)."""
-    bead_kane = test_module("physics/test_reactions_coupled.py").bead_kane
+    bead_kane = load_test_file("physics/test_reactions_coupled.py").bead_kane
     km, consts, F, _ = bead_kane("vertical")
     return gen.Model.from_kanes(km, constants=consts, inputs=[F], name="bead_cpl")
 

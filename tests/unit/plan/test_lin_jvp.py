@@ -13,7 +13,7 @@ import gen
 import gen.plan.ir as ir
 import rolling_disc
 import seed_pendulum
-from helpers import test_module
+from helpers import load_test_file
 from gen.sim.simulator import Simulator
 from gen.toolchain.build import build
 from gen.toolchain.host import load
@@ -34,7 +34,7 @@ def _sim(model, lin):
 
 
 def _skate():
-    skate = test_module("physics/test_implicit_kinematics_constrained.py").skate
+    skate = load_test_file("physics/test_implicit_kinematics_constrained.py").skate
     return skate(explicit_kinematics=False, name="skate_jvp")
 
 
