@@ -7,6 +7,8 @@ References: solve_ivp (DOP853, rtol 1e-12) over an independent closed-loop
 right-hand side (sympy's own mass_matrix_full / forcing_full, lambdified,
 with F = -K x); a Python loop of RK4 steps with the input held by hand; the
 analytic response of a double integrator to a ramp and to a staircase."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 import sympy as sm
