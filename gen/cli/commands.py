@@ -480,7 +480,7 @@ def cmd_ensemble(a, progress):
     opts = _run_options(a, "ensemble")
     client = None
     if a.scheduler:
-        client = _optional("distributed", "eomgen ensemble --scheduler").Client(a.scheduler)
+        client = _optional("distributed", "--scheduler").Client(a.scheduler)
     out = Path(a.output)
     if out.suffix not in (".npz", ".parquet"):
         raise UsageError(f"-o {a.output}: write .npz or .parquet")
@@ -500,8 +500,8 @@ def cmd_ensemble(a, progress):
         if out.suffix == ".npz":
             np.savez(out, t=res.t, **cols, **{k: np.asarray(v) for k, v in res.values.items()})
         else:
-            pd = _optional("pandas", "eomgen ensemble -o .parquet (or write .npz)")
-            _optional("pyarrow", "eomgen ensemble -o .parquet (or write .npz)")
+            pd = _optional("pandas", "-o .parquet")
+            _optional("pyarrow", "-o .parquet")
             for k, v in res.values.items():
                 v = np.asarray(v).reshape(res.n, -1)
                 for j in range(v.shape[1]):

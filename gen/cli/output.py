@@ -150,7 +150,7 @@ def plot_simulation(path, m, sim, t, X, res_names, res, E, Y=None, R=None):
     constraint residuals (log scale) and the relative energy error, one
     panel each (those present). A gen.MissingDependencyError without
     matplotlib (the command line reports it as a usage error)."""
-    matplotlib = require("matplotlib", "eomgen simulate --plot")
+    matplotlib = require("matplotlib", "--plot")
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np

@@ -10,6 +10,7 @@ commands themselves are gen/cli/commands.py's.
 from __future__ import annotations
 
 import argparse
+import inspect
 import os
 import re
 import sys
@@ -18,6 +19,7 @@ from .._version import __version__
 from ..codegen import abi
 from ..codegen.backends import backend_names
 from ..core.errors import EomgenError
+from ..export.fmu import export_fmu
 from ..sim.options import OPTIONS
 from .commands import (UsageError, cmd_build, cmd_cache, cmd_ensemble, cmd_fmu, cmd_generate,
                        cmd_linearize, cmd_report, cmd_simulate, cmd_verify)
@@ -236,9 +238,10 @@ def _fmu(sub, common):
     fm.add_argument("--unit", action="append", metavar="NAME=UNIT",
                     help="unit of a state, input, constant or output (repeat), Modelica "
                          "syntax: m, rad/s, N.m")
-    fm.add_argument("--cs-method", default="dopri5", choices=list(abi.ADAPTIVE_METHODS),
-                    help="the Co-Simulation integrator (default dopri5; rodas4 for stiff "
-                         "models)")
+    cs_default = inspect.signature(export_fmu).parameters["cs_method"].default
+    fm.add_argument("--cs-method", default=cs_default, choices=list(abi.ADAPTIVE_METHODS),
+                    help=f"the Co-Simulation integrator (default {cs_default}; rodas4 for "
+                         "stiff models)")
     fm.add_argument("--no-binary", action="store_true",
                     help="sources only (compile with the importer, e.g. FMPy)")
     _add_real(fm)

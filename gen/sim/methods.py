@@ -8,23 +8,26 @@ takes and returns is the C function's description in gen/codegen/abi.py
 Python needs beyond it: the method's name, its positional arguments, its
 summary and the text of what differs from the shared text of
 gen/sim/docstrings.py. :func:`method` makes each one, with its signature
-
-    mass_matrix(self, q, *, p=None, t=0.0)
-
 (the positional arguments, then the C function's optional inputs r and p,
-its time t when it is not positional, and its plain values) and its
-docstring; its body is one call of ``Simulator._evaluate``, which converts
-the arguments, calls the C function, raises on a failure status and shapes
-the outputs by the same description.
+its time t when it is not positional, and its plain values), its docstring
+and its body, written out as the hand-written methods were:
+
+    def mass_matrix(self, q, *, p=None, t=0.0):
+        q = self._vec(q, self.nq, 'coordinates q')
+        p_ = self._params(p)
+        outs = self._call('eval_mass_matrix', q, p_, t, t=t, state=None, named={'q': q, 'p': p_})
+        return outs[0].reshape(self.nu, self.nu)
 """
 from __future__ import annotations
 
+import linecache
 from dataclasses import dataclass, field
 
 from ..codegen import abi
+from ..core.errors import InputError
 from .docstrings import ARGS, doc
 
-__all__ = ["Evaluation", "EVALUATIONS", "method", "call_steps", "LABELS"]
+__all__ = ["Evaluation", "EVALUATIONS", "method", "source", "LABELS"]
 
 # the name a Python argument has in messages ("coordinates q must have shape (2,)")
 LABELS = {"q": "coordinates q", "u": "speeds u", "x": "state x", "r": "inputs r",
@@ -152,44 +155,75 @@ def docstring(ev):
     return doc(ev.summary, params, returns, ev.raises)
 
 
-def method(ev, module):
-    """The method of an Evaluation: its signature, its docstring, and a body
-    that hands the arguments to ``self._evaluate``."""
-    pos = ev.args.split()
-    kws = _keywords(ev)
+def _size(expr):
+    """A size of the description as the Simulator's attribute ("NU" ->
+    "self.nu")."""
+    return f"self.{expr.lower()}"
+
+
+def source(ev):
+    """The Python source of an evaluation method, from the C function's
+    parameters in their order: each array input converted (``self._vec``,
+    its shape checked and its name in the message), p and r given their
+    defaults, the C function called with fresh outputs (``self._call``, a
+    failure status raised with the time, the state and the inputs), and
+    the outputs returned in their shapes."""
+    pos, kws = ev.args.split(), _keywords(ev)
     sig = ", ".join(["self"] + pos + ["*"] + [f"{k}={_DEFAULTS[k]!r}" for k in kws])
-    given = ", ".join(f"{k!r}: {k}" for k in pos + kws)
-    src = f"def {ev.name}({sig}):\n    return self._evaluate({ev.name!r}, {{{given}}})\n"
-    ns = {}
-    exec(compile(src, f"<gen.sim.methods: {ev.name}>", "exec"), ns)   # noqa: S102
+    body, call, named = [], [], []
+    if ev.requires:
+        body.append(f"if not self.{ev.requires}:\n"
+                    f"        raise InputError({ev.refusal!r}.format(name=self.name))")
+    for a in ev.function.params:
+        if a.role in ("out", "out?"):
+            continue
+        if a.role == "in?":
+            conv = "self._params(p)" if a.name == "p" else "self._inputs(r)"
+            body.append(f"{a.name}_ = {conv}")
+            call.append(f"{a.name}_")
+            named.append((a.name, f"{a.name}_"))
+        elif a.role in ("in", "inout") and a.name in pos:
+            copy = ".copy()" if a.role == "inout" else ""
+            body.append(f"{a.name} = self._vec({a.name}, {_size(a.size)}, "
+                        f"{LABELS[a.name]!r}){copy}")
+            call.append(a.name)
+            named.append((a.name, a.name))
+        elif a.role == "in":           # q or u of the state x
+            if ("x", "x") not in named:
+                body.append(f"x = self._vec(x, self.nx, {LABELS['x']!r})")
+                named.append(("x", "x"))
+            call.append("x[:self.nq].copy()" if a.name == "q" else "x[self.nq:].copy()")
+        else:                          # the time, a plain value
+            call.append(a.name)
+    has_t = any(a.name == "t" for a in ev.function.params)
+    state = "x" if ("x", "x") in named else "None"
+    given = ", ".join(f"{k!r}: {v}" for k, v in named)
+    body.append(f"outs = self._call({ev.verb!r}, {', '.join(call)}, t={'t' if has_t else None}, "
+                f"state={state}, named={{{given}}})")
+    written = [a.name for a in ev.function.params if a.role in ("out", "out?")]
+    rets = []
+    for name, size in _outputs(ev):
+        v = f"outs[{written.index(name)}]" if name in written else name
+        if ev.scalar:
+            v = f"float({v}[0])"
+        elif "*" in size:
+            v += f".reshape({', '.join(_size(d) for d in size.split('*'))})"
+        rets.append(v)
+    body.append("return " + ", ".join(rets))
+    return f"def {ev.name}({sig}):\n" + "".join(f"    {line}\n" for line in body)
+
+
+def method(ev, module):
+    """The method of an Evaluation: its signature, its docstring and its
+    body (:func:`source`), compiled under a file name of its own that
+    linecache knows (tracebacks and ``inspect.getsource`` show it)."""
+    src = source(ev)
+    filename = f"<gen.sim.methods: Simulator.{ev.name}>"
+    ns = {"InputError": InputError}
+    exec(compile(src, filename, "exec"), ns)   # noqa: S102
+    linecache.cache[filename] = (len(src), None, src.splitlines(True), filename)
     fn = ns[ev.name]
     fn.__doc__ = docstring(ev)
     fn.__module__ = module
     fn.__qualname__ = f"Simulator.{ev.name}"
     return fn
-
-
-def call_steps(ev, size):
-    """How ``Simulator._evaluate`` builds the C call, one step per input
-    parameter in the C order: (kind, C name, size); kinds "t", "vec" (an
-    array argument), "x@" (q or u, taken from the state x), "p", "r",
-    "inout" (a copy the C function writes) and "value". size: the
-    Simulator's interface.size. Outputs come last: ``_call`` appends them."""
-    pos = ev.args.split()
-    steps = []
-    for a in ev.function.params:
-        if a.role in ("out", "out?"):
-            continue
-        if a.name == "t" and a.role == "scalar":
-            steps.append(("t", "t", 0))
-        elif a.role == "in?":
-            steps.append((a.name, a.name, size(a.size)))
-        elif a.role == "in":
-            steps.append(("vec" if a.name in pos else "x@", a.name, size(a.size)))
-        elif a.role == "inout":
-            steps.append(("inout", a.name, size(a.size)))
-        else:
-            steps.append(("value", a.name, 0))
-    outs = [(name, [size(d) for d in s.split("*")] if "*" in s else None)
-            for name, s in _outputs(ev)]
-    return steps, outs

@@ -26,7 +26,7 @@ import inspect
 import math
 import os
 import sys
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -82,7 +82,7 @@ def _finite(name, v):
     return f
 
 
-def _integer(name, v, low, none=False):
+def _integer(name, v, low=1, none=False):
     if none and v is None:
         return None
     try:
@@ -137,24 +137,24 @@ class RunOptions:
     consistent: bool = False
 
     def __post_init__(self):
-        checked = {
-            "method": _method("method", self.method),
-            "rtol": _positive("rtol", self.rtol), "atol": _positive("atol", self.atol),
-            "h_init": _finite("h_init", self.h_init), "h_min": _finite("h_min", self.h_min),
-            "h_max": _finite("h_max", self.h_max),
-            "max_steps": _integer("max_steps", self.max_steps, 1),
-            "project": bool(self.project),
-            "proj_tol": _finite("proj_tol", self.proj_tol),
-            "proj_max_iter": _integer("proj_max_iter", self.proj_max_iter, 0),
-            "t0": _finite("t0", self.t0), "input_hold": _hold("input_hold", self.input_hold),
-            "every": _integer("every", self.every, 1), "final_only": bool(self.final_only),
-            "max_rows": _integer("max_rows", self.max_rows, 1, none=True),
-            "consistent": bool(self.consistent)}
+        for name, check in _CHECKS.items():
+            v = getattr(self, name)
+            if v is not _DEFAULTS[name]:        # a default is valid as it is
+                object.__setattr__(self, name, check(name, v))
         if self.events is None and self.terminal is not False:
             raise InputError("terminal= needs events={name: direction}", "terminal", None,
                              self.terminal)
-        for k, v in checked.items():
-            object.__setattr__(self, k, v)
+
+
+# option -> its check (the value normalized, or an InputError naming it)
+_CHECKS = {"method": _method, "rtol": _positive, "atol": _positive, "h_init": _finite,
+           "h_min": _finite, "h_max": _finite, "max_steps": _integer,
+           "project": lambda _, v: bool(v), "proj_tol": _finite,
+           "proj_max_iter": lambda n, v: _integer(n, v, 0), "t0": _finite,
+           "input_hold": _hold, "every": _integer, "final_only": lambda _, v: bool(v),
+           "max_rows": lambda n, v: _integer(n, v, 1, none=True),
+           "consistent": lambda _, v: bool(v)}
+_DEFAULTS = {f.name: f.default for f in fields(RunOptions)}
 
 
 @dataclass(frozen=True, **_KW)
@@ -166,7 +166,18 @@ class Run(RunOptions):
 
     def __post_init__(self):
         super().__post_init__()
-        t_end, dt = _number("t_end", self.t_end), _number("dt", self.dt)
+        self._times(self.t_end, self.dt)
+
+    @classmethod
+    def of(cls, options, t_end, dt):
+        """The Run of checked options (a RunOptions) and the run's times."""
+        run = object.__new__(cls)
+        run.__dict__.update(options.__dict__)
+        run._times(t_end, dt)
+        return run
+
+    def _times(self, t_end, dt):
+        t_end, dt = _number("t_end", t_end), _number("dt", dt)
         if not (math.isfinite(dt) and dt > 0):
             raise InputError(f"dt must be a positive number, got dt = {dt!r}", "dt", None, dt)
         if not (math.isfinite(t_end) and t_end >= self.t0):
@@ -262,6 +273,9 @@ RunOptions.__doc__ = doc(
              "value."), ("TypeError", "On a name that is not an option.")])
 
 
+_DEFAULT_OPTIONS = RunOptions()
+
+
 # ------------------------------------------------------------ using them
 def run_options(t_end, dt, options=None, given=None, where="Simulator.simulate"):
     """The checked :class:`Run` of a call: ``options`` (a RunOptions, or
@@ -276,17 +290,17 @@ def run_options(t_end, dt, options=None, given=None, where="Simulator.simulate")
         On a bad value; the message names the argument and the value.
     """
     if options is None:
-        options = RunOptions()
+        options = _DEFAULT_OPTIONS
     elif not isinstance(options, RunOptions):
         raise InputError(f"options must be a gen.RunOptions, got {type(options).__name__}",
                          "options", None, options)
-    given = given or {}
-    for k in given:
-        if k not in OPTION_NAMES:
-            raise TypeError(f"{where}() got an unexpected keyword argument {k!r}" + _hint(k))
-    values = {f.name: getattr(options, f.name) for f in fields(RunOptions)}
-    values.update(given)
-    return Run(**values, t_end=t_end, dt=dt)
+    if given:
+        for k in given:
+            if k not in OPTION_NAMES:
+                raise TypeError(f"{where}() got an unexpected keyword argument {k!r}"
+                                + _hint(k))
+        options = replace(options, **given)
+    return Run.of(options, t_end, dt)
 
 
 def _hint(name):
@@ -308,18 +322,20 @@ def options_signature(func, names=OPTION_NAMES):
     return sig.replace(parameters=params[:at] + opts + params[at:])
 
 
+# the options the C struct sim_options has: (name, the C value of a Python one)
+_C_FIELDS = [(name, (lambda v: abi.METHODS[v]) if name == "method" else
+              float if f.ctype == "real" else int)
+             for name, f in _C.items() if name in _DEFAULTS]
+
+
 def fill_sim_options(struct, run, rows=True):
     """Write a run's options into a C ``sim_options`` struct (filled with
     ``sim_options_default`` first): every field that is an option (with
     rows=False not ``every`` and ``final_only``, which an ensemble keeps by
     its reducers)."""
-    for name, f in _C.items():
-        if name not in _BY_NAME or (not rows and name in ("every", "final_only")):
-            continue
-        v = getattr(run, name)
-        if name == "method":
-            v = abi.METHODS[v]
-        setattr(struct, name, float(v) if f.ctype == "real" else int(v))
+    for name, c_value in _C_FIELDS:
+        if rows or name not in ("every", "final_only"):
+            setattr(struct, name, c_value(getattr(run, name)))
 
 
 # ------------------------------------------------------------- the rows

@@ -1,5 +1,5 @@
 """The numpy-facing simulator over a compiled model. C status codes become
-exceptions from gen.errors; wrong shapes raise gen.InputError (a ValueError) naming the
+exceptions from gen.core.errors; wrong shapes raise gen.InputError (a ValueError) naming the
 expected shape. Every call returns fresh arrays (safe with solve_ivp).
 
 A Simulator is made from the host module (gen/toolchain/host.py), the model
@@ -27,15 +27,16 @@ from .docstrings import documented
 from .ensemble import run_ensemble
 from .interrupt import call
 from .library import ModelLibrary, fast_rhs
-from .methods import EVALUATIONS, LABELS, call_steps, method
+from .methods import EVALUATIONS, method
 from .options import (OPTION_NAMES, fill_sim_options, finite_or_raise, option_params,
                       options_signature, plan_rows, run_options)
 from .solution import Solution
 
 __all__ = ["Simulator", "ModelLibrary", "EXCEPTIONS"]
 
-# the options an ensemble accepts as simulate's but keeps its own way
-_ENSEMBLE_ONLY_ACCEPTED = ("every", "final_only", "events", "terminal")
+# the options an ensemble accepts as simulate's but keeps its own way (its reducers)
+_KEPT_BY_REDUCERS = ("every", "final_only", "events", "terminal")
+
 
 class Simulator:
     """A compiled model: numpy arrays in, numpy arrays out, every call in the
@@ -111,7 +112,6 @@ class Simulator:
         self._dt = np.dtype(self.dtype)
         self._fns = {}
         self._outs = {}
-        self._plans = {}
         self._xshape = (self.nx,)
         self._rshape = (self.nr,)
         self._fb = self._ffi.from_buffer
@@ -214,42 +214,6 @@ class Simulator:
         if st:
             self._check(st, verb, t, state, args=named)
         return [o if n == o.size else o[:n].copy() for o, n in zip(outs, sizes)]
-
-    def _evaluate(self, name, given):
-        """The call of a generated evaluation method (gen/sim/methods.py):
-        given, its arguments by name, converted and checked as the C
-        function's description says; its outputs shaped likewise."""
-        ev = EVALUATIONS[name]
-        plan = self._plans.get(name)
-        if plan is None:
-            plan = self._plans[name] = call_steps(ev, self.interface.size)
-        steps, outs = plan
-        if ev.requires and not getattr(self, ev.requires):
-            raise InputError(ev.refusal.format(name=self.name))
-        args, named = [], {}
-        for kind, cname, n in steps:
-            if kind == "t" or kind == "value":
-                a = given[cname]
-            elif kind == "p":
-                a = named["p"] = self._params(given["p"])
-            elif kind == "r":
-                a = named["r"] = self._inputs(given["r"])
-            elif kind == "x@":       # q or u of the state x
-                if "x" not in named:
-                    named["x"] = self._vec(given["x"], self.nx, LABELS["x"])
-                x = named["x"]
-                a = (x[:self.nq] if cname == "q" else x[self.nq:]).copy()
-            else:                    # an array: "vec", or "inout" (a copy, written)
-                a = self._vec(given[cname], n, LABELS[cname])
-                a = named[cname] = a.copy() if kind == "inout" else a
-            args.append(a)
-        got = self._call(ev.verb, *args, t=given.get("t"), state=named.get("x"), named=named)
-        got = dict(zip([a.name for a in ev.function.params if a.role in ("out", "out?")], got))
-        got.update(named)
-        if ev.scalar:
-            return float(got[outs[0][0]][0])
-        res = [got[k] if dims is None else got[k].reshape(dims) for k, dims in outs]
-        return res[0] if len(res) == 1 else tuple(res)
 
     def _vec(self, v, n, what, default=None):
         if (type(v) is np.ndarray and v.dtype is self._dt and v.shape == (n,)
@@ -822,9 +786,9 @@ class Simulator:
                  ("workers", "int, optional", "Threads (default: every core)."),
                  ("progress", "bool, optional", "A tqdm progress bar (None: on a terminal; "
                   "``pip install eomgen[ensemble]``)."),
-                 (", ".join(n for n in OPTION_NAMES if n not in _ENSEMBLE_ONLY_ACCEPTED), "",
+                 (", ".join(n for n in OPTION_NAMES if n not in _KEPT_BY_REDUCERS), "",
                   "As for :meth:`simulate` (checked by the same code)."),
-                 (", ".join(_ENSEMBLE_ONLY_ACCEPTED), "", "Accepted as :meth:`simulate`'s; an "
+                 (", ".join(_KEPT_BY_REDUCERS), "", "Accepted as :meth:`simulate`'s; an "
                   "ensemble keeps what its reducers ask for, so ``every`` must be 1, "
                   '``final_only=True`` means ``reduce="final"``, and events are refused '
                   "(simulate the runs that need them)."), "options"],
