@@ -5,6 +5,7 @@ verified C simulators.
     gen.generate(model, "out/")            # C sources + CMake project
     sim = gen.compile(model)               # a model library, numpy in and out
     t, x = sim.simulate(x0, 5.0, 1e-3)    # a gen.Solution: sol.outputs, sol.events, ...
+    sol = sim.simulate(x0, 5.0, 1e-2, options=gen.RunOptions(method="dopri5", rtol=1e-10))
     A, B = sim.linearize(x_op)
     res = sim.ensemble(x0, 5.0, 1e-3, p=gen.Sampler(1).draw(10**5, m=("uniform", 0.8, 1.2)))
     A, B = gen.linearize_symbolic(model, {q1: L, q2: 0})   # sympy matrices
@@ -21,6 +22,7 @@ from .core.errors import (BuildError, ConvergenceError, DivergenceError, EomgenE
                      InputError, MissingDependencyError, ModelError, SingularError, SolverError,
                      UnusedConstantWarning, UnusedInputWarning, MasslessSpeedWarning)
 from .sim.solution import Event, Solution  # noqa: E402
+from .sim.options import RunOptions  # noqa: E402
 from .sim.simulator import Simulator  # noqa: E402
 from .intake.model import Model  # noqa: E402
 from .codegen.render import generate  # noqa: E402
@@ -34,7 +36,8 @@ from .sim.ensemble import At, EnsembleResult, Final, Max, Mean, Min, Sampler  # 
 from .intake.hybrid import Impact, Reset  # noqa: E402
 from .design.ocp import OptimalControl, OptimalSolution  # noqa: E402
 
-__all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "EomgenError",
+__all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "RunOptions",
+           "EomgenError",
            "ModelError", "BuildError", "InputError", "MissingDependencyError",
            "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "UnusedInputWarning", "MasslessSpeedWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
            "TrajectoryTracker", "export_fmu", "Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult",

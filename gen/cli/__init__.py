@@ -1,4 +1,4 @@
 """The command line, ``eomgen`` (and ``python -m gen``)."""
-from .commands import main
+from .program import main
 
 __all__ = ["main"]

@@ -1,5 +1,6 @@
-"""eomgen command line: generate, build, simulate, linearize, verify and
-report on a model file.
+"""The commands of the eomgen command line: generate, build, simulate,
+ensemble, linearize, verify, report, fmu and cache on a model file (their
+arguments: gen/cli/program.py).
 
 A model file is a Python file defining ``model()`` that returns a
 ``gen.Model``; ``FILE.py:function`` names another function. Exit codes:
@@ -9,7 +10,6 @@ unless ``--debug``.
 """
 from __future__ import annotations
 
-import argparse
 import contextlib
 import importlib.util
 import os
@@ -17,30 +17,12 @@ import subprocess
 import sys
 from pathlib import Path
 
-from .._version import __version__
-
-from ..codegen import abi
-from .output import (MissingDependency, Progress, plot_simulation, print_csv,
-                         print_events, print_linearization, write_csv, write_events_csv)
 from ..codegen.backends import backend_names, get_backend
-from ..core.errors import EomgenError
-
-EXAMPLES = """examples:
-  eomgen generate examples/seed_pendulum.py -o out/pend
-  eomgen build examples/seed_pendulum.py:lagrange_model -o out/pend_lagrange
-  eomgen simulate examples/seed_pendulum.py --t-end 5 --x0 q2=0.5 --csv run.csv --plot run.png
-  eomgen simulate examples/seed_pendulum.py --t-end 5 --x0 q2=0.5 --method dopri5 --event q2:-1:terminal
-  eomgen ensemble examples/seed_pendulum.py --samples 10000 --param L=uniform:0.8:1.2 --x0 q2=normal:0:0.3 --t-end 5 -o res.npz
-  eomgen linearize examples/seed_pendulum.py --at q1=1 --at q2=0
-  eomgen verify examples/seed_pendulum.py --samples 20
-  eomgen generate examples/seed_pendulum.py -o out/pend_f --real float
-  eomgen report examples/seed_pendulum.py --target cortex-m4f -o footprint.txt
-  eomgen fmu examples/cart_pole.py -o cart_pole.fmu --fmi 3.0 --kind both
-  eomgen cache            (where the build cache is, its size; eomgen cache clear empties it)
-
-A model file defines model() returning a gen.Model (or name a function: FILE.py:func).
-Exit codes: 0 ok, 1 failure, 2 usage error. --debug shows Python tracebacks.
-"""
+from ..core.errors import EomgenError, InputError, MissingDependencyError
+from ..core.optional import require
+from ..sim.options import OPTIONS, RunOptions
+from .output import (Progress, plot_simulation, print_csv, print_events, print_linearization,
+                     write_csv, write_events_csv)
 
 
 class UsageError(Exception):
@@ -187,6 +169,19 @@ def _events(sim, items):
     return events, terminal
 
 
+def _run_options(a, command):
+    """The gen.RunOptions of the run flags of a command (gen/cli/program.py
+    makes them from the same OPTIONS); a bad value is a usage error naming
+    its flag."""
+    given = {o.name: getattr(a, o.name) for o in OPTIONS if command in o.cli}
+    try:
+        return RunOptions(**given)
+    except InputError as e:
+        o = next((o for o in OPTIONS if o.name == e.argument), None)
+        flag = (o.flag or "--" + o.name.replace("_", "-")) if o else e.argument
+        raise UsageError(f"{flag}: {e}") from None
+
+
 # ------------------------------------------------------------- subcommands
 def cmd_generate(a, progress):
     from ..codegen.render import render_files, write_atomic
@@ -316,11 +311,10 @@ def cmd_simulate(a, progress):
             raise UsageError("give the inputs either with --input or with --input-csv")
         r = _read_input_table(sim, a.input_csv)
         varying = True
-    method = abi.method_name(a.method, "--method")
+    opts = _run_options(a, "simulate")
     kw = dict(events=events, terminal=terminal) if events else {}
-    with progress.stage(f"simulate {a.t_end:g} s ({method})"):
-        sol = sim.simulate(x, a.t_end, a.dt, method=method, r=r, p=p, rtol=a.rtol,
-                           atol=a.atol, input_hold=getattr(a, "hold", "zoh"), **kw)
+    with progress.stage(f"simulate {a.t_end:g} s ({opts.method})"):
+        sol = sim.simulate(x, a.t_end, a.dt, r=r, p=p, options=opts, **kw)
     t, X, lam, R = sol.t, sol.x, sol.lam, sol.r
     Y = np.column_stack([sol.outputs[k] for k in sim.output_names]) if sim.ny else \
         np.empty((len(t), 0))
@@ -367,7 +361,7 @@ def cmd_simulate(a, progress):
             try:
                 plot_simulation(a.plot, m, sim, t, X, res_names, res, E, Y=Y,
                                 R=R if varying else None)
-            except MissingDependency as e:
+            except MissingDependencyError as e:
                 raise UsageError(str(e)) from None
         print(f"wrote {a.plot}")
     if a.events_csv and (a.csv or a.plot):   # (else stdout holds the trajectory)
@@ -483,22 +477,18 @@ def cmd_ensemble(a, progress):
     p = _sampled(a.param, sim.constant_names, sim.constant_labels, "param", sampler, a.samples)
     r = _sampled(a.input, sim.input_names, sim.input_labels, "input", sampler, a.samples)
     reduce = _reducers_arg(a.reduce)
+    opts = _run_options(a, "ensemble")
     client = None
     if a.scheduler:
-        try:
-            from distributed import Client
-        except ImportError:
-            raise UsageError("--scheduler needs dask.distributed: pip install "
-                                    "'eomgen[dask]'") from None
-        client = Client(a.scheduler)
+        client = _optional("distributed", "--scheduler").Client(a.scheduler)
     out = Path(a.output)
     if out.suffix not in (".npz", ".parquet"):
         raise UsageError(f"-o {a.output}: write .npz or .parquet")
     n = a.samples
-    with progress.stage(f"{n} runs of {a.t_end:g} s ({a.method})"):
+    with progress.stage(f"{n} runs of {a.t_end:g} s ({opts.method})"):
         res = sim.ensemble(x0 or np.zeros((n, sim.nx)), a.t_end, a.dt, p=p or None, r=r or None,
-                           reduce=reduce, client=client, chunk=a.chunk, method=a.method,
-                           rtol=a.rtol, atol=a.atol, workers=a.workers,
+                           reduce=reduce, client=client, chunk=a.chunk, workers=a.workers,
+                           options=opts,
                            consistent=not a.no_consistent and bool(sim.mc or sim.mv),
                            progress=None if not a.quiet else False)
     cols = {f"x0.{k}": v for k, v in x0.items()}
@@ -510,11 +500,8 @@ def cmd_ensemble(a, progress):
         if out.suffix == ".npz":
             np.savez(out, t=res.t, **cols, **{k: np.asarray(v) for k, v in res.values.items()})
         else:
-            try:
-                import pandas as pd
-            except ImportError:
-                raise UsageError("-o .parquet needs pandas and pyarrow: pip install "
-                                        "pandas pyarrow (or write .npz)") from None
+            pd = _optional("pandas", "-o .parquet")
+            _optional("pyarrow", "-o .parquet")
             for k, v in res.values.items():
                 v = np.asarray(v).reshape(res.n, -1)
                 for j in range(v.shape[1]):
@@ -530,6 +517,15 @@ def cmd_ensemble(a, progress):
     if len(fails) > 10:
         print(f"  ... and {len(fails) - 10} more (status in {out})", file=sys.stderr)
     return 0
+
+
+def _optional(name, feature):
+    """An optional dependency of a command; missing, a usage error naming
+    the extra that installs it (gen.core.optional)."""
+    try:
+        return require(name, feature)
+    except MissingDependencyError as e:
+        raise UsageError(str(e)) from None
 
 
 def cmd_verify(a, progress):
@@ -596,294 +592,3 @@ def cmd_report(a, progress):
     else:
         print(text, end="")
     return 0
-
-
-# ------------------------------------------------------------------ parser
-class _Parser(argparse.ArgumentParser):
-    """Usage errors as one line and exit code 2."""
-
-    def error(self, message):
-        self.exit(2, f"{self.prog}: {message}\n")
-
-
-def _sub(sub, name, help_, example, common):
-    return sub.add_parser(name, help=help_, description=help_ + ".",
-                          epilog="example:\n  " + example,
-                          formatter_class=argparse.RawDescriptionHelpFormatter,
-                          parents=[common])
-
-
-def _add_real(p, default="double", both=False):
-    choices = ["double", "float"] + (["both"] if both else [])
-    p.add_argument("--real", default=default, choices=choices,
-                   help=f"scalar type of the generated code (default {default})")
-
-
-def _common(defaults):
-    """--quiet/--verbose/--debug, accepted before and after the subcommand
-    (the subcommand's copies must not reset what was given before it)."""
-    c = argparse.ArgumentParser(add_help=False)
-    d = {} if defaults else {"default": argparse.SUPPRESS}
-    c.add_argument("--quiet", "-q", action="store_true", help="no progress display", **d)
-    c.add_argument("--verbose", "-v", action="store_true",
-                   help="print every stage with its time", **d)
-    c.add_argument("--debug", action="store_true", help="show Python tracebacks", **d)
-    return c
-
-
-def build_parser():
-    common = _common(defaults=False)
-    ap = _Parser(prog="eomgen", formatter_class=argparse.RawDescriptionHelpFormatter,
-                 description="Generate verified C simulators from sympy.physics.mechanics "
-                             "models.", epilog=EXAMPLES, parents=[_common(defaults=True)])
-    ap.add_argument("--version", action="version", version=f"eomgen {__version__}")
-    sub = ap.add_subparsers(dest="cmd", required=True, parser_class=_Parser,
-                            metavar="{generate,build,simulate,ensemble,linearize,verify,report,fmu,"
-                                    "cache}")
-
-    g = _sub(sub, "generate", "write the model's C (or C++/Eigen) sources and a CMake project",
-             "eomgen generate examples/seed_pendulum.py -o out/pend --real float", common)
-    g.add_argument("file", help="model file (FILE.py or FILE.py:function)")
-    g.add_argument("-o", "--output", required=True, help="output folder")
-    g.add_argument("--backend", default="c", choices=backend_names("project"))
-    _add_real(g)
-    g.add_argument("--name", help="C prefix (default: the model's name)")
-    g.set_defaults(fn=cmd_generate)
-
-    b = _sub(sub, "build", "generate and build the standalone simulator with CMake; "
-             "prints the binary's path",
-             "eomgen build examples/seed_pendulum.py:lagrange_model -o out/pl", common)
-    b.add_argument("file", help="model file (FILE.py or FILE.py:function)")
-    b.add_argument("-o", "--output", required=True, help="output folder (build in OUTPUT/build)")
-    b.add_argument("--backend", default="c", choices=backend_names("project"))
-    _add_real(b)
-    b.add_argument("--stack-limit", type=int, default=None, metavar="BYTES",
-                   help="fail the library build on a function frame above BYTES "
-                        "(-Wstack-usage, GCC; the embedded profile's bound, "
-                        f"{abi.STACK_LIMIT} by default when cross-compiling); default: no "
-                        "bound on the host")
-    b.set_defaults(fn=cmd_build)
-
-    s = _sub(sub, "simulate", "simulate the compiled model; write CSV and/or a plot (states, "
-             "constraint residuals, energy error)",
-             "eomgen simulate examples/seed_pendulum.py --t-end 5 --x0 q2=0.5 --plot run.png",
-             common)
-    s.add_argument("file", help="model file (FILE.py or FILE.py:function)")
-    s.add_argument("--t-end", type=float, required=True, help="end time [s]")
-    s.add_argument("--dt", type=float, default=0.01,
-                   help="RK4 step, or the output interval of dopri5 and rodas4 (default 0.01)")
-    s.add_argument("--method", default="rk4", choices=[*abi.METHODS, *abi.METHOD_ALIASES],
-                   help="rk4 (default), dopri5 or rodas4 (alias rodas: implicit, for stiff "
-                        "models)")
-    s.add_argument("--rtol", type=float, default=1e-8,
-                   help="dopri5/rodas4 relative tolerance (default 1e-8)")
-    s.add_argument("--atol", type=float, default=1e-10,
-                   help="dopri5/rodas4 absolute tolerance (default 1e-10)")
-    s.add_argument("--x0", action="append", metavar="NAME=VALUE",
-                   help="initial state entry (repeat); dependent entries are solved")
-    s.add_argument("--param", action="append", metavar="NAME=VALUE", help="constant value")
-    s.add_argument("--input", action="append", metavar="NAME=VALUE",
-                   help="constant input value")
-    s.add_argument("--input-csv", metavar="FILE",
-                   help="inputs from a table: a header 't,<input names>' then rows; held "
-                        "(--hold zoh, default) or interpolated (--hold linear) inside C")
-    s.add_argument("--hold", default="zoh", choices=list(abi.HOLDS),
-                   help="the input table between rows")
-    s.add_argument("--event", action="append", metavar="NAME[=LEVEL]:DIR[:terminal]",
-                   help="log the crossings of LEVEL (default 0) by a state or an output NAME; "
-                        "DIR +1 (or 1, up), -1 (down) or 0 (both); terminal: the first "
-                        "crossing ends the run, its state the last row (repeat)")
-    s.add_argument("--events-csv", metavar="FILE",
-                   help="write the events as CSV 'event,t,<states>' (default: one line "
-                        "'event NAME t=T <state>' per event on stderr)")
-    s.add_argument("--csv", help="write the trajectory (t, states, lam, residuals, energy, "
-                        "reaction forces, inputs when they vary)")
-    s.add_argument("--plot", help="write a PNG plot")
-    _add_real(s)
-    s.set_defaults(fn=cmd_simulate, backend="c")
-
-    li = _sub(sub, "linearize", "print A and B (labelled) and the eigenvalues of A at a state",
-              "eomgen linearize examples/seed_pendulum.py --at q1=-1", common)
-    li.add_argument("file", help="model file (FILE.py or FILE.py:function)")
-    li.add_argument("--at", action="append", metavar="NAME=VALUE",
-                    help="operating-point entry (repeat); dependent entries are solved")
-    li.add_argument("--param", action="append", metavar="NAME=VALUE", help="constant value")
-    li.add_argument("--input", action="append", metavar="NAME=VALUE", help="input value")
-    li.add_argument("--dt", type=float, metavar="TS",
-                    help="also print the zero-order-hold discretization Ad, Bd over TS")
-    _add_real(li)
-    li.set_defaults(fn=cmd_linearize, backend="c")
-
-    v = _sub(sub, "verify", "check every compiled function against sympy's own evaluation "
-             "of the model at random states; exit 1 on a mismatch",
-             "eomgen verify examples/seed_pendulum.py --samples 50 --sources out/pend", common)
-    v.add_argument("file", help="model file (FILE.py or FILE.py:function)")
-    v.add_argument("--samples", type=int, default=20, help="random states (default 20)")
-    v.add_argument("--backend", default="c", choices=[*backend_names("loadable"), "both"])
-    v.add_argument("--sources", help="check the sources in this generated folder instead")
-    v.add_argument("--tol", type=float, help="relative tolerance (default 1e-9; float 2e-4)")
-    v.add_argument("--seed", type=int, default=0, help="random seed")
-    _add_real(v)
-    v.set_defaults(fn=cmd_verify)
-
-    rp = _sub(sub, "report", "flash and worst-case stack of the embedded library",
-              "eomgen report examples/seed_pendulum.py --target cortex-m4f -o footprint.txt",
-              common)
-    rp.add_argument("file", help="model file (FILE.py or FILE.py:function)")
-    _add_real(rp, default="both", both=True)
-    rp.add_argument("--target", default="cortex-m4f", choices=["cortex-m4f", "host"])
-    rp.add_argument("--stack-limit", type=int, default=abi.STACK_LIMIT, metavar="BYTES",
-                    help="-Wstack-usage bound on every function frame (default "
-                         f"{abi.STACK_LIMIT}; 0: no bound)")
-    rp.add_argument("--build-dir", help="keep the build here (default: a temporary directory)")
-    rp.add_argument("-o", "--output", help="write the table to this file (footprint.txt)")
-    rp.add_argument("--json", metavar="FILE", help="also write the reports as JSON")
-    rp.set_defaults(fn=cmd_report)
-
-    fm = _sub(sub, "fmu", "export the model as an FMU (FMI 2.0 or 3.0, Model Exchange and/or "
-              "Co-Simulation) for Simulink, Dymola, OpenModelica, FMPy...; needs "
-              "pip install eomgen[fmu]",
-              "eomgen fmu examples/seed_pendulum.py -o pend.fmu --fmi 3.0 --start q2=0.6 "
-              "--start q1=0.8", common)
-    fm.add_argument("file", help="model file (FILE.py or FILE.py:function)")
-    fm.add_argument("-o", "--output", required=True, help="the FMU file (NAME.fmu)")
-    fm.add_argument("--fmi", default="2.0", choices=["2.0", "3.0"],
-                    help="FMI version (default 2.0)")
-    fm.add_argument("--kind", default="both", choices=["cs", "me", "both"],
-                    help="Co-Simulation, Model Exchange or both (default)")
-    fm.add_argument("--start", action="append", metavar="NAME=VALUE",
-                    help="start value of a state (repeat); the dependent coordinates and "
-                         "speeds are solved from the independent ones, the values given are "
-                         "the guess")
-    fm.add_argument("--unit", action="append", metavar="NAME=UNIT",
-                    help="unit of a state, input, constant or output (repeat), Modelica "
-                         "syntax: m, rad/s, N.m")
-    fm.add_argument("--cs-method", default="dopri5", choices=list(abi.ADAPTIVE_METHODS),
-                    help="the Co-Simulation integrator (default dopri5; rodas4 for stiff "
-                         "models)")
-    fm.add_argument("--no-binary", action="store_true",
-                    help="sources only (compile with the importer, e.g. FMPy)")
-    _add_real(fm)
-    fm.set_defaults(fn=cmd_fmu)
-
-    en = _sub(sub, "ensemble", "many runs of the compiled model over sampled parameters and "
-              "initial states, in C on every core or on a Dask cluster; write the reduced "
-              "results (.npz or .parquet)",
-              "eomgen ensemble examples/seed_pendulum.py --samples 100000 --param "
-              "L=uniform:0.8:1.2 --x0 q2=normal:0:0.05 --t-end 5 --reduce final -o res.npz",
-              common)
-    en.add_argument("file", help="model file (FILE.py or FILE.py:function)")
-    en.add_argument("--samples", type=int, required=True, help="number of runs")
-    en.add_argument("--param", action="append", metavar="NAME=SPEC",
-                    help="a constant: a number, uniform:LOW:HIGH or normal:MEAN:STD (repeat)")
-    en.add_argument("--x0", action="append", metavar="NAME=SPEC",
-                    help="an initial-state entry, as --param (others 0; dependent entries "
-                         "solved unless --no-consistent)")
-    en.add_argument("--input", action="append", metavar="NAME=SPEC",
-                    help="a constant input, as --param")
-    en.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    en.add_argument("--t-end", type=float, required=True, help="end time [s]")
-    en.add_argument("--dt", type=float, default=1e-3, help="RK4 step or output interval "
-                    "(default 1e-3)")
-    en.add_argument("--method", default="rk4", choices=[*abi.METHODS, *abi.METHOD_ALIASES])
-    en.add_argument("--rtol", type=float, default=1e-8)
-    en.add_argument("--atol", type=float, default=1e-10)
-    en.add_argument("--reduce", action="append",
-                    metavar="final|min:NAMES|max:NAMES|mean:NAMES|at:TIMES[:NAMES]",
-                    help="what to keep of each run (repeat; default final)")
-    en.add_argument("--no-consistent", action="store_true",
-                    help="take the sampled states as they are")
-    en.add_argument("--chunk", type=int, help="runs per C call (default: a few per worker)")
-    en.add_argument("--workers", type=int, help="threads (default: every core)")
-    en.add_argument("--scheduler", metavar="ADDRESS",
-                    help="run the chunks on a Dask cluster (tcp://host:8786)")
-    en.add_argument("-o", "--output", required=True, help="results file (.npz or .parquet)")
-    _add_real(en)
-    en.set_defaults(fn=cmd_ensemble, backend="c")
-
-    ca = _sub(sub, "cache", "show where eomgen's build cache is, its entries and size; "
-              "'clear' deletes eomgen's entries from it",
-              "eomgen cache clear", common)
-    ca.add_argument("action", nargs="?", default="info", choices=["info", "clear"],
-                    help="info (default) or clear")
-    ca.set_defaults(fn=cmd_cache)
-    return ap
-
-
-def main(argv=None):
-    """Run the command line; returns the exit status. Every eomgen error,
-    a refused or too large run (ValueError, MemoryError) and a file error is
-    one line on stderr, never a traceback (--debug shows it). A closed pipe
-    (``eomgen ... | head``) ends the run quietly with 141 (128 + SIGPIPE,
-    what a program killed by the signal reports), as Python's documentation
-    recommends: stdout is pointed at devnull so that the interpreter's own
-    flush at exit does not fail again."""
-    try:
-        rc = _main(argv)
-        sys.stdout.flush()    # a closed pipe shows here at the latest
-        return rc
-    except BrokenPipeError:
-        _stdout_to_devnull()
-        return 141
-
-
-def _stdout_to_devnull():
-    try:
-        fd = sys.stdout.fileno()
-    except (AttributeError, OSError, ValueError):
-        return
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, fd)
-    os.close(devnull)
-
-
-def _one_line(cmd, text):
-    """eomgen CMD: the first line of text (the rest: --verbose)."""
-    first, _, rest = text.partition("\n")
-    print(f"eomgen {cmd}: {first}", file=sys.stderr)
-    return rest
-
-
-def _main(argv=None):
-    ap = build_parser()
-    a = ap.parse_args(argv)
-    if getattr(a, "samples", 1) is not None and getattr(a, "samples", 1) < 1:
-        print(f"eomgen {a.cmd}: --samples must be at least 1", file=sys.stderr)
-        return 2
-    progress = Progress(quiet=a.quiet, verbose=a.verbose)
-    try:
-        rc = a.fn(a, progress)
-        progress.summary()
-        return rc
-    except BrokenPipeError:
-        raise                 # main(): quiet
-    except UsageError as e:
-        if a.debug:
-            raise
-        print(f"eomgen {a.cmd}: {e}", file=sys.stderr)
-        return 2
-    except (EomgenError, OSError, ValueError) as e:
-        # ValueError: a refused argument or run (gen.InputError is one)
-        if a.debug:
-            raise
-        text = str(e) or type(e).__name__
-        rest = _one_line(a.cmd, text)
-        if rest and (a.verbose or "compiler log" in text or "CMake" in text.partition("\n")[0]):
-            print(rest, file=sys.stderr)
-        return 1
-    except MemoryError as e:
-        if a.debug:
-            raise
-        detail = f" ({e})" if str(e) else ""
-        way_out = ("the run is too large for this machine; keep fewer rows (a larger --dt, "
-                   "a shorter --t-end)" if a.cmd in ("simulate", "ensemble")
-                   else "the job is too large for this machine")
-        _one_line(a.cmd, f"out of memory{detail}: {way_out}")
-        return 1
-    except KeyboardInterrupt:
-        print("eomgen: interrupted", file=sys.stderr)
-        return 130
-
-
-if __name__ == "__main__":
-    sys.exit(main())

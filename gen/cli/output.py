@@ -8,13 +8,10 @@ from __future__ import annotations
 import sys
 import time
 
-__all__ = ["Progress", "MissingDependency", "format_matrix", "print_linearization",
-           "write_csv", "print_csv", "write_events_csv", "print_events", "plot_simulation"]
+from ..core.optional import require
 
-
-class MissingDependency(Exception):
-    """An optional package an output needs is not installed (the command
-    line reports it as a usage error)."""
+__all__ = ["Progress", "format_matrix", "print_linearization", "write_csv", "print_csv",
+           "write_events_csv", "print_events", "plot_simulation"]
 
 
 # --------------------------------------------------------------- progress
@@ -151,13 +148,11 @@ def print_events(state_names, events, stream=None):
 def plot_simulation(path, m, sim, t, X, res_names, res, E, Y=None, R=None):
     """A PNG of the states, the outputs, the inputs (when they vary), the
     constraint residuals (log scale) and the relative energy error, one
-    panel each (those present)."""
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        raise MissingDependency("--plot needs matplotlib: pip install 'eomgen[plot]'") from None
+    panel each (those present). A gen.MissingDependencyError without
+    matplotlib (the command line reports it as a usage error)."""
+    matplotlib = require("matplotlib", "--plot")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
     import numpy as np
     has_y = Y is not None and sim.ny > 0
     has_r = R is not None and sim.nr > 0

@@ -39,11 +39,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..codegen.abi import JACOBIAN_METHODS, METHODS
-from ..core.status import status_name
+from ..codegen.abi import JACOBIAN_METHODS
 from ..core.errors import InputError
+from ..core.optional import require
+from ..core.status import status_name
 from .interrupt import call, count as interrupt_count
-from .options import finite_or_raise, plan_rows
+from .options import fill_sim_options, finite_or_raise, plan_rows
 
 __all__ = ["Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult", "run_ensemble"]
 
@@ -396,8 +397,8 @@ def run_chunk(sim, job, since=None):
     reducers; returns {"status", "t_last", "x_last", "values"}."""
     library = sim.library
     ffi, lib = library.ffi, library.host
-    n, nx, rows = job["n"], sim.nx, job["rows"]
-    if job["method"] in JACOBIAN_METHODS:
+    n, nx, rows, run = job["n"], sim.nx, job["rows"], job["run"]
+    if run.method in JACOBIAN_METHODS:
         library.ensure_derivatives()
     keep = []
 
@@ -420,22 +421,19 @@ def run_chunk(sim, job, since=None):
         r = arr(job["r"])
         e.r, e.r_stride = ptr(r), (sim.nr if len(r) > 1 else 0)
     from .inputs import plan_inputs
-    plan = plan_inputs(sim, job["r_shared"], job["controller"], job["dt"], job["method"],
-                       job["input_period"], job["input_hold"])
+    plan = plan_inputs(sim, job["r_shared"], job["controller"], run.dt, run.method,
+                       run.input_period, run.input_hold)
     if plan is not None:
         e.input = plan.struct
     opts = library.new("sim_options")
     library.function("sim_options_default")(opts)
-    opts.method = METHODS[job["method"]]
-    opts.project = 1 if job["project"] else 0
-    opts.rtol, opts.atol = job["rtol"], job["atol"]
-    opts.max_steps = int(job["max_steps"])
+    fill_sim_options(opts, run, rows=False)   # every and final_only: the reducers'
     e.opts = opts
-    e.t0, e.t_end, e.dt = job["t0"], job["t_end"], job["dt"]
+    e.t0, e.t_end, e.dt = run.t0, run.t_end, run.dt
     e.rows = rows
     reducers = job["reducers"]
     e.final_only = int(all(k == lib.EOMGEN_REDUCE_FINAL for k, *_ in reducers.values()))
-    e.consistent = int(job["consistent"])
+    e.consistent = int(run.consistent)
     cap = 1 if e.final_only else rows
     t_buf, x_buf = arr(np.empty(cap)), arr(np.empty((cap, nx)))
     r_buf = arr(np.empty((cap, max(1, sim.nr)))) if plan is not None else None
@@ -492,17 +490,17 @@ def _progress(total, enabled):
     if enabled is False or (enabled is None and not sys.stderr.isatty()):
         return None
     try:
-        from tqdm import tqdm
+        tqdm = require("tqdm", "Simulator.ensemble(progress=True)")
     except ImportError:
         if enabled:
-            raise ImportError("progress=True needs tqdm: pip install 'eomgen[ensemble]'") from None
+            raise
         return None
-    return tqdm(total=total, unit="run", smoothing=0.1)
+    return tqdm.tqdm(total=total, unit="run", smoothing=0.1)
 
 
 def run_ensemble(sim, x0, opts, r=None, p=None, controller=None, reduce="final", client=None,
                  chunk=None, workers=None, progress=None):
-    """Simulator.ensemble (its docstring); opts: the checked gen.sim.options.RunOptions."""
+    """Simulator.ensemble (its docstring); opts: the checked gen.sim.options.Run."""
     if opts.events is not None:
         raise InputError("events= is not available in an ensemble: simulate the runs that "
                          "need events one by one (sim.simulate(..., events=...))", "events")
@@ -514,7 +512,7 @@ def run_ensemble(sim, x0, opts, r=None, p=None, controller=None, reduce="final",
                                 or isinstance(reduce, Final)):
         raise InputError("final_only=True keeps the final state only: give reduce='final' "
                          f"(got reduce={reduce!r})", "final_only")
-    method, t0, t_end, dt = opts.method, opts.t0, opts.t_end, opts.dt
+    t0, t_end, dt = opts.t0, opts.t_end, opts.dt
     if callable(r) and not isinstance(r, tuple):
         raise InputError("an ensemble runs in C without the GIL: give r as constants (one row, "
                          "or one per run), a table (t_grid, R) or a gen.LinearFeedback "
@@ -559,12 +557,8 @@ def run_ensemble(sim, x0, opts, r=None, p=None, controller=None, reduce="final",
     if chunk < 1:
         raise InputError(f"chunk must be >= 1, got {chunk}")
     bounds = [(i, min(n, i + chunk)) for i in range(0, n, chunk)]
-    shared = dict(rows=rows, t_rows=t_rows, method=method, project=opts.project,
-                  rtol=opts.rtol, atol=opts.atol, max_steps=opts.max_steps, t0=t0,
-                  t_end=t_end, dt=dt, consistent=opts.consistent,
-                  r_shared=r if table else None, controller=controller,
-                  input_period=opts.input_period, input_hold=opts.input_hold,
-                  reducers=reducers)
+    shared = dict(rows=rows, t_rows=t_rows, run=opts, r_shared=r if table else None,
+                  controller=controller, reducers=reducers)
     jobs = [dict(shared, n=i1 - i0, x0=_slice(X0, i0, i1), p=_slice(P, i0, i1),
                  r=_slice(R, i0, i1)) for i0, i1 in bounds]
     bar = _progress(n, progress)
@@ -666,7 +660,7 @@ def _dask_task(bundle, job):
 
 
 def _run_dask(sim, jobs, client, bar):
-    if jobs and jobs[0]["method"] in JACOBIAN_METHODS:
+    if jobs and jobs[0]["run"].method in JACOBIAN_METHODS:
         sim.library.ensure_derivatives()     # the workers get the complete library
     # one future for the whole bundle, under a key of this call's own: a
     # dict given to scatter itself would be scattered value by value under

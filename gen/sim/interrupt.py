@@ -44,9 +44,18 @@ import _signal   # signal's C functions: getsignal without the enum wrapper (10 
 __all__ = ["call", "count"]
 
 
-_lock = threading.Lock()
-_owner = None        # (lib, ffi) of the host module whose relay the process uses
-_followers = {}      # id(lib) -> (lib, ffi): modules that take the owner's flags
+class _Relay:
+    """The process's one relay: the host module that owns it and those that
+    follow it. Read without the lock (a reference read is atomic); set only
+    under it."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.owner = None      # (lib, ffi) of the host module whose relay the process uses
+        self.followers = {}    # id(lib) -> (lib, ffi): modules that take the owner's flags
+
+
+_relay = _Relay()
 
 
 def _relay_of(lib, ffi):
@@ -55,18 +64,18 @@ def _relay_of(lib, ffi):
     one) never installs its own (two relays chained over each other could
     call each other forever): its batch loops follow the owner's counter and
     its runs get the owner's flags."""
-    global _owner
-    owner = _owner
-    if owner is not None and (owner[0] is lib or id(lib) in _followers):
+    owner = _relay.owner
+    if owner is not None and (owner[0] is lib or id(lib) in _relay.followers):
         return owner
-    with _lock:
-        if _owner is None:
-            _owner = (lib, ffi)
-        elif _owner[0] is not lib and id(lib) not in _followers:
-            counter = int(_owner[1].cast("uintptr_t", _owner[0].eomgen_interrupt_counter()))
+    with _relay.lock:
+        owner = _relay.owner
+        if owner is None:
+            owner = _relay.owner = (lib, ffi)
+        elif owner[0] is not lib and id(lib) not in _relay.followers:
+            counter = int(owner[1].cast("uintptr_t", owner[0].eomgen_interrupt_counter()))
             lib.eomgen_interrupt_follow(ffi.cast("void *", counter))
-            _followers[id(lib)] = (lib, ffi)
-        return _owner
+            _relay.followers[id(lib)] = (lib, ffi)
+        return owner
 
 
 def _armed(lib, ffi=None):
@@ -82,7 +91,7 @@ def count(sim):
     """The number of SIGINTs the process's relay has seen (0 where there is
     none yet): a baseline for :func:`call`'s ``since``."""
     lib, ffi = sim.library.host, sim.library.ffi
-    owner = _owner[0] if _owner is not None else lib
+    owner = _relay.owner[0] if _relay.owner is not None else lib
     return int(owner.eomgen_interrupt_count())
 
 
@@ -104,7 +113,7 @@ def call(sim, opts, fn, *args, since=None):
         if opts is not None:
             flag = owner.eomgen_interrupt_flag(slot)
             if owner is not lib:     # the owner's int, as this module's pointer
-                flag = ffi.cast("int *", int(_owner[1].cast("uintptr_t", flag)))
+                flag = ffi.cast("int *", int(_relay.owner[1].cast("uintptr_t", flag)))
             opts.cancel = flag
             if since is not None and int(owner.eomgen_interrupt_count()) != since:
                 flag[0] = 1      # interrupted before this call was armed

@@ -1,108 +1,41 @@
 """The numpy-facing simulator over a compiled model. C status codes become
-exceptions from gen.errors; wrong shapes raise gen.InputError (a ValueError) naming the
+exceptions from gen.core.errors; wrong shapes raise gen.InputError (a ValueError) naming the
 expected shape. Every call returns fresh arrays (safe with solve_ivp).
 
 A Simulator is made from the host module (gen/toolchain/host.py), the model
 library's plugin table and the model's interface description
 (gen.codegen.abi.Interface). It needs no sympy object, except through
 ``derivatives``: a function that builds the derivative kernels on their
-first use (gen.compile's lazy build)."""
+first use (gen.compile's lazy build).
+
+The evaluation methods (``mass_matrix``, ``forcing``, ..., ``jacobian``) are
+generated from the interface description (gen/sim/methods.py); every
+docstring is assembled from the shared text of gen/sim/docstrings.py and, for
+the run options, gen/sim/options.py."""
 from __future__ import annotations
 
-import ctypes
 import functools
 import threading
 
 import numpy as np
 
-from ..codegen.abi import DERIVATIVE_VERBS, JACOBIAN_METHODS, METHODS
+from ..codegen.abi import DERIVATIVE_VERBS, JACOBIAN_METHODS
+from ..core.errors import InputError, SolverError
+from ..core.optional import require
 from ..core.status import EXCEPTIONS, status_name
-from ..core.errors import ConvergenceError, DivergenceError, InputError, SingularError, SolverError
+from .docstrings import documented
 from .ensemble import run_ensemble
 from .interrupt import call
-from .options import finite_or_raise, plan_rows, run_options
-from .solution import Event, Solution
+from .library import ModelLibrary, fast_rhs
+from .methods import EVALUATIONS, method
+from .options import (OPTION_NAMES, fill_sim_options, finite_or_raise, option_params,
+                      options_signature, plan_rows, run_options)
+from .solution import Solution
 
 __all__ = ["Simulator", "ModelLibrary", "EXCEPTIONS"]
 
-def _fast_rhs(host, api, which="rhs"):
-    """The host module's CPython fast path of rhs (which="rhs") or
-    rhs_batch ("rhs_batch"), bound to the table api
-    (csrc/host/gen_host_fast.c); None where the host has none."""
-    make = getattr(host.lib, f"eomgen_fast_{which}_new", None)
-    if make is None:
-        return None
-    ptr = make(api)
-    if ptr == host.ffi.NULL:
-        return None
-    addr = int(host.ffi.cast("uintptr_t", ptr))
-    fn = ctypes.cast(ctypes.c_void_p(addr), ctypes.py_object).value
-    ctypes.pythonapi.Py_DecRef(ctypes.py_object(fn))     # the new reference made in C
-    return fn
-
-
-class ModelLibrary:
-    """The compiled model library under a Simulator (``sim.library``): what
-    eomgen's own modules that fill the C structs themselves need
-    (gen.ensemble, gen.control, gen.events), without the Simulator's
-    private names.
-
-    Attributes
-    ----------
-    ffi : cffi.FFI
-        The host module's ffi (its struct and type declarations).
-    host : object
-        The host module's lib: its functions (``eomgen_<verb>``, each taking
-        the table first) and constants (``EOMGEN_REDUCE_FINAL``, ...).
-    real_array : str
-        The cffi type of an array of the model's reals (``"eomgen_real[]"``).
-    """
-
-    real_array = "eomgen_real[]"
-
-    def __init__(self, sim):
-        self._sim = sim
-        self.ffi = sim._ffi
-        self.host = sim._lib
-
-    @property
-    def table(self):
-        """The model's plugin table (``const eomgen_api *``); it changes once,
-        when :meth:`ensure_derivatives` switches to the complete library."""
-        return self._sim._api
-
-    def new(self, struct):
-        """A zeroed C struct of the interface: ``"sim_options"``, ``"input"``,
-        ``"events"``, ``"sim_stats"`` (sized for the model), or any struct the
-        host declares (``"ensemble"`` is ``eomgen_ensemble``)."""
-        return self._sim._new(struct)
-
-    def function(self, name):
-        """The model's C function ``<p>_<name>``, its table bound: call it with
-        the C function's own arguments. A derivative kernel is built first
-        where the library has none yet."""
-        return self._sim._fn(name)
-
-    def call(self, name, *args):
-        """Call the host's ``eomgen_<name>`` (a host-only loop such as
-        ``ensemble_run``) with the current table first."""
-        return getattr(self.host, f"eomgen_{name}")(self._sim._api, *args)
-
-    def array(self, a, ctype=None):
-        """A C pointer over the buffer of the numpy array a (no copy; keep a
-        alive for the call): the model's reals, or ctype (``"int[]"``)."""
-        return self.ffi.from_buffer(ctype or self.real_array, a)
-
-    def check(self, status, where, t=None, state=None, args=None):
-        """Raise the gen exception of a nonzero C status (see
-        :class:`gen.SolverError`); nothing for 0."""
-        self._sim._check(status, where, t, state, args)
-
-    def ensure_derivatives(self):
-        """Build (or load from the cache) the derivative kernels now, where
-        they are not compiled in yet (RODAS4 and the linearizations need
-        them)."""
-        self._sim._need_derivatives()
+# the options an ensemble accepts as simulate's but keeps its own way (its reducers)
+_KEPT_BY_REDUCERS = ("every", "final_only", "events", "terminal")
 
 
 class Simulator:
@@ -184,8 +117,8 @@ class Simulator:
         self._fb = self._ffi.from_buffer
         self._null = self._ffi.NULL
         self._rhs_c = self._lib.eomgen_eval_rhs    # the fast path passes the table itself
-        self._rhs_fast = _fast_rhs(host, api)
-        self._rhs_batch_fast = _fast_rhs(host, api, "rhs_batch")
+        self._rhs_fast = fast_rhs(host, api)
+        self._rhs_batch_fast = fast_rhs(host, api, "rhs_batch")
         for k, n in (("nq", self.nq), ("nu", self.nu), ("nr", self.nr), ("np", self.np),
                      ("mc", self.mc), ("mv", self.mv), ("ns", self.ns), ("ny", self.ny),
                      ("na", self.na)):
@@ -246,8 +179,8 @@ class Simulator:
                 return
             api, built, timings = self._derive()
             self._api = api
-            self._rhs_fast = _fast_rhs(self._mod, api)
-            self._rhs_batch_fast = _fast_rhs(self._mod, api, "rhs_batch")
+            self._rhs_fast = fast_rhs(self._mod, api)
+            self._rhs_batch_fast = fast_rhs(self._mod, api, "rhs_batch")
             self._fns.clear()
             self.build_info.update(timings, module=str(built.path), derivatives=True)
             self._derive = None
@@ -268,17 +201,19 @@ class Simulator:
                                         if a.role in ("out", "out?")]
         return sizes
 
-    def _call(self, verb, *args, t=None, state=None):
+    def _call(self, verb, *args, t=None, state=None, named=None):
         """Call <p>_<verb> with the inputs (arrays become pointers, None
         NULL, numbers pass as they are) followed by fresh arrays for its
         outputs (sizes from the interface description); raise on a failure
-        status; return the outputs, each of its true length."""
-        outs = [np.zeros(max(1, n), dtype=self.dtype) for n in self._out_sizes(verb)]
+        status (named: {argument: array} of the inputs, for the message of a
+        NaN); return the outputs, each of its true length."""
+        sizes = self._out_sizes(verb)
+        outs = [np.zeros(max(1, n), dtype=self.dtype) for n in sizes]
         conv = [self._ptr(a) if a is None or isinstance(a, np.ndarray) else a for a in args]
         st = self._fn(verb)(*conv, *[self._ptr(o) for o in outs])
         if st:
-            self._check(st, verb, t, state)
-        return [o[:n] for o, n in zip(outs, self._out_sizes(verb))]
+            self._check(st, verb, t, state, args=named)
+        return [o if n == o.size else o[:n].copy() for o, n in zip(outs, sizes)]
 
     def _vec(self, v, n, what, default=None):
         if (type(v) is np.ndarray and v.dtype is self._dt and v.shape == (n,)
@@ -371,262 +306,30 @@ class Simulator:
     def _inputs(self, r):
         return None if r is None else self._vec(r, self.nr, "inputs r")
 
-    # ------------------------------------------------------- evaluation
-    def mass_matrix(self, q, *, p=None, t=0.0):
-        """The mass matrix M(q) of the unconstrained equations.
+    # ------------------------------------------- evaluation (generated)
+    mass_matrix = method(EVALUATIONS["mass_matrix"], __name__)
+    forcing = method(EVALUATIONS["forcing"], __name__)
+    kinematics = method(EVALUATIONS["kinematics"], __name__)
+    constraints = method(EVALUATIONS["constraints"], __name__)
+    constraint_jacobian = method(EVALUATIONS["constraint_jacobian"], __name__)
+    velocity_constraints = method(EVALUATIONS["velocity_constraints"], __name__)
+    velocity_constraint_matrix = method(EVALUATIONS["velocity_constraint_matrix"], __name__)
+    energy = method(EVALUATIONS["energy"], __name__)
+    multipliers = method(EVALUATIONS["multipliers"], __name__)
+    auxiliary_forces = method(EVALUATIONS["auxiliary_forces"], __name__)
+    outputs = method(EVALUATIONS["outputs"], __name__)
+    project = method(EVALUATIONS["project"], __name__)
+    consistent_state = method(EVALUATIONS["consistent_state"], __name__)
+    jacobian = method(EVALUATIONS["jacobian"], __name__)
 
-        Parameters
-        ----------
-        q : array_like, shape (nq,)
-            The coordinates.
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        t : float, optional
-            Time (default 0), for models that depend on it.
-
-        Returns
-        -------
-        numpy.ndarray, shape (nu, nu)
-
-        Raises
-        ------
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
-        q = self._vec(q, self.nq, "coordinates q")
-        (M,) = self._call("eval_mass_matrix", q, self._params(p), t, t=t)
-        return M.reshape(self.nu, self.nu)
-
-    def forcing(self, q, u, *, r=None, p=None, t=0.0):
-        """The forcing f(q, u, r, t), with ``M u' = f + A^T lam``.
-
-        Parameters
-        ----------
-        q : array_like, shape (nq,)
-            The coordinates.
-        u : array_like, shape (nu,)
-            The speeds.
-        r : array_like, shape (nr,), optional
-            The inputs (None: zero).
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        t : float, optional
-            Time (default 0), for models that depend on it.
-
-        Returns
-        -------
-        numpy.ndarray, shape (nu,)
-
-        Raises
-        ------
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
-        q = self._vec(q, self.nq, "coordinates q")
-        u = self._vec(u, self.nu, "speeds u")
-        (f,) = self._call("eval_forcing", q, u, self._inputs(r), self._params(p), t, t=t)
-        return f
-
-    def kinematics(self, q, u, *, p=None, t=0.0):
-        """The coordinate rates q' from the kinematic equations.
-
-        Parameters
-        ----------
-        q : array_like, shape (nq,)
-            The coordinates.
-        u : array_like, shape (nu,)
-            The speeds.
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        t : float, optional
-            Time (default 0), for models that depend on it.
-
-        Returns
-        -------
-        numpy.ndarray, shape (nq,)
-
-        Raises
-        ------
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
-        q = self._vec(q, self.nq, "coordinates q")
-        u = self._vec(u, self.nu, "speeds u")
-        (qd,) = self._call("eval_kinematics", q, u, self._params(p), t, t=t)
-        return qd
-
-    def constraints(self, q, *, p=None, t=0.0):
-        """The configuration-constraint residuals f_c(q).
-
-        Parameters
-        ----------
-        q : array_like, shape (nq,)
-            The coordinates.
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        t : float, optional
-            Time (default 0), for models that depend on it.
-
-        Returns
-        -------
-        numpy.ndarray, shape (mc,)
-
-        Raises
-        ------
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
-        q = self._vec(q, self.nq, "coordinates q")
-        (fc,) = self._call("eval_constraints", q, self._params(p), t, t=t)
-        return fc.copy()
-
-    def constraint_jacobian(self, q, *, p=None, t=0.0):
-        """The configuration-constraint Jacobian d f_c / dq.
-
-        Parameters
-        ----------
-        q : array_like, shape (nq,)
-            The coordinates.
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        t : float, optional
-            Time (default 0), for models that depend on it.
-
-        Returns
-        -------
-        numpy.ndarray, shape (mc, nq)
-
-        Raises
-        ------
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
-        q = self._vec(q, self.nq, "coordinates q")
-        (J,) = self._call("eval_constraint_jacobian", q, self._params(p), t, t=t)
-        return J.reshape(self.mc, self.nq).copy()
-
-    def velocity_constraints(self, q, u, *, p=None, t=0.0):
-        """The velocity-constraint residuals A(q) u + b.
-
-        Parameters
-        ----------
-        q : array_like, shape (nq,)
-            The coordinates.
-        u : array_like, shape (nu,)
-            The speeds.
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        t : float, optional
-            Time (default 0), for models that depend on it.
-
-        Returns
-        -------
-        numpy.ndarray, shape (mv,)
-
-        Raises
-        ------
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
-        q = self._vec(q, self.nq, "coordinates q")
-        u = self._vec(u, self.nu, "speeds u")
-        (fv,) = self._call("eval_velocity_constraints", q, u, self._params(p), t, t=t)
-        return fv.copy()
-
-    def velocity_constraint_matrix(self, q, *, p=None, t=0.0):
-        """The velocity constraints as A(q) u + b(q, t) = 0.
-
-        Parameters
-        ----------
-        q : array_like, shape (nq,)
-            The coordinates.
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        t : float, optional
-            Time (default 0), for models that depend on it.
-
-        Returns
-        -------
-        A : numpy.ndarray, shape (mv, nu)
-        b : numpy.ndarray, shape (mv,)
-
-        Raises
-        ------
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
-        q = self._vec(q, self.nq, "coordinates q")
-        A, b = self._call("eval_velocity_constraint_matrix", q, self._params(p), t, t=t)
-        return A.reshape(self.mv, self.nu).copy(), b.copy()
-
-    def energy(self, x, *, p=None, t=0.0):
-        """The total energy at a state.
-
-        Parameters
-        ----------
-        x : array_like, shape (nx,)
-            The state ``[q, u]`` (layout: ``state_names``).
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        t : float, optional
-            Time (default 0), for models that depend on it.
-
-        Returns
-        -------
-        float
-
-        Raises
-        ------
-        ValueError
-            When the model was given no energy expression.
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
-        if not self.has_energy:
-            raise InputError(f"model '{self.name}' was built without energy=...")
-        x = self._vec(x, self.nx, "state x")
-        (E,) = self._call("eval_energy", x[:self.nq].copy(), x[self.nq:].copy(),
-                          self._params(p), t, t=t, state=x)
-        return float(E[0])
-
+    @documented("The state derivative x', usable as ``solve_ivp``'s ``fun``.",
+                ["t", ("x", "array_like, shape (nx,) or (N, nx)", "The state, or N states "
+                       "evaluated in one C call (:meth:`rhs_batch`)."), "r", "p",
+                 ("out", "numpy.ndarray, optional", "A preallocated C-contiguous result "
+                  "array.")],
+                [("", "numpy.ndarray, shape (nx,) or (N, nx)", "A fresh array per call (or "
+                  "``out``).")])
     def rhs(self, t, x, *, r=None, p=None, out=None):
-        """The state derivative x', usable as ``solve_ivp``'s ``fun``.
-
-        Parameters
-        ----------
-        t : float
-            Time.
-        x : array_like, shape (nx,) or (N, nx)
-            The state, or N states evaluated in one C call (:meth:`rhs_batch`).
-        r : array_like, shape (nr,), optional
-            The inputs (None: zero).
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        out : numpy.ndarray, optional
-            A preallocated C-contiguous result array.
-
-        Returns
-        -------
-        numpy.ndarray, shape (nx,) or (N, nx)
-            A fresh array per call (or ``out``).
-
-        Raises
-        ------
-        ValueError
-            On a wrong shape (the message names the expected one) or a NaN or
-            infinite input.
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
         if p is None and out is None and self._rhs_fast is not None:
             # the host's CPython function (csrc/host/gen_host_fast.c): x' for
             # an exact array of the right type and size, None otherwise or
@@ -668,258 +371,38 @@ class Simulator:
         self._check(st, "eval_rhs", t, x, args={"x": x, "r": r, "p": self._params(p)})
         return out
 
-    def multipliers(self, t, x, *, r=None, p=None):
-        """The multipliers lam of the velocity constraints (:doc:`/guides/multipliers`).
 
-        Parameters
-        ----------
-        t : float
-            Time.
-        x : array_like, shape (nx,)
-            The state ``[q, u]`` (layout: ``state_names``).
-        r : array_like, shape (nr,), optional
-            The inputs (None: zero).
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-
-        Returns
-        -------
-        numpy.ndarray, shape (mv,)
-
-        Raises
-        ------
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
-        x = self._vec(x, self.nx, "state x")
-        _, lam = self._call("eval_rhs", t, x, self._inputs(r), self._params(p), t=t, state=x)
-        return lam.copy()
-
-    def auxiliary_forces(self, t, x, *, r=None, p=None):
-        """The reaction forces along the auxiliary speeds (Kane's
-        ``u_auxiliary``) at a state: u' from the right-hand side, then the
-        auxiliary equations ``F reactions + g = 0`` solved (reactions that
-        enter the motion, friction on a normal force, come from the same
-        linear system as u'). When every force along the auxiliary
-        directions is a declared input, the force each direction still
-        needs to keep its speed zero, ``-(Fr + Fr*)`` at the inputs given
-        (zero when they are the reactions).
-
-        Parameters
-        ----------
-        t : float
-            Time.
-        x : array_like, shape (nx,)
-            The state ``[q, u]`` (layout: ``state_names``).
-        r : array_like, shape (nr,), optional
-            The inputs (None: zero).
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-
-        Returns
-        -------
-        numpy.ndarray, shape (na,)
-            In the order of ``auxiliary_names``; empty without auxiliary speeds.
-
-        Raises
-        ------
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
-        x = self._vec(x, self.nx, "state x")
-        (F,) = self._call("eval_auxiliary_forces", t, x, self._inputs(r), self._params(p),
-                          t=t, state=x)
-        return F.copy()
-
-    # ---------------------------------------------------- the manifold
-    def outputs(self, t, x, *, r=None, p=None):
-        """The outputs y(q, u, r, t) given at model creation (``outputs={...}``).
-
-        Parameters
-        ----------
-        t : float
-            Time.
-        x : array_like, shape (nx,)
-            The state ``[q, u]`` (layout: ``state_names``).
-        r : array_like, shape (nr,), optional
-            The inputs (None: zero).
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-
-        Returns
-        -------
-        numpy.ndarray, shape (ny,)
-            Named by ``output_names``; empty for a model without outputs.
-
-        Raises
-        ------
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
-        x = self._vec(x, self.nx, "state x")
-        r = None if r is None else self._vec(r, self.nr, "inputs r")
-        y = np.zeros(max(1, self.ny), dtype=self.dtype)
-        st = self._fn("eval_outputs")(t, self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
-                                      self._ptr(y))
-        self._check(st, "eval_outputs", t, x)
-        return y[:self.ny].copy()
-
-    def project(self, x, *, p=None, t=0.0, tol=0.0, max_iter=0):
-        """Project a state onto the configuration and velocity constraints
-        (minimum-norm Gauss-Newton; independent of the partition).
-
-        Parameters
-        ----------
-        x : array_like, shape (nx,)
-            The state ``[q, u]`` (layout: ``state_names``).
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        t : float, optional
-            Time (default 0), for models that depend on it.
-        tol : float, optional
-            Relative tolerance on the correction (0: 16 machine epsilons).
-        max_iter : int, optional
-            Newton iterations (0: the default, 10).
-
-        Returns
-        -------
-        numpy.ndarray, shape (nx,)
-
-        Raises
-        ------
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
-        x = self._vec(x, self.nx, "state x").copy()
-        st = self._fn("project")(t, self._ptr(self._params(p)), tol, max_iter, self._ptr(x))
-        self._check(st, "project", t, x)
-        return x
-
-    def consistent_state(self, x, *, p=None, t=0.0, tol=0.0, max_iter=0):
-        """Solve the dependent coordinates and speeds from the independent ones
-        (:doc:`/guides/partitions`).
-
-        Parameters
-        ----------
-        x : array_like, shape (nx,), or dict
-            The state; its dependent entries are Newton's starting guess (they
-            pick the branch). A dict ``{state name: value}`` sets the named
-            entries, the others 0.
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        t : float, optional
-            Time (default 0), for models that depend on it.
-        tol : float, optional
-            Relative tolerance (0: 16 machine epsilons).
-        max_iter : int, optional
-            Newton iterations (0: the default).
-
-        Returns
-        -------
-        numpy.ndarray, shape (nx,)
-
-        Raises
-        ------
-        gen.SingularError
-            Where the partition does not determine the dependent entries.
-        gen.ConvergenceError
-            When Newton does not converge.
-        """
-        x = self._vec(x, self.nx, "state x").copy()
-        st = self._fn("consistent_state")(t, self._ptr(self._params(p)), tol, max_iter,
-                                          self._ptr(x))
-        self._check(st, "consistent_state", t, x)
-        return x
+    @documented("""The Jacobian d x'/dx of the right-hand side (every entry of x free),
+                usable as ``solve_ivp``'s ``jac``: ``solve_ivp(sim.rhs, (0, 10), x0,
+                method="Radau", jac=sim.jac)``.""", ["t", "x", "r", "p"],
+                [("", "numpy.ndarray, shape (nx, nx)", "")])
+    def jac(self, t, x, *, r=None, p=None):
+        return self.jacobian(t, x, r=r, p=p)[0]
 
     # ------------------------------------------------------- simulation
-    def simulate(self, x0, t_end, dt, *, r=None, p=None, controller=None, method="rk4",
-                 rtol=1e-8, atol=1e-10, project=True, t0=0.0, max_steps=100000,
-                 input_period=None, input_hold="zoh", every=1, final_only=False, max_rows=None,
-                 events=None, terminal=False, consistent=False):
-        """Simulate from x0 to t_end, in C, with one row per output time.
+    @documented("""Simulate from x0 to t_end, in C, with one row per output time.
 
-        ``t, x = sim.simulate(x0, t_end, dt)`` unpacks the result; every
-        other quantity is an attribute of it (:class:`gen.Solution`).
-
-        Parameters
-        ----------
-        x0 : array_like, shape (nx,), or dict
-            The initial state (consistent with the constraints: see
-            :meth:`consistent_state`, or ``consistent=True``).
-        t_end : float
-            The final time (the last interval is clipped).
-        dt : float
-            The RK4 step, or the output interval of the adaptive methods (they
-            step by their error control alone and write the output times from
-            their dense output).
-        r : None, array_like, tuple or callable, optional
-            None or nr constant inputs; a table ``(t_grid, R)`` held or
-            interpolated in C (``input_hold``); or a callable ``r(t, x)``
-            sampled every ``input_period``.
-        p : array_like, shape (np,), or dict, optional
-            The constants (None: the defaults given at model creation).
-        controller : gen.LinearFeedback, optional
-            A feedback computed inside C, continuous or sampled.
-        method : {"rk4", "dopri5", "rodas4"}, optional
-            Fixed-step RK4; DOPRI5 (explicit, adaptive); RODAS4 (alias
-            ``"rodas"``: linearly implicit, L-stable, for stiff models; it uses
-            the generated Jacobian).
-        rtol, atol : float, optional
-            The adaptive methods' tolerances.
-        project : bool, optional
-            Project onto the constraints after every step (default True).
-        t0 : float, optional
-            The initial time.
-        max_steps : int, optional
-            The adaptive methods' step budget between two output rows.
-        input_period : float, optional
-            The sampling period of a callable r (default dt; 0: every stage).
-        input_hold : {"zoh", "linear"}, optional
-            How a table of inputs is held between its knots.
-        every : int, optional
-            Keep every k-th output row and the last (dropped in C; the
-            integration is unchanged).
-        final_only : bool, optional
-            Keep only the row at t_end.
-        max_rows : int, optional
-            Refuse a run that would keep more rows.
-        events : dict, optional
-            ``{name: direction}`` or ``{name: (direction, level)}``: crossings of
-            a state or an output through zero (or level), upwards (+1),
-            downwards (-1) or both (0), located on the dense output.
-        terminal : bool or dict, optional
-            The first crossing of a terminal event ends the run; its state is
-            the last row.
-        consistent : bool, optional
-            Solve the dependent states of x0 first (:meth:`consistent_state`).
-
-        Returns
-        -------
-        gen.Solution
-            ``t``, ``x``, ``r``, ``lam``, ``outputs``, ``events``, ``status``,
-            ``message``, ``stats`` and ``sol(t)``; unpacks as ``t, x``.
-
-        Raises
-        ------
-        gen.InputError
-            On a bad argument (shape, NaN, method, dt, a run longer than
-            max_rows or than the memory available): the message names it.
-        gen.SolverError
-            When a step fails (:class:`gen.SingularError`,
-            :class:`gen.ConvergenceError`, :class:`gen.DivergenceError`): the
-            message names the time and the last good state.
-        """
-        from .inputs import InputPlan, plan_inputs
-        from .events import plan_events
-        o = run_options(t_end, dt, method=method, rtol=rtol, atol=atol, project=project, t0=t0,
-                        max_steps=max_steps, input_period=input_period,
-                        input_hold=input_hold, every=every, final_only=final_only,
-                        max_rows=max_rows, events=events, terminal=terminal,
-                        consistent=consistent)
+                ``t, x = sim.simulate(x0, t_end, dt)`` unpacks the result; every
+                other quantity is an attribute of it (:class:`gen.Solution`). The
+                options of the run are keywords, or ``options=gen.RunOptions(...)``
+                (a keyword given explicitly wins over options).""",
+                ["x0", "t_end", "dt@run",
+                 ("r", "None, array_like, tuple or callable, optional", "None or nr "
+                  "constant inputs; a table ``(t_grid, R)`` held or interpolated in C "
+                  "(``input_hold``); or a callable ``r(t, x)`` sampled every "
+                  "``input_period``."),
+                 ("p", "array_like, shape (np,), or dict, optional", "The constants (None: "
+                  "the defaults given at model creation)."),
+                 ("controller", "gen.LinearFeedback, optional", "A feedback computed "
+                  "inside C, continuous or sampled."),
+                 *option_params(OPTION_NAMES), "options"],
+                [("", "gen.Solution", "``t``, ``x``, ``r``, ``lam``, ``outputs``, "
+                  "``events``, ``status``, ``message``, ``stats`` and ``sol(t)``; unpacks "
+                  "as ``t, x``.")], ["run", "step", "keyword"])
+    def simulate(self, x0, t_end, dt, *, r=None, p=None, controller=None, options=None,
+                 **keywords):
+        from .inputs import plan_inputs
+        o = run_options(t_end, dt, options, keywords, "Simulator.simulate")
         x0 = self._vec(x0, self.nx, "state x0")
         finite_or_raise("x0", x0, self.state_names)
         pp = self._params(p)
@@ -938,15 +421,18 @@ class Simulator:
             self._need_derivatives()       # its Jacobian
         if o.consistent:
             x0 = self.consistent_state(x0, p=pp, t=o.t0)
+        return self._run(o, x0, r, pp, plan, rows)
+
+    simulate.__signature__ = options_signature(simulate)
+
+    def _run(self, o, x0, r, pp, plan, rows):
+        """simulate's C call (simulate, simulate_input with a plan of inputs,
+        simulate_events with events or hybrid jumps) and its Solution."""
+        from .events import plan_events
+        from .inputs import InputPlan
         opts = self._new("sim_options")
         self._fn("sim_options_default")(opts)
-        opts.method = METHODS[o.method]
-        opts.project = 1 if o.project else 0
-        opts.rtol = o.rtol
-        opts.atol = o.atol
-        opts.max_steps = o.max_steps
-        opts.every = o.every
-        opts.final_only = 1 if o.final_only else 0
+        fill_sim_options(opts, o)
         evplan = None
         if o.events is not None or self.nh:   # hybrid={...}: its jumps are events
             evplan = plan_events(self, o.events, o.terminal)
@@ -983,10 +469,14 @@ class Simulator:
                 self._check(st, verb, stats.t_last,
                             np.array([stats.x_last[i] for i in range(self.nx)]))
             self._check(st, verb, o.t0, x0, args={"x0": x0, "p": pp, "r": r})
-        status, message = 0, "the run reached t_end"
         if stats.n_out < rows:   # a terminal event ended the run
             rows = stats.n_out
             t, X, lam, R = t[:rows], X[:rows], lam[:rows], R[:rows]
+        return self._solution(o, stats, evplan, t, X, lam, R, pp)
+
+    def _solution(self, o, stats, evplan, t, X, lam, R, pp):
+        """The Solution of a run: its rows, statistics, events and status."""
+        status, message = 0, "the run reached t_end"
         info = {"n_steps": stats.n_accepted, "n_accepted": stats.n_accepted,
                 "n_rejected": stats.n_rejected, "n_rhs": stats.n_rhs, "n_jac": stats.n_jac,
                 "n_out": stats.n_out}
@@ -1002,40 +492,16 @@ class Simulator:
         return Solution(self, t, X, R[:, :self.nr], lam[:, :self.mv],
                         pp, found, status, message, info, o.method)
 
+    @documented("One integrator step of size h from (t, x).",
+                ["t", "x", "h", "r", "p",
+                 ("method", '{"rk4"}, optional', "The integrator: the classic RK4 step (the "
+                  "C ``<p>_step_rk4``)."),
+                 ("project", "bool, optional", "Project the new state onto the constraints "
+                  "(default True).")],
+                [("", "numpy.ndarray, shape (nx,)", "The state after the step.")],
+                [("gen.InputError", "On a wrong shape (the message names the expected one), "
+                  "a NaN or infinite input, or a method other than rk4."), "solver"])
     def step(self, t, x, h, *, r=None, p=None, method="rk4", project=True):
-        """One integrator step of size h from (t, x).
-
-        Parameters
-        ----------
-        t : float
-            Time.
-        x : array_like, shape (nx,)
-            The state ``[q, u]`` (layout: ``state_names``).
-        h : float
-            The step size.
-        r : array_like, shape (nr,), optional
-            The inputs (None: zero).
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        method : {"rk4"}, optional
-            The integrator: the classic RK4 step (the C ``<p>_step_rk4``).
-        project : bool, optional
-            Project the new state onto the constraints (default True).
-
-        Returns
-        -------
-        numpy.ndarray, shape (nx,)
-            The state after the step.
-
-        Raises
-        ------
-        gen.InputError
-            On a wrong shape (the message names the expected one), a NaN or
-            infinite input, or a method other than rk4.
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
         if method != "rk4":
             raise InputError(f"step supports method='rk4' (a fixed step); got {method!r}",
                              "method", None, method)
@@ -1047,48 +513,24 @@ class Simulator:
         self._check(st, "step_rk4", t, x, args={"x": x1, "r": r, "p": pp})
         return x1
 
+    @documented("""One integrator step of size h from (t, x) and its exact derivatives
+                by the step's variational equations (the generated Jacobian kernels, not
+                finite differences); the step is not projected.
+
+                For a constrained model the dependent entries of x follow the
+                constraints to first order (perturb ``x_ind``, complete with
+                ``consistent_state``). For an unconstrained model Fx is the full
+                dx1/dx; as h -> 0, Fx -> I + h A.""",
+                ["t", "x", "h", "r", "p", ("method", '{"rk4"}, optional', "The integrator "
+                                            "(the sensitivities are those of RK4).")],
+                [("x1", "numpy.ndarray, shape (nx,)", "The state after the (unprojected) "
+                  "step."),
+                 ("Fx", "numpy.ndarray, shape (ns, ns)", "``dx1_ind/dx_ind`` on the "
+                  "independent state."),
+                 ("Fr", "numpy.ndarray, shape (ns, nr)", "``dx1_ind/dr``.")],
+                [("gen.InputError", "On a wrong shape, a NaN or infinite input, or a method "
+                  "other than rk4."), "solver"])
     def step_sensitivity(self, t, x, h, *, r=None, p=None, method="rk4"):
-        """One integrator step of size h from (t, x) and its exact derivatives
-        by the step's variational equations (the generated Jacobian kernels,
-        not finite differences); the step is not projected.
-
-        For a constrained model the dependent entries of x follow the
-        constraints to first order (perturb ``x_ind``, complete with
-        ``consistent_state``). For an unconstrained model Fx is the full dx1/dx;
-        as h -> 0, Fx -> I + h A.
-
-        Parameters
-        ----------
-        t : float
-            Time.
-        x : array_like, shape (nx,)
-            The state ``[q, u]`` (layout: ``state_names``).
-        h : float
-            The step size.
-        r : array_like, shape (nr,), optional
-            The inputs (None: zero).
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        method : {"rk4"}, optional
-            The integrator (the sensitivities are those of RK4).
-
-        Returns
-        -------
-        x1 : numpy.ndarray, shape (nx,)
-            The state after the (unprojected) step.
-        Fx : numpy.ndarray, shape (ns, ns)
-            ``dx1_ind/dx_ind`` on the independent state.
-        Fr : numpy.ndarray, shape (ns, nr)
-            ``dx1_ind/dr``.
-
-        Raises
-        ------
-        gen.InputError
-            On a wrong shape, a NaN or infinite input, or a method other than
-            rk4.
-        gen.SolverError
-            When the C function returns a failure status.
-        """
         if method != "rk4":
             raise InputError(f"step_sensitivity supports method='rk4' (a fixed step); got "
                              f"{method!r}", "method", None, method)
@@ -1103,141 +545,24 @@ class Simulator:
         return (x1, Fx.reshape(self.ns, self.ns),
                 Fr[:self.ns * self.nr].reshape(self.ns, self.nr).copy())
 
-    def jac(self, t, x, *, r=None, p=None):
-        """The Jacobian d x'/dx of the right-hand side (every entry of x
-        free), usable as ``solve_ivp``'s ``jac``:
-        ``solve_ivp(sim.rhs, (0, 10), x0, method="Radau", jac=sim.jac)``.
-
-        Parameters
-        ----------
-        t : float
-            Time.
-        x : array_like, shape (nx,)
-            The state ``[q, u]`` (layout: ``state_names``).
-        r : array_like, shape (nr,), optional
-            The inputs (None: zero).
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-
-        Returns
-        -------
-        numpy.ndarray, shape (nx, nx)
-
-        Raises
-        ------
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
-        return self.jacobian(t, x, r=r, p=p)[0]
-
-    def jacobian(self, t, x, *, r=None, p=None):
-        """The full-state Jacobian of the right-hand side, every entry of x free.
-
-        Parameters
-        ----------
-        t : float
-            Time.
-        x : array_like, shape (nx,)
-            The state ``[q, u]`` (layout: ``state_names``).
-        r : array_like, shape (nr,), optional
-            The inputs (None: zero).
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-
-        Returns
-        -------
-        Jx : numpy.ndarray, shape (nx, nx)
-            d x'/dx.
-        Jr : numpy.ndarray, shape (nx, nr)
-            d x'/dr.
-
-        Raises
-        ------
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
-        x = self._vec(x, self.nx, "state x")
-        r = None if r is None else self._vec(r, self.nr, "inputs r")
-        Jx = np.empty(self.nx * self.nx, dtype=self.dtype)
-        Jr = np.zeros(max(1, self.nx * self.nr), dtype=self.dtype)
-        st = self._fn("jacobian")(t, self._ptr(x), self._ptr(r), self._ptr(self._params(p)),
-                                  self._ptr(Jx), self._ptr(Jr))
-        self._check(st, "jacobian", t, x, args={"x": x, "r": r, "p": self._params(p)})
-        return Jx.reshape(self.nx, self.nx), Jr[:self.nx * self.nr].reshape(self.nx, self.nr).copy()
-
     # ---------------------------------------------------- linearization
+    @documented("""Linearize about any operating point (it need not be an equilibrium),
+                in C, on the independent state ``[q_ind, u_ind]`` (sympy's
+                ``A_and_B=True`` partition).""", ["x@op", "r@op", "p", "t=", "dt@zoh"],
+                [("A", "numpy.ndarray, shape (ns, ns)", "(or Ad with dt)"),
+                 ("B", "numpy.ndarray, shape (ns, nr)", "(or Bd with dt)")])
     def linearize(self, x, *, r=None, p=None, t=0.0, dt=None):
-        """Linearize about any operating point (it need not be an equilibrium),
-        in C, on the independent state ``[q_ind, u_ind]`` (sympy's
-        ``A_and_B=True`` partition).
-
-        Parameters
-        ----------
-        x : array_like, shape (nx,)
-            The operating state (consistent with the constraints).
-        r : array_like, shape (nr,), optional
-            The operating inputs (None: zero).
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        t : float, optional
-            Time (default 0), for models that depend on it.
-        dt : float, optional
-            Return the zero-order-hold discretization over a step dt instead:
-            ``Ad = exp(A dt)``, ``Bd = int_0^dt exp(A s) ds B`` (scaling and
-            squaring, in C).
-
-        Returns
-        -------
-        A : numpy.ndarray, shape (ns, ns)
-            (or Ad with dt)
-        B : numpy.ndarray, shape (ns, nr)
-            (or Bd with dt)
-
-        Raises
-        ------
-        gen.InputError
-            On a wrong shape (the message names the expected one) or a NaN or
-            infinite input.
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
         return self._linearize(x, r, p, t, dt, False)
 
+    @documented(""":meth:`linearize` and the outputs' ``C = dy/dx_ind`` (ny, ns) and ``D =
+                dy/dr`` (ny, nr), in one C call (the dependent entries follow the
+                constraints, as for A).""",
+                ["x@op", "r@op", "p", "t=", ("dt", "float, optional", "A and B as the "
+                                              "zero-order-hold discretization over dt (C "
+                                              "and D are the same).")],
+                [("A, B", "numpy.ndarray, shapes (ns, ns), (ns, nr)", "As :meth:`linearize`."),
+                 ("C, D", "numpy.ndarray, shapes (ny, ns), (ny, nr)", "")])
     def linearize_outputs(self, x, *, r=None, p=None, t=0.0, dt=None):
-        """:meth:`linearize` and the outputs' ``C = dy/dx_ind`` (ny, ns) and
-        ``D = dy/dr`` (ny, nr), in one C call (the dependent entries follow
-        the constraints, as for A).
-
-        Parameters
-        ----------
-        x : array_like, shape (nx,)
-            The operating state (consistent with the constraints).
-        r : array_like, shape (nr,), optional
-            The operating inputs (None: zero).
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        t : float, optional
-            Time (default 0), for models that depend on it.
-        dt : float, optional
-            A and B as the zero-order-hold discretization over dt (C and D
-            are the same).
-
-        Returns
-        -------
-        A, B : numpy.ndarray, shapes (ns, ns), (ns, nr)
-            As :meth:`linearize`.
-        C, D : numpy.ndarray, shapes (ny, ns), (ny, nr)
-
-        Raises
-        ------
-        gen.InputError
-            On a wrong shape or a NaN or infinite input.
-        gen.SolverError
-            When the C function returns a failure status.
-        """
         return self._linearize(x, r, p, t, dt, True)
 
     def _linearize(self, x, r, p, t, dt, outputs):
@@ -1274,39 +599,18 @@ class Simulator:
         return (A.reshape(self.ns, self.ns),
                 B[:self.ns * self.nr].reshape(self.ns, self.nr).copy())
 
+    @documented("""The linearization as a python-control ``StateSpace``, with its states,
+                inputs and outputs named (``pip install eomgen[control]``).""",
+                ["x@op", "r@op", "p", "t=", ("dt", "float, optional", "A discrete-time "
+                                              "system with this sampling time (zero-order "
+                                              "hold).")],
+                [("", "control.StateSpace", "Outputs are the model's (C, D of "
+                  ":meth:`linearize_outputs`), or the independent state (C = I, D = 0) for a "
+                  "model without outputs.")],
+                [("gen.MissingDependencyError", "When python-control is not installed (an "
+                  "ImportError; ``pip install eomgen[control]``)."), "input", "solver"])
     def to_statespace(self, x, *, r=None, p=None, t=0.0, dt=None):
-        """The linearization as a python-control ``StateSpace``, with its
-        states, inputs and outputs named (``pip install eomgen[control]``).
-
-        Parameters
-        ----------
-        x : array_like, shape (nx,)
-            The operating state.
-        r : array_like, shape (nr,), optional
-            The operating inputs.
-        p : array_like, shape (np,), optional
-            The constants (None: the defaults given at model creation).
-        t : float, optional
-            Time (default 0), for models that depend on it.
-        dt : float, optional
-            A discrete-time system with this sampling time (zero-order hold).
-
-        Returns
-        -------
-        control.StateSpace
-            Outputs are the model's (C, D of :meth:`linearize_outputs`), or the
-            independent state (C = I, D = 0) for a model without outputs.
-
-        Raises
-        ------
-        ImportError
-            When python-control is not installed.
-        """
-        try:
-            import control
-        except ImportError:
-            raise ImportError("to_statespace needs python-control: pip install "
-                              "'eomgen[control]' (or pip install control)") from None
+        control = require("control", "Simulator.to_statespace")
         names = list(self.independent_state_names)
         if self.ny:
             A, B, C, D = self.linearize_outputs(x, r=r, p=p, t=t, dt=dt)
@@ -1348,35 +652,11 @@ class Simulator:
                     else type(e)(f"state {idx} of {len(X)}: {e}", status=e.status,
                                  status_name=e.status_name, time=e.time, state=e.state) from None
 
+    @documented("x' for N states in one C call, the GIL released.",
+                ["t@N", "X@N", "r@N", "p@N", ("out", "numpy.ndarray, shape (N, nx), optional",
+                                              "A preallocated C-contiguous result.")],
+                [("", "numpy.ndarray, shape (N, nx)", "")])
     def rhs_batch(self, t, X, *, r=None, p=None, out=None):
-        """x' for N states in one C call, the GIL released.
-
-        Parameters
-        ----------
-        t : float or array_like, shape (N,)
-            The time(s).
-        X : array_like, shape (N, nx)
-            The states.
-        r : array_like, shape (nr,) or (N, nr), optional
-            One input vector for all states or one row per state.
-        p : array_like, shape (np,) or (N, np), optional
-            One constant vector for all states or one row per state.
-        out : numpy.ndarray, shape (N, nx), optional
-            A preallocated C-contiguous result.
-
-        Returns
-        -------
-        numpy.ndarray, shape (N, nx)
-
-        Raises
-        ------
-        ValueError
-            On a wrong shape (the message names the expected one) or a NaN or
-            infinite input.
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
         if self._rhs_batch_fast is not None:
             # the host's CPython function (csrc/host/gen_host_fast.c): for a
             # number t and exact arrays of the right types and shapes; None
@@ -1409,29 +689,11 @@ class Simulator:
         self._batch_check(idx, st[0], "eval_rhs", X)
         return out
 
+    @documented("M(q) for N configurations in one C call.",
+                [("Q", "array_like, shape (N, nq) or (N, nx)", "Configurations (or states)."),
+                 ("p", "array_like, shape (np,) or (N, np), optional", "The constants.")],
+                [("", "numpy.ndarray, shape (N, nu, nu)", "")])
     def mass_matrix_batch(self, Q, *, p=None):
-        """M(q) for N configurations in one C call.
-
-        Parameters
-        ----------
-        Q : array_like, shape (N, nq) or (N, nx)
-            Configurations (or states).
-        p : array_like, shape (np,) or (N, np), optional
-            The constants.
-
-        Returns
-        -------
-        numpy.ndarray, shape (N, nu, nu)
-
-        Raises
-        ------
-        ValueError
-            On a wrong shape (the message names the expected one) or a NaN or
-            infinite input.
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
         Q = np.ascontiguousarray(Q, dtype=self.dtype)
         if Q.ndim != 2 or Q.shape[1] not in (self.nq, self.nx):
             raise InputError(f"coordinates must have shape (N, {self.nq}) or (N, {self.nx}), "
@@ -1445,34 +707,13 @@ class Simulator:
         self._batch_check(idx, st[0], "eval_mass_matrix", Q)
         return out
 
+    @documented("(A, B) at N operating points in one C call.",
+                [("X", "array_like, shape (N, nx)", "The operating states."),
+                 ("r", "array_like, shape (nr,) or (N, nr), optional", "The operating inputs."),
+                 ("p", "array_like, shape (np,) or (N, np), optional", "The constants."), "t="],
+                [("A", "numpy.ndarray, shape (N, ns, ns)", ""),
+                 ("B", "numpy.ndarray, shape (N, ns, nr)", "")])
     def linearize_batch(self, X, *, r=None, p=None, t=0.0):
-        """(A, B) at N operating points in one C call.
-
-        Parameters
-        ----------
-        X : array_like, shape (N, nx)
-            The operating states.
-        r : array_like, shape (nr,) or (N, nr), optional
-            The operating inputs.
-        p : array_like, shape (np,) or (N, np), optional
-            The constants.
-        t : float, optional
-            Time (default 0), for models that depend on it.
-
-        Returns
-        -------
-        A : numpy.ndarray, shape (N, ns, ns)
-        B : numpy.ndarray, shape (N, ns, nr)
-
-        Raises
-        ------
-        ValueError
-            On a wrong shape (the message names the expected one) or a NaN or
-            infinite input.
-        gen.SolverError
-            When the C function returns a failure status (a
-            :class:`gen.SingularError` at a singular configuration, ...).
-        """
         X = np.ascontiguousarray(X, dtype=self.dtype)
         if X.ndim != 2 or X.shape[1] != self.nx:
             raise InputError(f"operating points must have shape (N, {self.nx}), got {X.shape}")
@@ -1488,32 +729,9 @@ class Simulator:
         self._batch_check(idx, st[0], "linearize", X, t)
         return A, B
 
+    @documented("The outputs y for N states in one C call.", ["t@N", "X@N", "r@N", "p@N"],
+                [("", "numpy.ndarray, shape (N, ny)", "Named by ``output_names``.")])
     def outputs_batch(self, t, X, *, r=None, p=None):
-        """The outputs y for N states in one C call.
-
-        Parameters
-        ----------
-        t : float or array_like, shape (N,)
-            The time(s).
-        X : array_like, shape (N, nx)
-            The states.
-        r : array_like, shape (nr,) or (N, nr), optional
-            One input vector for all states or one row per state.
-        p : array_like, shape (np,) or (N, np), optional
-            One constant vector for all states or one row per state.
-
-        Returns
-        -------
-        numpy.ndarray, shape (N, ny)
-            Named by ``output_names``.
-
-        Raises
-        ------
-        gen.InputError
-            On a wrong shape or a NaN or infinite input.
-        gen.SolverError
-            When the C function returns a failure status.
-        """
         X = np.ascontiguousarray(X, dtype=self.dtype)
         if X.ndim != 2 or X.shape[1] != self.nx:
             raise InputError(f"states X must have shape (N, {self.nx}), got {X.shape}", "X")
@@ -1535,72 +753,56 @@ class Simulator:
         self._batch_check(idx, st[0], "eval_outputs", X)
         return out
 
+    # --------------------------------------------------------- ensembles
+    @documented("""N simulations in C, reduced as they finish (or every row kept): in
+                chunks on every core (threads, the GIL released) or on a Dask cluster
+                (:doc:`/guides/ensembles`).
+
+                Each run is exactly ``sim.simulate`` of its own x0, p, r (the same C
+                path), so the results do not depend on chunk, workers or client. The
+                options of the runs are simulate's: keywords, or
+                ``options=gen.RunOptions(...)`` (a keyword given explicitly wins).""",
+                [("x0", "array_like or dict", "One state for every run, an (N, nx) array, "
+                  "or a dict ``{name: number or (N,) array}`` (other states 0); "
+                  ":class:`gen.Sampler` draws such dicts."),
+                 ("t_end", "float", "The final time."), "dt@run",
+                 ("r", "optional", "Constant inputs (one row, (N, nr) or a dict), or a table "
+                  "``(t_grid, R)`` shared by every run; a Python function is refused (it "
+                  "would hold the GIL at every step)."),
+                 ("p", "array_like or dict, optional", "One constant vector, (N, np), or a "
+                  "dict (other constants their defaults)."),
+                 ("controller", "gen.LinearFeedback, optional", "A feedback computed in C, "
+                  "shared by every run."),
+                 ("reduce", "str, reducer, callable or dict, optional", '``"final"`` (the '
+                  'state at t_end, (N, nx)), ``"rows"`` (every row, (N, rows, nx), with '
+                  "``res.t``), :class:`gen.At`, :class:`gen.Min`, :class:`gen.Max`, "
+                  ":class:`gen.Mean`, a function ``f(t, X)`` called per chunk on its full "
+                  "trajectories, or a dict ``{key: reducer}``."),
+                 ("client", "dask.distributed.Client, optional", "Run the chunks on the "
+                  "cluster's workers (each builds the model from its sources into its own "
+                  "cache, by content)."),
+                 ("chunk", "int, optional", "Runs per C call (default: a few chunks per "
+                  "worker)."),
+                 ("workers", "int, optional", "Threads (default: every core)."),
+                 ("progress", "bool, optional", "A tqdm progress bar (None: on a terminal; "
+                  "``pip install eomgen[ensemble]``)."),
+                 (", ".join(n for n in OPTION_NAMES if n not in _KEPT_BY_REDUCERS), "",
+                  "As for :meth:`simulate` (checked by the same code)."),
+                 (", ".join(_KEPT_BY_REDUCERS), "", "Accepted as :meth:`simulate`'s; an "
+                  "ensemble keeps what its reducers ask for, so ``every`` must be 1, "
+                  '``final_only=True`` means ``reduce="final"``, and events are refused '
+                  "(simulate the runs that need them)."), "options"],
+                [("", "gen.EnsembleResult", "``res[key]`` per reducer, ``res.status``, "
+                  "``res.failures`` (failed runs: NaN rows, their status and last state), "
+                  "``res.runs_per_second``.")], ["run", "keyword"])
     def ensemble(self, x0, t_end, dt, *, r=None, p=None, controller=None, reduce="final",
-                 client=None, chunk=None, workers=None, progress=None, method="rk4", rtol=1e-8,
-                 atol=1e-10, project=True, t0=0.0, max_steps=100000, input_period=None,
-                 input_hold="zoh", every=1, final_only=False, max_rows=None, events=None,
-                 terminal=False, consistent=False):
-        """N simulations in C, reduced as they finish (or every row kept): in
-        chunks on every core (threads, the GIL released) or on a Dask cluster
-        (:doc:`/guides/ensembles`).
-
-        Each run is exactly ``sim.simulate`` of its own x0, p, r (the same C
-        path), so the results do not depend on chunk, workers or client.
-
-        Parameters
-        ----------
-        x0 : array_like or dict
-            One state for every run, an (N, nx) array, or a dict ``{name: number
-            or (N,) array}`` (other states 0); :class:`gen.Sampler` draws such
-            dicts.
-        t_end : float
-            The final time.
-        dt : float
-            The RK4 step or the output interval.
-        r : optional
-            Constant inputs (one row, (N, nr) or a dict), or a table ``(t_grid,
-            R)`` shared by every run; a Python function is refused (it would
-            hold the GIL at every step).
-        p : array_like or dict, optional
-            One constant vector, (N, np), or a dict (other constants their
-            defaults).
-        controller : gen.LinearFeedback, optional
-            A feedback computed in C, shared by every run.
-        reduce : str, reducer, callable or dict, optional
-            ``"final"`` (the state at t_end, (N, nx)), ``"rows"`` (every row,
-            (N, rows, nx), with ``res.t``), :class:`gen.At`, :class:`gen.Min`,
-            :class:`gen.Max`, :class:`gen.Mean`, a function ``f(t, X)`` called
-            per chunk on its full trajectories, or a dict ``{key: reducer}``.
-        client : dask.distributed.Client, optional
-            Run the chunks on the cluster's workers (each builds the model from
-            its sources into its own cache, by content).
-        chunk : int, optional
-            Runs per C call (default: a few chunks per worker).
-        workers : int, optional
-            Threads (default: every core).
-        progress : bool, optional
-            A tqdm progress bar (None: on a terminal).
-        method, rtol, atol, project, t0, max_steps, input_period, input_hold, max_rows, consistent
-            As for :meth:`simulate` (checked by the same code).
-        every, final_only, events, terminal
-            Accepted as :meth:`simulate`'s; an ensemble keeps what its reducers
-            ask for, so ``every`` must be 1, ``final_only=True`` means
-            ``reduce="final"``, and events are refused (simulate the runs that
-            need them).
-
-        Returns
-        -------
-        gen.EnsembleResult
-            ``res[key]`` per reducer, ``res.status``, ``res.failures`` (failed
-            runs: NaN rows, their status and last state), ``res.runs_per_second``.
-        """
-        opts = run_options(t_end, dt, method=method, rtol=rtol, atol=atol, project=project,
-                           t0=t0, max_steps=max_steps, input_period=input_period,
-                           input_hold=input_hold, every=every, final_only=final_only,
-                           max_rows=max_rows, events=events, terminal=terminal,
-                           consistent=consistent)
+                 client=None, chunk=None, workers=None, progress=None, options=None,
+                 **keywords):
+        opts = run_options(t_end, dt, options, keywords, "Simulator.ensemble")
         return run_ensemble(self, x0, opts, r=r, p=p, controller=controller, reduce=reduce,
                             client=client, chunk=chunk, workers=workers, progress=progress)
+
+    ensemble.__signature__ = options_signature(ensemble)
 
     def __repr__(self):
         return (f"<eomgen Simulator '{self.name}' ({self.method}, {self.real}): "

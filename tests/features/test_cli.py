@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import gen
 from conftest import require_tool
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -117,6 +118,10 @@ def _slow(*case):
     _slow(["generate", SEED, "-o", "x", "--backend", "fortran"], "invalid choice: 'fortran'"),
     _slow(["linearize", SEED, "--at", "q2"], "must be NAME=VALUE"),
     _slow(["frobnicate"], "invalid choice"),
+    _slow(["simulate", SEED, "--t-end", "1", "--x0", "q2=0.5", "--x0", "q1=0.8", "--rtol", "-1"],
+          "--rtol: rtol must be a positive number, got rtol = -1.0"),
+    _slow(["ensemble", SEED, "--samples", "2", "--t-end", "1", "-o", "r.npz", "--max-steps",
+           "0"], "--max-steps: max_steps must be an integer >= 1"),
 ])
 def test_bad_arguments_one_line_exit_2(tmp_path, args, needle):
     nomodel = tmp_path / "nomodel.py"
@@ -236,3 +241,84 @@ def test_simulate_csv_has_the_reaction_forces(tmp_path):
     p = eomgen("simulate", str(f), "--t-end", "0.02", "--dt", "0.01", "--x0", "theta=0.5",
                check_rc=0)
     assert p.stdout.splitlines()[0] == "t,theta,omega,R1,R2"
+
+
+# ------------------------------------------------ the run flags (issue 42)
+def _help_entries(text):
+    """{flag: its help text, wrapped lines joined} of an argparse --help."""
+    out, flag = {}, None
+    for line in text.splitlines():
+        m = re.match(r"^  (--[a-z0-9-]+)(.*)$", line)
+        if m:
+            flag = m.group(1)
+            out[flag] = m.group(2)
+        elif flag and line.startswith("      "):
+            out[flag] += " " + line.strip()
+        else:
+            flag = None
+    return {k: " ".join(v.split()) for k, v in out.items()}
+
+
+def _described_defaults():
+    """{flag: default as --help should show it}, read from the interface
+    description itself (gen/codegen/abi.py), not from gen.RunOptions."""
+    from gen.codegen import abi
+    f = {fl.name: fl for s in abi.STRUCTS if s.name == "sim_options" for fl in s.fields}
+    hold = next(fl for s in abi.STRUCTS if s.name == "input" for fl in s.fields
+                if fl.name == "hold")
+    method = next(k for k, v in abi.METHODS.items() if v == f["method"].default)
+    both = {"--method": method, "--rtol": f["rtol"].default, "--atol": f["atol"].default,
+            "--h-init": f["h_init"].default, "--h-min": f["h_min"].default,
+            "--h-max": f["h_max"].default, "--max-steps": f["max_steps"].default,
+            "--no-project": "on" if f["project"].default else "off",
+            # "eps16": 0, which the engine reads as 16 machine epsilons
+            "--proj-tol": 0.0 if f["proj_tol"].default == "eps16" else f["proj_tol"].default,
+            "--proj-max-iter": f["proj_max_iter"].default}
+    only = {"--hold": next(k for k, v in abi.HOLDS.items() if v == hold.default),
+            "--every": f["every"].default,
+            "--final-only": "on" if f["final_only"].default else "off", "--max-rows": "none"}
+    return {"simulate": {**both, **only}, "ensemble": both}
+
+
+@pytest.mark.parametrize("cmd", ["simulate", "ensemble"])
+def test_help_lists_every_run_option_with_the_described_default(cmd):
+    from gen.sim.options import OPTIONS
+    text = eomgen(cmd, "--help", check_rc=0).stdout
+    entries = _help_entries(text)
+    expected = _described_defaults()[cmd]
+    group = text.split("\nrun options (those of gen.RunOptions):\n", 1)[1].split("\n\n")[0]
+    assert set(_help_entries(group)) == set(expected)
+    for flag, want in expected.items():
+        m = re.search(r"\(default ([^;)]+)", entries[flag])
+        assert m, (flag, entries[flag])
+        got = m.group(1)
+        if isinstance(want, str):
+            assert got == want, (flag, got, want)
+        else:
+            assert float(got) == want, (flag, got, want)
+    # the help text is the option's own (gen.sim.options.OPTIONS)
+    doc = next(o.doc for o in OPTIONS if o.name == "max_steps").rstrip(".")
+    assert doc in entries["--max-steps"]
+    assert "{rk4,dopri5,rodas4,rodas}" in entries["--method"]
+
+
+@pytest.mark.slow
+def test_run_flags_give_the_numbers_of_run_options(kane_sim):
+    """eomgen simulate with run flags writes the rows gen.RunOptions gives in
+    Python, digit for digit (17 significant digits round-trip a double)."""
+    args = ["--method", "dopri5", "--rtol", "1e-10", "--atol", "1e-12", "--h-max", "0.05",
+            "--every", "7"]
+    p = eomgen("simulate", SEED, "--t-end", "2", "--dt", "0.01", "--x0", "q2=0.5", "--x0",
+               "q1=0.8", *args, check_rc=0)
+    rows = np.array([[float(v) for v in ln.split(",")] for ln in p.stdout.splitlines()[1:]])
+    x0 = kane_sim.consistent_state(np.array([0.5, 0.8, 0.0, 0.0]))
+    sol = kane_sim.simulate(x0, 2.0, 0.01, options=gen.RunOptions(
+        method="dopri5", rtol=1e-10, atol=1e-12, h_max=0.05, every=7))
+    assert rows.shape == (len(sol.t), 5) and len(sol.t) == 30
+    np.testing.assert_array_equal(rows[:, 0], sol.t)
+    np.testing.assert_array_equal(rows[:, 1:], sol.x)
+    p = eomgen("simulate", SEED, "--t-end", "2", "--x0", "q2=0.5", "--x0", "q1=0.8",
+               "--final-only", "--no-project", check_rc=0)
+    rows = np.array([[float(v) for v in ln.split(",")] for ln in p.stdout.splitlines()[1:]])
+    sol = kane_sim.simulate(x0, 2.0, 0.01, final_only=True, project=False)
+    np.testing.assert_array_equal(rows, np.column_stack([sol.t, sol.x]))
