@@ -134,6 +134,9 @@ int gen_rt_lu_factor(int n, gen_rt_real *a, int *piv, gen_rt_real scale);
 /* Solve with a factor from gen_rt_lu_factor; b is n x nrhs, overwritten. */
 int gen_rt_lu_solve(int n, const gen_rt_real *lu, const int *piv, int nrhs,
                     gen_rt_real *b);
+/* The same with the transpose: a^T x = b (b n x nrhs, overwritten). */
+int gen_rt_lu_solve_t(int n, const gen_rt_real *lu, const int *piv, int nrhs,
+                      gen_rt_real *b);
 /* Cholesky a = L L^T in place (lower triangle holds L). Not positive
  * definite, or a pivot below GEN_RT_PIVOT_RTOL * max diag: SINGULAR. */
 int gen_rt_chol_factor(int n, gen_rt_real *a);

@@ -166,3 +166,32 @@ void gen_rt_matmul(int m, int k, int n, const gen_rt_real *a,
         }
     }
 }
+
+/* a^T x = b from P a = L U: U^T y = b, L^T c = y (unit diagonal), x = P^T c */
+int gen_rt_lu_solve_t(int n, const gen_rt_real *lu, const int *piv, int nrhs,
+                      gen_rt_real *b)
+{
+    int i, j, k;
+    if (n < 0 || nrhs < 0) return GEN_RT_ERR_BAD_ARG;
+    if (n == 0 || nrhs == 0) return GEN_RT_OK;
+    if (!lu || !piv || !b) return GEN_RT_ERR_NULL;
+    for (j = 0; j < nrhs; ++j) {
+        for (i = 0; i < n; ++i) {
+            gen_rt_real s = b[i * nrhs + j];
+            for (k = 0; k < i; ++k) s -= lu[k * n + i] * b[k * nrhs + j];
+            b[i * nrhs + j] = s / lu[i * n + i];
+        }
+        for (i = n - 1; i >= 0; --i) {
+            gen_rt_real s = b[i * nrhs + j];
+            for (k = i + 1; k < n; ++k) s -= lu[k * n + i] * b[k * nrhs + j];
+            b[i * nrhs + j] = s;
+        }
+        for (k = n - 1; k >= 0; --k)
+            if (piv[k] != k) {
+                gen_rt_real tmp = b[k * nrhs + j];
+                b[k * nrhs + j] = b[piv[k] * nrhs + j];
+                b[piv[k] * nrhs + j] = tmp;
+            }
+    }
+    return GEN_RT_OK;
+}

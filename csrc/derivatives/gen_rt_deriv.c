@@ -1,0 +1,418 @@
+/* gen_rt_deriv.c - the implicit function's derivatives and the derivatives
+ * of one RK4 and one RODAS4 step (gen_rt_deriv.h). */
+#include "gen_rt.h"
+#include "gen_rt_deriv.h"
+#include "gen_rt_rodas4.h"
+
+/* RODAS4 coefficients (the tableau of gen_rt_rodas4.h) */
+#define RD_COEF_(name, value) static const gen_rt_real RD_##name = GEN_RT_C(value);
+GEN_RT_RODAS4_TABLEAU(RD_COEF_)
+#undef RD_COEF_
+
+/* the next n reals of a work array (the one helper of this file) */
+static gen_rt_real *take(gen_rt_real **w, int n)
+{
+    gen_rt_real *p = *w;
+    *w += n;
+    return p;
+}
+
+int gen_rt_deriv_solve(const gen_rt_deriv_model *m, const gen_rt_real *z, gen_rt_real *work,
+                       gen_rt_real *w, gen_rt_real *lu, int *piv, gen_rt_real *Jw)
+{
+    const int nw = m->nw, nz = m->nz;
+    gen_rt_real *r0 = work;
+    int i, st;
+    m->r0(z, lu, r0);
+    if (!gen_rt_all_finite(nw * nw, lu) || !gen_rt_all_finite(nw, r0))
+        return GEN_RT_ERR_NONFINITE_MODEL;
+    if ((st = gen_rt_lu_factor(nw, lu, piv, 0))) return st;
+    for (i = 0; i < nw; ++i) w[i] = -r0[i];
+    gen_rt_lu_solve(nw, lu, piv, 1, w);
+    if (Jw) {
+        m->rz(z, w, Jw);
+        for (i = 0; i < nw * nz; ++i) Jw[i] = -Jw[i];
+        gen_rt_lu_solve(nw, lu, piv, nz, Jw);
+    }
+    return GEN_RT_OK;
+}
+
+int gen_rt_deriv_hessian(const gen_rt_deriv_model *m, const gen_rt_real *z,
+                         const gen_rt_real *w, const gen_rt_real *lu, const int *piv,
+                         const gen_rt_real *Jw, const gen_rt_real *lam, gen_rt_real *work,
+                         gen_rt_real *H)
+{
+    const int nw = m->nw, nz = m->nz;
+    gen_rt_real *mu = work, *Hz = mu + nw, *Wz = Hz + nz * nz;
+    int a, b, k, st;
+    if (!m->rh) return GEN_RT_ERR_BAD_ARG;
+    for (k = 0; k < nw; ++k) mu[k] = lam[k];
+    if ((st = gen_rt_lu_solve_t(nw, lu, piv, 1, mu))) return st;
+    m->rh(z, w, mu, Hz, Wz);
+    /* the upper triangle, mirrored */
+    for (a = 0; a < nz; ++a)
+        for (b = a; b < nz; ++b) {
+            gen_rt_real s = GEN_RT_C(0.5) * (Hz[a * nz + b] + Hz[b * nz + a]);
+            for (k = 0; k < nw; ++k)
+                s += Wz[k * nz + a] * Jw[k * nz + b] + Jw[k * nz + a] * Wz[k * nz + b];
+            H[a * nz + b] = H[b * nz + a] = -s;
+        }
+    return GEN_RT_OK;
+}
+
+/* out (nv x nv, nv = nz + 1) += Z^T Hz Z for a symmetric Hz (nz x nz) and
+ * a stage's Z = dzeta/dv = E_c + [X; 0] (E_c: the identity on z and c at
+ * (t, h); X: nx x nv): B = Hz Z (nz x nv), then the upper triangle of
+ * Z^T B, mirrored. nx of the nz rows of Z are dense, so this costs
+ * nx (nz nv + nv^2 / 2) instead of nz nv (nz + nv) */
+static void zhz(int nx, int nz, const gen_rt_real *Hz, const gen_rt_real *X, gen_rt_real c,
+                gen_rt_real *out, gen_rt_real *B)
+{
+    const int nv = nz + 1;
+    int a, b, al;
+    for (al = 0; al < nz; ++al) {
+        const gen_rt_real *Ha = Hz + al * nz;
+        gen_rt_real *Ba = B + al * nv;
+        for (b = 0; b < nz; ++b) Ba[b] = Ha[b];
+        Ba[nz] = c * Ha[nz - 1];
+        for (a = 0; a < nx; ++a) {
+            const gen_rt_real hb = Ha[a], *Xa = X + a * nv;
+            for (b = 0; b < nv; ++b) Ba[b] += hb * Xa[b];
+        }
+    }
+    for (a = 0; a < nv; ++a)
+        for (b = a; b < nv; ++b) {
+            gen_rt_real v = a < nz ? B[a * nv + b] : c * B[(nz - 1) * nv + b];
+            for (al = 0; al < nx; ++al) v += X[al * nv + a] * B[al * nv + b];
+            out[a * nv + b] += v;
+            if (b != a) out[b * nv + a] += v;
+        }
+}
+
+/* the RK4 step's scratch (gen_rt_deriv_rk4), carved from its work */
+typedef struct {
+    gen_rt_real *w, *lu, *Jw, *sw, *lw, *Hz, *hw, *K, *S, *ak, *g, *zk;
+    gen_rt_real *Dp, *Dk, *DA, *DM, *X, *G, *ZH, *Ep, *Ek, *EA, *EM, *St;
+} rk4_work;
+
+static rk4_work rk4_carve(int nx, int nz, int nw, gen_rt_real *work)
+{
+    const int nv = nz + 1, P = GEN_RT_DERIV_POINT_(nz, nw);
+    rk4_work r;
+    gen_rt_real *w = work;
+    r.w = take(&w, nw); r.lu = take(&w, nw * nw); r.Jw = take(&w, nw * nz);
+    r.sw = take(&w, GEN_RT_DERIV_SOLVE_WORK(nw)); r.lw = take(&w, nw);
+    r.Hz = take(&w, nz * nz); r.hw = take(&w, GEN_RT_DERIV_HESSIAN_WORK(nz, nw));
+    r.K = take(&w, 5 * nx); r.S = take(&w, nx); r.ak = take(&w, nx); r.g = take(&w, nx);
+    r.zk = take(&w, nz);
+    r.Dp = take(&w, nx * nv); r.Dk = take(&w, nx * nv); r.DA = take(&w, nx * nv);
+    r.DM = take(&w, nx * nv); r.X = take(&w, nx * nv); r.G = take(&w, nx * nv);
+    r.ZH = take(&w, nz * nv);
+    r.Ep = take(&w, nx * nv * nv); r.Ek = take(&w, nx * nv * nv); r.EA = take(&w, nx * nv * nv);
+    r.EM = take(&w, nx * nv * nv);
+    r.St = take(&w, 4 * (nz + P + 2 * nx * nv));
+    return r;
+}
+
+/* acc = the runtime's RK4 sum k1 + 2 (k2 + k3) + k4 of stage s's value v
+ * (n entries), accumulated in acc (k1, then the sum) and mid (k2 + k3) */
+static void rk4_sum(int s, int n, const gen_rt_real *v, gen_rt_real *acc, gen_rt_real *mid)
+{
+    int i;
+    if (s == 0) for (i = 0; i < n; ++i) acc[i] = v[i];
+    else if (s == 1) for (i = 0; i < n; ++i) mid[i] = v[i];
+    else if (s == 2) for (i = 0; i < n; ++i) mid[i] += v[i];
+    else for (i = 0; i < n; ++i) acc[i] = acc[i] + GEN_RT_C(2.0) * mid[i] + v[i];
+}
+
+/* E_k[i] = Z^T Hf_i Z + c (e_h G_i^T + G_i e_h^T + h sum_al Jf[i][al] E_{k-1}[al]),
+ * G = Jf_x D_{k-1}: the stage's second derivatives (forward over forward) */
+static int rk4_stage_second(const gen_rt_deriv_model *m, const rk4_work *r, const int *piv,
+                            gen_rt_real c, gen_rt_real h)
+{
+    const int nx = m->nx, nz = m->nz, nw = m->nw, nv = nz + 1;
+    int i, a, al, k, st;
+    for (i = 0; i < nx; ++i)
+        for (a = 0; a < nv; ++a) {
+            gen_rt_real g = 0;
+            for (al = 0; al < nx; ++al) g += r->Jw[i * nz + al] * r->Dp[al * nv + a];
+            r->G[i * nv + a] = g;
+        }
+    for (i = 0; i < nx; ++i) {
+        gen_rt_real *E = r->Ek + i * nv * nv;
+        for (k = 0; k < nw; ++k) r->lw[k] = k == i;
+        st = gen_rt_deriv_hessian(m, r->zk, r->w, r->lu, piv, r->Jw, r->lw, r->hw, r->Hz);
+        if (st) return st;
+        for (a = 0; a < nv * nv; ++a) E[a] = 0;
+        zhz(nx, nz, r->Hz, r->X, c, E, r->ZH);
+        for (al = 0; al < nx; ++al) {
+            const gen_rt_real j_ = c * h * r->Jw[i * nz + al], *Ea = r->Ep + al * nv * nv;
+            for (a = 0; a < nv * nv; ++a) E[a] += j_ * Ea[a];
+        }
+        for (a = 0; a < nv; ++a) {
+            E[(nv - 1) * nv + a] += c * r->G[i * nv + a];
+            E[a * nv + nv - 1] += c * r->G[i * nv + a];
+        }
+    }
+    return GEN_RT_OK;
+}
+
+/* Hl = (h/6) d2Phi + (e_h dPhi^T + dPhi e_h^T) / 6, Phi = lam^T (K1 + 2 K2 +
+ * 2 K3 + K4): with a_k the adjoint of K_k (a_4 = lam, a_k = w_k lam +
+ * c_{k+1} h Jf_{k+1,x}^T a_{k+1}), d2Phi = sum_k Z_k^T d2(a_k^T f)(zeta_k)
+ * Z_k + c_k (e_h g_k^T D_{k-1} + ...), g_k = Jf_{k,x}^T a_k (the adjoint of
+ * the stage state); the stages' data stored in r->St (SB reals each) */
+static int rk4_adjoint(const gen_rt_deriv_model *m, const rk4_work *r, const int *spiv,
+                       const gen_rt_real *cs, gen_rt_real h, const gen_rt_real *lam,
+                       gen_rt_real *Hl)
+{
+    const int nx = m->nx, nz = m->nz, nw = m->nw, nv = nz + 1;
+    const int SB = nz + GEN_RT_DERIV_POINT_(nz, nw) + 2 * nx * nv;
+    const gen_rt_real hs = h / GEN_RT_C(6.0);
+    int s, i, k, a, st;
+    for (i = 0; i < nx; ++i) r->g[i] = 0;
+    for (s = 3; s >= 0; --s) {
+        const gen_rt_real *zs = r->St + s * SB, *ws = zs + nz, *lus = ws + nw,
+                          *Jws = lus + nw * nw, *Xs = Jws + nw * nz, *Ds = Xs + nx * nv;
+        const gen_rt_real cn = s < 3 ? cs[s + 1] * h : 0;
+        const gen_rt_real wt = (s == 0 || s == 3) ? GEN_RT_C(1.0) : GEN_RT_C(2.0);
+        for (i = 0; i < nw; ++i) r->lw[i] = i < nx ? wt * lam[i] + cn * r->g[i] : 0;
+        st = gen_rt_deriv_hessian(m, zs, ws, lus, spiv + s * nw, Jws, r->lw, r->hw, r->Hz);
+        if (st) return st;
+        zhz(nx, nz, r->Hz, Xs, cs[s], Hl, r->ZH);
+        for (i = 0; i < nx; ++i) {
+            gen_rt_real v = 0;
+            for (k = 0; k < nx; ++k) v += Jws[k * nz + i] * r->lw[k];
+            r->ak[i] = v;
+        }
+        for (a = 0; a < nv; ++a) {
+            gen_rt_real v = 0;
+            for (i = 0; i < nx; ++i) v += r->ak[i] * Ds[i * nv + a];
+            Hl[(nv - 1) * nv + a] += cs[s] * v;
+            Hl[a * nv + nv - 1] += cs[s] * v;
+        }
+        for (i = 0; i < nx; ++i) r->g[i] = r->ak[i];
+    }
+    for (i = 0; i < nv * nv; ++i) Hl[i] *= hs;
+    for (a = 0; a < nv; ++a) {
+        gen_rt_real v = 0;
+        for (i = 0; i < nx; ++i) v += r->DA[i * nv + a] * lam[i];
+        v = v / GEN_RT_C(6.0);
+        Hl[(nv - 1) * nv + a] += v;
+        Hl[a * nv + nv - 1] += v;
+    }
+    return GEN_RT_OK;
+}
+
+/* x+ = x + (h/6) S, S = K1 + 2 (K2 + K3) + K4: J = [I 0] + (h/6) DA +
+ * S e_h^T / 6; T = (h/6) EA + (e_h DA^T + DA e_h^T) / 6 */
+static void rk4_outputs(int nx, int nz, const rk4_work *r, gen_rt_real h, const gen_rt_real *z,
+                        gen_rt_real *xn, gen_rt_real *J, gen_rt_real *T)
+{
+    const int nv = nz + 1;
+    const gen_rt_real hs = h / GEN_RT_C(6.0);
+    const gen_rt_real *k1 = r->K + nx, *k2 = k1 + nx, *k3 = k2 + nx, *k4 = k3 + nx;
+    int i, a;
+    for (i = 0; i < nx; ++i) r->S[i] = k1[i] + GEN_RT_C(2.0) * (k2[i] + k3[i]) + k4[i];
+    if (xn)     /* the arithmetic of gen_rt_rk4_step */
+        for (i = 0; i < nx; ++i)
+            xn[i] = z[i] + (h / GEN_RT_C(6.0)) * (k1[i] + GEN_RT_C(2.0) * (k2[i] + k3[i]) + k4[i]);
+    if (J)
+        for (i = 0; i < nx; ++i) {
+            for (a = 0; a < nv; ++a) J[i * nv + a] = hs * r->DA[i * nv + a];
+            J[i * nv + i] += 1;
+            J[i * nv + nv - 1] += r->S[i] / GEN_RT_C(6.0);
+        }
+    if (T) {
+        for (i = 0; i < nx * nv * nv; ++i) T[i] = hs * r->EA[i];
+        for (i = 0; i < nx; ++i)
+            for (a = 0; a < nv; ++a) {
+                const gen_rt_real d = r->DA[i * nv + a] / GEN_RT_C(6.0);
+                T[(i * nv + nv - 1) * nv + a] += d;
+                T[(i * nv + a) * nv + nv - 1] += d;
+            }
+    }
+}
+
+/* the stage's state zeta = (x + c h K_{k-1}, r, p, t + c h), X = dzeta_x/dv
+ * = c h D_{k-1} + c K_{k-1} e_h^T, and after the solve D_k = Jf dzeta/dv */
+static void rk4_stage_first(int nx, int nz, const rk4_work *r, const gen_rt_real *z,
+                            const gen_rt_real *Kp, gen_rt_real c, gen_rt_real h, int solved)
+{
+    const int nv = nz + 1;
+    int i, a, al;
+    if (!solved) {
+        for (i = 0; i < nz; ++i) r->zk[i] = z[i];
+        for (i = 0; i < nx; ++i) r->zk[i] += c * h * Kp[i];
+        r->zk[nz - 1] += c * h;
+        for (i = 0; i < nx; ++i) {
+            for (a = 0; a < nv; ++a) r->X[i * nv + a] = c * h * r->Dp[i * nv + a];
+            r->X[i * nv + nv - 1] += c * Kp[i];
+        }
+        return;
+    }
+    for (i = 0; i < nx; ++i) {
+        const gen_rt_real *Ji = r->Jw + i * nz;
+        for (a = 0; a < nz; ++a) r->Dk[i * nv + a] = Ji[a];
+        r->Dk[i * nv + nv - 1] = c * Ji[nz - 1];
+        for (al = 0; al < nx; ++al) {
+            const gen_rt_real j_ = Ji[al], *Xa = r->X + al * nv;
+            for (a = 0; a < nv; ++a) r->Dk[i * nv + a] += j_ * Xa[a];
+        }
+    }
+}
+
+static void copy_n(int n, const gen_rt_real *src, gen_rt_real *dst)
+{
+    int i;
+    for (i = 0; i < n; ++i) dst[i] = src[i];
+}
+
+int gen_rt_deriv_rk4(const gen_rt_deriv_model *m, const gen_rt_real *z, gen_rt_real h,
+                     const gen_rt_real *lam, gen_rt_real *work, int *iwork, gen_rt_real *xn,
+                     gen_rt_real *J, gen_rt_real *Hl, gen_rt_real *T)
+{
+    /* the runtime's RK4 (gen_rt_rk4_step): c h = 0, h/2, h/2, h */
+    const gen_rt_real cs[4] = {0, GEN_RT_C(0.5), GEN_RT_C(0.5), GEN_RT_C(1.0)};
+    const int nx = m->nx, nz = m->nz, nw = m->nw, nv = nz + 1;
+    const int P = GEN_RT_DERIV_POINT_(nz, nw), SB = nz + P + 2 * nx * nv;
+    const int second = T != 0, adj = Hl != 0 && T == 0 && lam != 0;
+    rk4_work r = rk4_carve(nx, nz, nw, work);
+    int *piv = iwork, *spiv = iwork + nw;
+    int s, i, st;
+    if ((Hl || T) && !m->rh) return GEN_RT_ERR_BAD_ARG;
+    for (i = 0; i < nx; ++i) r.K[i] = 0;            /* K_0 = 0, D_0 = 0, E_0 = 0 */
+    for (i = 0; i < nx * nv; ++i) r.Dp[i] = 0;
+    if (second) for (i = 0; i < nx * nv * nv; ++i) r.Ep[i] = 0;
+    for (s = 0; s < 4; ++s) {
+        const gen_rt_real c = cs[s];
+        gen_rt_real *tmp;
+        rk4_stage_first(nx, nz, &r, z, r.K + s * nx, c, h, 0);
+        if ((st = gen_rt_deriv_solve(m, r.zk, r.sw, r.w, r.lu, piv, r.Jw))) return st;
+        rk4_stage_first(nx, nz, &r, z, r.K + s * nx, c, h, 1);
+        if (adj) {
+            /* the stage's data for the adjoint sweep: zeta, w, Rw's LU, dw/dz, X, D_{k-1} */
+            gen_rt_real *sb = r.St + s * SB;
+            copy_n(nz, r.zk, sb);
+            copy_n(P, r.w, sb + nz);    /* w, lu, Jw: contiguous */
+            copy_n(nx * nv, r.X, sb + nz + P);
+            copy_n(nx * nv, r.Dp, sb + nz + P + nx * nv);
+            for (i = 0; i < nw; ++i) spiv[s * nw + i] = piv[i];
+        }
+        if (second && (st = rk4_stage_second(m, &r, piv, c, h))) return st;
+        copy_n(nx, r.w, r.K + (s + 1) * nx);
+        rk4_sum(s, nx * nv, r.Dk, r.DA, r.DM);
+        tmp = r.Dp; r.Dp = r.Dk; r.Dk = tmp;
+        if (second) {
+            rk4_sum(s, nx * nv * nv, r.Ek, r.EA, r.EM);
+            tmp = r.Ep; r.Ep = r.Ek; r.Ek = tmp;
+        }
+    }
+    rk4_outputs(nx, nz, &r, h, z, xn, J, T);
+    if (Hl) {
+        for (i = 0; i < nv * nv; ++i) Hl[i] = 0;
+        if (adj && (st = rk4_adjoint(m, &r, spiv, cs, h, lam, Hl))) return st;
+        if (second && lam)
+            for (s = 0; s < nx; ++s)
+                if (lam[s] != 0)
+                    for (i = 0; i < nv * nv; ++i) Hl[i] += lam[s] * T[s * nv * nv + i];
+    }
+    if ((xn && !gen_rt_all_finite(nx, xn)) || (J && !gen_rt_all_finite(nx * nv, J)) ||
+        (T && !gen_rt_all_finite(nx * nv * nv, T)) || (Hl && !gen_rt_all_finite(nv * nv, Hl)))
+        return GEN_RT_ERR_NONFINITE_MODEL;
+    return GEN_RT_OK;
+}
+
+int gen_rt_deriv_rodas4(const gen_rt_deriv_model *m, const gen_rt_real *z, gen_rt_real h,
+                        gen_rt_real *work, int *iwork, gen_rt_real *J)
+{
+    const gen_rt_real al_[6] = {0, RD_ALPHA2, RD_ALPHA3, RD_ALPHA4, 1, 1};
+    const gen_rt_real ga_[6] = {RD_GAMMA, RD_GAMMA2, RD_GAMMA3, RD_GAMMA4, 0, 0};
+    const gen_rt_real A_[6][5] = {
+        {0, 0, 0, 0, 0}, {RD_A21, 0, 0, 0, 0}, {RD_A31, RD_A32, 0, 0, 0},
+        {RD_A41, RD_A42, RD_A43, 0, 0}, {RD_A51, RD_A52, RD_A53, RD_A54, 0},
+        {RD_A51, RD_A52, RD_A53, RD_A54, 1}};
+    const gen_rt_real C_[6][5] = {
+        {0, 0, 0, 0, 0}, {RD_C21, 0, 0, 0, 0}, {RD_C31, RD_C32, 0, 0, 0},
+        {RD_C41, RD_C42, RD_C43, 0, 0}, {RD_C51, RD_C52, RD_C53, RD_C54, 0},
+        {RD_C61, RD_C62, RD_C63, RD_C64, RD_C65}};
+    const gen_rt_real b_[6] = {RD_A51, RD_A52, RD_A53, RD_A54, 1, 1};
+    const int nx = m->nx, nz = m->nz, nw = m->nw, nv = nz + 1;
+    gen_rt_real *wk = work;
+    gen_rt_real *w = take(&wk, nw), *lu = take(&wk, nw * nw), *Jw = take(&wk, nw * nz),
+                *sw = take(&wk, GEN_RT_DERIV_SOLVE_WORK(nw)), *lw = take(&wk, nw),
+                *hw = take(&wk, GEN_RT_DERIV_HESSIAN_WORK(nz, nw)), *f0 = take(&wk, nx),
+                *J0 = take(&wk, nx * nz), *Hr = take(&wk, nx * nz * nz), *G = take(&wk, nx * nx),
+                *K = take(&wk, 6 * nx), *dK = take(&wk, 6 * nx * nv), *Zt = take(&wk, nz * nv),
+                *B = take(&wk, nx * nv), *zk = take(&wk, nz);
+    int *piv = iwork, *gpiv = iwork + nw;
+    gen_rt_real ih, hg;
+    int i, j, k, s, a, c, st;
+    if (!m->rh || !(h != 0)) return GEN_RT_ERR_BAD_ARG;
+    ih = 1 / h;
+    hg = 1 / (h * RD_GAMMA);
+    /* f, Jf and the Hessians of f's rows at z */
+    if ((st = gen_rt_deriv_solve(m, z, sw, w, lu, piv, Jw))) return st;
+    copy_n(nx, w, f0);
+    copy_n(nx * nz, Jw, J0);
+    for (i = 0; i < nx; ++i) {
+        for (k = 0; k < nw; ++k) lw[k] = k == i;
+        if ((st = gen_rt_deriv_hessian(m, z, w, lu, piv, Jw, lw, hw, Hr + i * nz * nz)))
+            return st;
+    }
+    for (i = 0; i < nx; ++i)
+        for (j = 0; j < nx; ++j) G[i * nx + j] = (i == j ? hg : 0) - J0[i * nz + j];
+    if ((st = gen_rt_lu_factor(nx, G, gpiv, 0))) return st;
+    for (s = 0; s < 6; ++s) {
+        gen_rt_real *Ks = K + s * nx, *dKs = dK + s * nx * nv;
+        const gen_rt_real *fs = f0, *Js = J0;
+        /* zeta_s and Zt = dzeta_s/dv */
+        for (i = 0; i < nz; ++i) zk[i] = z[i];
+        for (i = 0; i < nz * nv; ++i) Zt[i] = 0;
+        for (i = 0; i < nz; ++i) Zt[i * nv + i] = 1;
+        for (j = 0; j < s; ++j)
+            for (i = 0; i < nx; ++i) {
+                zk[i] += A_[s][j] * K[j * nx + i];
+                for (c = 0; c < nv; ++c) Zt[i * nv + c] += A_[s][j] * dK[(j * nx + i) * nv + c];
+            }
+        zk[nz - 1] += al_[s] * h;
+        Zt[(nz - 1) * nv + nv - 1] += al_[s];
+        if (s > 0) {
+            if ((st = gen_rt_deriv_solve(m, zk, sw, w, lu, piv, Jw))) return st;
+            fs = w;
+            Js = Jw;
+        }
+        /* K_s = G^-1 F_s; B = dF_s + (d(Jf_x)/dv) K_s + e_h K_s / (h^2 gamma) */
+        for (i = 0; i < nx; ++i) {
+            gen_rt_real F = fs[i] + h * ga_[s] * J0[i * nz + nz - 1];
+            for (j = 0; j < s; ++j) F += ih * C_[s][j] * K[j * nx + i];
+            Ks[i] = F;
+        }
+        if ((st = gen_rt_lu_solve(nx, G, gpiv, 1, Ks))) return st;
+        for (i = 0; i < nx; ++i) {
+            const gen_rt_real *Hi = Hr + i * nz * nz;
+            gen_rt_real eh = ga_[s] * J0[i * nz + nz - 1] + Ks[i] * ih * hg;
+            for (c = 0; c < nv; ++c) {
+                gen_rt_real v = 0;
+                for (a = 0; a < nz; ++a) v += Js[i * nz + a] * Zt[a * nv + c];
+                for (j = 0; j < s; ++j) v += ih * C_[s][j] * dK[(j * nx + i) * nv + c];
+                if (c < nz) {
+                    v += h * ga_[s] * Hi[(nz - 1) * nz + c];
+                    for (a = 0; a < nx; ++a) v += Hi[a * nz + c] * Ks[a];
+                }
+                B[i * nv + c] = v;
+            }
+            for (j = 0; j < s; ++j) eh -= ih * ih * C_[s][j] * K[j * nx + i];
+            B[i * nv + nv - 1] += eh;
+        }
+        if ((st = gen_rt_lu_solve(nx, G, gpiv, nv, B))) return st;
+        copy_n(nx * nv, B, dKs);
+    }
+    for (i = 0; i < nx; ++i)
+        for (c = 0; c < nv; ++c) {
+            gen_rt_real v = c == i;
+            for (s = 0; s < 6; ++s) v += b_[s] * dK[(s * nx + i) * nv + c];
+            J[i * nv + c] = v;
+        }
+    return gen_rt_all_finite(nx * nv, J) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+}
