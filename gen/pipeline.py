@@ -13,7 +13,9 @@ renders them (derivatives_source), builds the complete library
 """
 from __future__ import annotations
 
+import threading
 import time
+from collections import OrderedDict
 from dataclasses import replace
 from pathlib import Path
 
@@ -26,7 +28,8 @@ from .plan.ir import DERIVATIVE_KERNELS, plan as make_plan, with_derivatives
 from .intake.model import require_model
 from .codegen.render import render
 
-__all__ = ["compile", "derivatives_source", "simulator", "product"]
+__all__ = ["compile", "derivatives_source", "simulator", "product", "build_product",
+           "MEMO_SIZE"]
 
 
 def derivatives_source(plan, real="double", timings=None):
@@ -152,3 +155,40 @@ def _read_sources(folder, expected, name, backend):
             raise ModelError(f"{path} is missing: {folder} is not a generated '{name}' project")
         files[fname] = path.read_text()
     return files
+
+
+# ------------------------------------------------ products built once per process
+#: the product libraries built in this process (build_product): key -> path,
+#: at most MEMO_SIZE, the least recently used dropped first
+MEMO_SIZE = 32
+_built = OrderedDict()
+_built_lock = threading.Lock()
+
+
+def build_product(model, backend, key=(), real="double", verbose=False):
+    """The path of a product library of a model (plan -> render -> build
+    with a backend that is not loaded as a Simulator: gen.casadi's), built
+    into the content-keyed cache on first use. A second request in the same
+    process skips planning and rendering, which for a product's derivative
+    kernels can cost much more than the cache's lookup (the Whipple
+    bicycle's CasADi library: 14 s of sympy without its Hessians, 0.1 s for
+    the cart-pole): the paths are kept by (the model's fingerprint, the
+    backend's name, key: what else the rendered files depend on, such as
+    the backend variant's options, real), at most MEMO_SIZE of them, under
+    a lock. A path whose library left the cache (gen.clear_cache) is built
+    again. Two threads asking for the same new library may both build it
+    (the cache publishes atomically; the files are the same)."""
+    b = get_backend(backend)
+    memo = (model.fingerprint(), b.name, tuple(key), real)
+    with _built_lock:
+        path = _built.get(memo)
+    if path is not None and path.exists():
+        return path
+    plan = make_plan(model, lin=b.lin, derivatives=True)
+    path = build(render(plan, real=real, backend=b, project=False), verbose=verbose).path
+    with _built_lock:
+        _built[memo] = path
+        _built.move_to_end(memo)
+        while len(_built) > MEMO_SIZE:
+            _built.popitem(last=False)
+    return path

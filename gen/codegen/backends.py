@@ -51,7 +51,7 @@ __all__ = ["Backend", "CBackend", "EigenBackend", "FmuBackend", "CasadiBackend",
            "backend_names", "c_compiler", "cxx_compiler", "eigen_include_dir",
            "RUNTIME_SOURCES", "RUNTIME_HEADERS", "RUNTIME_MAIN", "EIGEN_RUNTIME_HEADERS", "C_FLAGS",
            "C_LIN_FLAGS", "RUNTIME_FLAGS", "STRICT_FLAGS", "CXX_FLAGS", "CXX_STRICT_FLAGS",
-           "LIB_SUFFIX", "CXX_RESERVED"]
+           "LIB_SUFFIX", "CXX_RESERVED", "DERIVATIVE_SOURCES", "DERIVATIVE_HEADERS"]
 
 # ------------------------------------------------------------ the runtime
 # the C runtime every C-backend model links (csrc/)
@@ -61,6 +61,10 @@ RUNTIME_SOURCES = ["gen_rt_status.c", "gen_rt_linalg.c", "gen_rt_dynamics.c",
                    "gen_rt_simulate.c", "gen_rt_expm.c", "gen_rt_sens.c", "gen_rt_hybrid.c"]
 RUNTIME_HEADERS = ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h", "gen_rt_rodas4.h", "gen_rt_expm.h",
                    "gen_rt_sens.h", "gen_rt_ldlt.h", "gen_rt_private.h"]
+# the derivative algorithms over a model's kernels and CasADi's calling
+# convention over them (csrc/derivatives): the CasADi library's
+DERIVATIVE_SOURCES = ["gen_rt_deriv.c", "gen_rt_casadi.c"]
+DERIVATIVE_HEADERS = ["gen_rt_deriv.h", "gen_rt_casadi.h"]
 # the standalone simulator's runtime (main.c's program: the project's binary
 # only, never a library's)
 RUNTIME_MAIN = ["gen_rt_main.c", "gen_rt_main.h"]
@@ -379,10 +383,12 @@ CASADI_TEMPLATES = [t for t in C_TEMPLATES if t[2] != "project" and t[0] != "{na
 
 class CasadiBackend(CBackend):
     """The C model as CasADi external functions (gen/export/casadi.py): the C
-    backend's model and runtime and {name}_casadi.c, the functions in
-    CasADi's calling convention over the model's C API; one shared library
-    for casadi.external, always with the derivative kernels. variant()
-    gives the backend of a library without the second-derivative functions
+    backend's model and runtime, the derivative algorithms and CasADi's
+    calling convention over them (csrc/derivatives: DERIVATIVE_SOURCES)
+    and {name}_casadi.c, the functions' metadata and the wiring of the
+    model's kernels and API to the runtime; one shared library for
+    casadi.external, always with the derivative kernels. variant() gives
+    the backend of a library without the second-derivative functions
     (gen.casadi.functions(model, hessians=False)) or the RODAS4 step."""
     name = "casadi"
     #: the second-derivative functions and kernels (jac_jac_, jac_fwd1_, jac_adj1_)
@@ -390,6 +396,8 @@ class CasadiBackend(CBackend):
     #: step_rodas4 (unconstrained models), whose first derivatives need the rhs Hessians
     rodas4 = True
     templates = tuple(CASADI_TEMPLATES)
+    runtime_files = tuple(RUNTIME_SOURCES + RUNTIME_HEADERS + DERIVATIVE_SOURCES
+                          + DERIVATIVE_HEADERS)
     lazy_derivatives = False
     loadable = False
     project = False
@@ -405,17 +413,9 @@ class CasadiBackend(CBackend):
         return b
 
     def context(self, model, kernels):
-        from .casadi_kernels import function_specs, kernel_context, sizes
-        rodas4 = self.rodas4 and not (model.mc or model.mv)
-        cs_kernels = kernel_context(model, lambda s: self.printer(s, "double"),
-                                    self.hessians, self.hessians or rodas4)
-        return {"cs_functions": function_specs(model, self.hessians, self.rodas4),
-                "cs_kernels": cs_kernels,
-                "cs_hessians": self.hessians,
-                "cs_wh": any(k["name"] == "cs_wh" for k in cs_kernels),
-                "cs": sizes(model),
-                "ny": len(model.output_names),
-                "sz_nx": max(1, model.nx)}
+        from .casadi_kernels import library_context
+        return library_context(model, lambda s: self.printer(s, "double"), self.hessians,
+                               self.rodas4)
 
     def cache_parts(self):
         return [*super().cache_parts(), f"backend={self.name}"]
@@ -424,7 +424,14 @@ class CasadiBackend(CBackend):
         cc = c_compiler()
         own = [(f"{name}_lin.c", C_LIN_FLAGS)] if derivatives else [(f"{name}_lin_stub.c", ())]
         own += [(f"{name}_kernels.c", ()), (f"{name}.c", ()), (f"{name}_casadi.c", ())]
-        return [(f, cc, [*C_FLAGS, "-fPIC", *extra]) for f, extra in own]
+        # the derivative runtime: compiled with the library (its objects are
+        # not among the shared runtime's), hidden like the runtime's
+        return [(f, cc, [*C_FLAGS, "-fPIC", *extra]) for f, extra in own] + \
+            [(f, cc, list(RUNTIME_FLAGS)) for f in DERIVATIVE_SOURCES]
+
+    def diagnose(self, name, units):
+        cc, flags, files = super().diagnose(name, units)
+        return cc, flags, [*files, *DERIVATIVE_SOURCES]
 
 
 # ------------------------------------------------------------ the products

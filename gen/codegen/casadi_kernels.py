@@ -1,12 +1,15 @@
-"""The CasADi face's function table: which functions the generated library
-holds (names, inputs and outputs with their sparsity in CasADi's compressed
-column storage, derivative blocks), from a gen.Model alone. Read by the
-casadi backend (gen/codegen/backends.py) to render the library and by gen.casadi to
-load it; it imports no stage of the pipeline."""
+"""The CasADi face's data, from a gen.Model alone: the function table
+(which functions the generated library holds: names, inputs and outputs
+with their sparsity in CasADi's compressed column storage, and each
+function as the runtime's gen_rt_cs_fn), the derivative kernels the
+runtime differentiates with (csrc/derivatives), the template's context
+and the cffi cdef of the functions. Read by the casadi backend
+(gen/codegen/backends.py) to render the library and by gen.casadi to load
+it; it imports no later stage of the pipeline."""
 from __future__ import annotations
 
-__all__ = ["NAMES", "STEP_METHODS", "function_specs", "sizes", "derivative_kernels",
-           "kernel_context"]
+__all__ = ["NAMES", "STEP_METHODS", "MODES", "function_specs", "derivative_kernels",
+           "kernel_context", "library_context", "cdef"]
 
 #: the functions, in the order of the dict functions() returns
 NAMES = ("rhs", "implicit", "step", "outputs", "constraints")
@@ -14,6 +17,11 @@ NAMES = ("rhs", "implicit", "step", "outputs", "constraints")
 #: the methods of step (functions(model, step=...)): the library symbol of
 #: each (<model>_<symbol>); "rodas4" for unconstrained models only
 STEP_METHODS = {"rk4": "step", "rodas4": "step_rodas4"}
+
+#: what each derivative function computes of its base function (the
+#: runtime's GEN_RT_CS_<MODE>, csrc/derivatives/gen_rt_casadi.h), by prefix
+MODES = {"jac_": "jac", "fwd1_": "fwd", "adj1_": "adj", "jac_jac_": "jac_jac",
+         "jac_fwd1_": "jac_fwd", "jac_adj1_": "jac_adj"}
 
 
 def _dense(m, n):
@@ -26,39 +34,6 @@ def _zero(m, n):
     return [m, n, *([0] * (n + 1))]
 
 
-def sizes(model):
-    """The sizes the derivative code is written over: nw (q', u', lam),
-    nz (q, u, r, p, t), mr (the most rows of a function), nv (the most
-    differentiable inputs), wk (the scratch of one derivative call)."""
-    m = model
-    nx, ny = m.nx, len(m.output_names)
-    nw, nz = nx + m.mv, nx + m.nr + m.np + 1
-    mr = max(1, nx + m.mc + m.mv, ny)
-    nv = nz + nx
-    wk = (2 * nw * nw + 3 * nw * nz + 3 * nz * nz + 4 * nw + 2 * nz + mr * nz
-          + 4 * nx * nv + 4 * nx * nv * nv + 2 * nz * nv + 4 * nx + 16
-          + 4 * (nz + nw + nw * nw + nw * nz + nz * nv + nx * nv))     # step's adjoint sweep
-    # step_rodas4's first derivatives: f0, Jf and the Hessians of f at z,
-    # G = I/(h gamma) - Jf_x, the six stages and their derivatives
-    wk = max(wk, 2 * nw * nw + nw * nz + 4 * nw + 2 * nz * nz + nw * nz + 16
-             + nx * nz + nx * nz * nz + nx * nx + 6 * nx + 6 * nx * nv + nz * nv
-             + nx * nv + 2 * nz + nx)
-    return {"nw": nw, "nz": nz, "mr": mr, "nv": nv, "wk": wk,
-            "sz_w": mr * nv + nv * nv + mr * nv * nv + nv + wk}
-
-
-def _cmap(model, name):
-    """Where each z = (q, u, r, p, t) column goes among a function's
-    differentiable inputs (-1: not an input of it)."""
-    m = model
-    nx, nr, nz = m.nx, m.nr, m.nx + m.nr + m.np + 1
-    if name == "implicit":
-        return [j if j < nx else j + nx for j in range(nz)]
-    if name == "constraints":
-        return [j if j < nx else (-1 if j < nx + nr else j - nr) for j in range(nz)]
-    return list(range(nz))
-
-
 def _holds_t(model):
     """Whether the model's equations hold the time explicitly (then
     step_rodas4 needs df/dt; otherwise it is zero)."""
@@ -69,139 +44,119 @@ def _holds_t(model):
     return any(m.t in getattr(e, "free_symbols", ()) for e in mats)
 
 
-def function_specs(model, hessians=True, rodas4=True):
-    """The functions of a model's CasADi library, as the template's data:
-    [{"sym", "kind", "ins": [(name, sparsity, default)], "outs": [(name,
-    sparsity)], "sz_w", "sz_out", ...}]. For each function <f>: jac_<f>,
-    fwd1_<f> and adj1_<f> (first derivatives, every input), and
-    jac_jac_<f>, jac_fwd1_<f> and jac_adj1_<f> (their Jacobians: the second
-    derivatives CasADi's Hessians are built from). "base", "mode",
-    "blocks" (input index, offset among the differentiable inputs,
-    columns) and "fill" (what each output of a second-derivative
-    function holds) are what the template's code needs. step of a
-    constrained model has no derivatives (its projection has no
-    derivative kernels). An unconstrained model also has step_rodas4 (one
-    RODAS4 step of the runtime, functions(model, step="rodas4")) with
-    jac_, fwd1_ and adj1_ only; "t_dep" says whether its value needs df/dt.
-    hessians=False leaves out every jac_jac_, jac_fwd1_ and jac_adj1_
-    (functions(model, hessians=False)); rodas4=False leaves out step_rodas4.
-    """
+def _bases(model, rodas4):
+    """The base functions the library holds: [(name, inputs [(name, size,
+    default)], outputs [(name, size)])]. A missing r, p or h is NaN (the
+    call fails), t is 0."""
     m = model
-    p = m.name
     nx, nr, np_, mc, mv, ny = m.nx, m.nr, m.np, m.mc, m.mv, len(m.output_names)
     nan = "NAN"
-    # defaults: r, p, h are NaN when missing (the call fails), t is 0
     x_, r_, p_, t_ = ("x", nx, 0), ("r", nr, nan if nr else 0), ("p", np_, nan if np_ else 0), \
         ("t", 1, 0)
+    step = ([x_, r_, p_, t_, ("h", 1, nan)], [("x_next", nx)])
     base = {
         "rhs": ([x_, r_, p_, t_], [("xdot", nx)]),
         "implicit": ([x_, ("xdot", nx, 0), r_, p_, t_], [("residual", nx + mc + mv)]),
-        "step": ([x_, r_, p_, t_, ("h", 1, nan)], [("x_next", nx)]),
+        "step": step,
         "outputs": ([x_, r_, p_, t_], [("y", ny)]),
         "constraints": ([x_, p_, t_], [("c", mc + mv)]),
     }
     have = [n for n in NAMES if (n != "outputs" or ny) and (n != "constraints" or mc + mv)]
     if rodas4 and not (mc or mv):
         # one RODAS4 step (gen_rt_rodas4_trial), first derivatives only
-        base["step_rodas4"] = base["step"]
+        base["step_rodas4"] = step
         have.append("step_rodas4")
-    sz = sizes(m)
-    sz_out = max(1, nx + mc + mv, ny)
+    return [(n, *base[n]) for n in have]
+
+
+def _spec(p, base, prefix, ins, outs):
+    """One function's entry: its symbol, inputs (name, sparsity, default),
+    outputs (name, sparsity) and the runtime's description of it (base
+    function, mode, the base's inputs: the template's gen_rt_cs_fn)."""
+    mode = MODES.get(prefix)
+    name = prefix + base[0]
+    return {"sym": f"{prefix}{p}_{base[0]}", "kind": name, "name": name, "base": base[0],
+            "mode": mode, "ins": ins, "outs": outs,
+            "c_fn": {"base": f"GEN_RT_CS_{base[0].upper()}",
+                     "mode": f"GEN_RT_CS_{(mode or 'value').upper()}",
+                     "ins": [f"GEN_RT_CS_{a.upper()}" for a, _, _ in base[1]]}}
+
+
+def _first(p, base):
+    """The value and its first derivatives: <f>, jac_<f> (the blocks
+    jac_<out>_<in>), fwd1_<f> (J times a forward seed per input), adj1_<f>
+    (J^T times the output's adjoint seed)."""
+    _, ins, outs = base
+    (yname, nrow), = outs
+    nom = [(a, _dense(k, 1), 0) for a, k, _ in ins] + [(f"out_{yname}", _dense(nrow, 1), 0)]
+    value = _spec(p, base, "", [(a, _dense(k, 1), d) for a, k, d in ins],
+                  [(yname, _dense(nrow, 1))])
+    del value["mode"]
+    jac = _spec(p, base, "jac_", nom, [(f"jac_{yname}_{a}", _dense(nrow, k)) for a, k, _ in ins])
+    fwd = _spec(p, base, "fwd1_", nom + [(f"fwd_{a}", _dense(k, 1), 0) for a, k, _ in ins],
+                [(f"fwd_{yname}", _dense(nrow, 1))])
+    adj = _spec(p, base, "adj1_", nom + [(f"adj_{yname}", _dense(nrow, 1), 0)],
+                [(f"adj_{a}", _dense(k, 1)) for a, k, _ in ins])
+    return [value, jac, fwd, adj]
+
+
+def _second(p, base, first):
+    """The Jacobians of jac_, fwd1_ and adj1_ (their outputs w.r.t. their
+    inputs; CasADi's names): the second derivatives CasADi's Hessians are
+    built from. A block w.r.t. a nominal output is a structural zero."""
+    _, ins, outs = base
+    (yname, nrow), = outs
+    nin = len(ins)
+    jac, fwd, adj = first[1:]
+
+    def block(name, rows, j, arg, zero_cols=0):
+        """d(rows-long output)/d(input j of arg: name, sparsity): dense for
+        an input or a seed, a structural zero for the nominal output (with
+        sparsity[zero_cols] columns: jac_jac_'s have one)."""
+        _, sp_, _ = arg
+        if j != nin:
+            return (name, _dense(rows, sp_[0]))
+        return (name, _zero(rows, sp_[zero_cols]))
+    outs_jj = [block(f"jac_{o}_{a[0]}", nrow * ins[i][1], j, a, 1)
+               for i, (o, _) in enumerate(jac["outs"]) for j, a in enumerate(jac["ins"])]
+    outs_jf = [block(f"jac_fwd_{yname}_{a[0]}", nrow, j, a) for j, a in enumerate(fwd["ins"])]
+    outs_ja = [block(f"jac_adj_{ai}_{a[0]}", k, j, a)
+               for ai, k, _ in ins for j, a in enumerate(adj["ins"])]
+    return [_spec(p, base, "jac_jac_", jac["ins"] + [(f"out_{a}", sp_, 0) for a, sp_ in jac["outs"]],
+                  outs_jj),
+            _spec(p, base, "jac_fwd1_", fwd["ins"] + [(f"out_{a}", sp_, 0) for a, sp_ in fwd["outs"]],
+                  outs_jf),
+            _spec(p, base, "jac_adj1_", adj["ins"] + [(f"out_{a}", sp_, 0) for a, sp_ in adj["outs"]],
+                  outs_ja)]
+
+
+def function_specs(model, hessians=True, rodas4=True):
+    """The functions of a model's CasADi library, as the template's data:
+    [{"sym", "kind", "name", "base", "mode", "ins": [(name, sparsity,
+    default)], "outs": [(name, sparsity)], "c_fn"}]. For each function <f>:
+    jac_<f>, fwd1_<f> and adj1_<f> (first derivatives, every input; "mode"
+    "jac", "fwd", "adj"), and jac_jac_<f>, jac_fwd1_<f> and jac_adj1_<f>
+    (their Jacobians: the second derivatives CasADi's Hessians are built
+    from; "jac_jac", "jac_fwd", "jac_adj"); the values have no "mode".
+    "c_fn" is the runtime's description of the function
+    (csrc/derivatives/gen_rt_casadi.h, gen_rt_cs_fn), which computes it.
+    step of a constrained model has no derivatives (its projection has no
+    derivative kernels). An unconstrained model also has step_rodas4 (one
+    RODAS4 step of the runtime, functions(model, step="rodas4")) with
+    jac_, fwd1_ and adj1_ only. hessians=False leaves out every jac_jac_,
+    jac_fwd1_ and jac_adj1_ (functions(model, hessians=False));
+    rodas4=False leaves out step_rodas4.
+    """
+    m = model
     specs = []
-    for n in have:
-        ins, outs = base[n]
-        specs.append({"sym": f"{p}_{n}", "kind": n, "name": n,
-                      "ins": [(a, _dense(k, 1), d) for a, k, d in ins],
-                      "outs": [(a, _dense(k, 1)) for a, k in outs],
-                      "sz_w": sz["sz_w"] if n == "step_rodas4" else 0, "sz_out": sz_out,
-                      "t_dep": n == "step_rodas4" and _holds_t(m)})
-        nrow = outs[0][1]
-        if n == "step" and (mc or mv):
-            continue        # the projection has no derivative kernels: no derivatives
-        # the inputs, side by side: (input index, offset, columns)
-        offs, blocks = 0, []
-        for i, (a, k, _) in enumerate(ins):
-            blocks.append((i, offs, k))
-            offs += k
-        nv = offs
-        common = {"base": n, "nrow": nrow, "nv": nv, "sz_out": sz_out, "sz_w": sz["sz_w"],
-                  "cmap": _cmap(m, n)}
-        nin, nout = len(ins), len(outs)
-        yname = outs[0][0]
-        nom = [(a, _dense(k, 1), 0) for a, k, _ in ins] + [(f"out_{a}", _dense(k, 1), 0)
-                                                           for a, k in outs]
-        jac_outs = [(f"jac_{yname}_{a}", _dense(nrow, k)) for a, k, _ in ins]
-        # jac_<f>: the blocks jac_<out>_<in> (one output: block i is input i)
-        specs.append({**common, "sym": f"jac_{p}_{n}", "kind": f"jac_{n}", "name": f"jac_{n}",
-                      "mode": "jac", "ins": nom, "outs": jac_outs,
-                      "blocks": blocks})
-        # fwd1_<f>: J times the forward seeds of the inputs
-        fwd_ins = nom + [(f"fwd_{a}", _dense(k, 1), 0) for a, k, _ in ins]
-        fwd_outs = [(f"fwd_{yname}", _dense(nrow, 1))]
-        specs.append({**common, "sym": f"fwd1_{p}_{n}", "kind": f"fwd1_{n}", "name": f"fwd1_{n}",
-                      "mode": "fwd", "ins": fwd_ins, "outs": fwd_outs,
-                                            "blocks": [(nin + nout + i, off, k) for i, off, k in blocks]})
-        # adj1_<f>: J^T times the adjoint seed of the output
-        adj_ins = nom + [(f"adj_{yname}", _dense(nrow, 1), 0)]
-        adj_outs = [(f"adj_{a}", _dense(k, 1)) for a, k, _ in ins]
-        specs.append({**common, "sym": f"adj1_{p}_{n}", "kind": f"adj1_{n}", "name": f"adj1_{n}",
-                      "mode": "adj", "ins": adj_ins, "outs": adj_outs,
-                      "blocks": blocks, "seed": nin + nout})
-        if n == "step_rodas4" or not hessians:
-            continue        # no second derivatives: CasADi says it cannot differentiate adj1_
-        # second derivatives: the Jacobians of jac_, fwd1_ and adj1_ (their
-        # outputs w.r.t. their inputs; CasADi's names), from the tensor
-        # T[a][b][c] = d2 out_a / dv_b dv_c or, for adj1_, the Hessian of
-        # adj^T out
-        blk = {i: (off, k) for i, off, k in blocks}
-        fill, outs2 = [], []
-        for (oname, _), (i, oo, on) in zip(jac_outs, blocks):
-            for a, sp_, _ in nom:
-                j = [x[0] for x in nom].index(a)
-                if j in blk:
-                    fill.append(("T", oo, on, *blk[j]))
-                    outs2.append((f"jac_{oname}_{a}", _dense(nrow * on, blk[j][1])))
-                else:
-                    fill.append(("zero",))
-                    outs2.append((f"jac_{oname}_{a}", _zero(nrow * on, sp_[1])))
-        specs.append({**common, "sym": f"jac_jac_{p}_{n}", "kind": f"jac_jac_{n}",
-                      "name": f"jac_jac_{n}", "mode": "jj", "blocks": blocks,
-                      "ins": nom + [(f"out_{a}", sp_, 0) for a, sp_ in jac_outs],
-                      "outs": outs2, "fill": fill})
-        fill, outs2 = [], []
-        for j, (a, sp_, _) in enumerate(fwd_ins):
-            nm = f"jac_fwd_{yname}_{a}"
-            if j < nin:
-                fill.append(("Tv", *blk[j]))
-                outs2.append((nm, _dense(nrow, blk[j][1])))
-            elif j >= nin + nout:
-                fill.append(("J", *blk[j - nin - nout]))
-                outs2.append((nm, _dense(nrow, blk[j - nin - nout][1])))
-            else:
-                fill.append(("zero",))
-                outs2.append((nm, _zero(nrow, sp_[0])))
-        specs.append({**common, "sym": f"jac_fwd1_{p}_{n}", "kind": f"jac_fwd1_{n}",
-                      "name": f"jac_fwd1_{n}", "mode": "jf", "blocks": blocks,
-                      "ins": fwd_ins + [(f"out_{a}", sp_, 0) for a, sp_ in fwd_outs],
-                      "outs": outs2, "fill": fill, "seeds": [(nin + nout + i, off, k)
-                                                              for i, off, k in blocks]})
-        fill, outs2 = [], []
-        for i, (ai, _, _) in enumerate(ins):
-            for j, (a, sp_, _) in enumerate(adj_ins):
-                nm = f"jac_adj_{ai}_{a}"
-                if j < nin:
-                    fill.append(("H", *blk[i], *blk[j]))
-                    outs2.append((nm, _dense(blk[i][1], blk[j][1])))
-                elif j == nin + nout:
-                    fill.append(("JT", *blk[i]))
-                    outs2.append((nm, _dense(blk[i][1], nrow)))
-                else:
-                    fill.append(("zero",))
-                    outs2.append((nm, _zero(blk[i][1], sp_[0])))
-        specs.append({**common, "sym": f"jac_adj1_{p}_{n}", "kind": f"jac_adj1_{n}",
-                      "name": f"jac_adj1_{n}", "mode": "ja", "blocks": blocks,
-                      "ins": adj_ins + [(f"out_{a}", sp_, 0) for a, sp_ in adj_outs],
-                      "outs": outs2, "fill": fill, "seed": nin + nout})
+    for base in _bases(m, rodas4):
+        first = _first(m.name, base)
+        if base[0] == "step" and (m.mc or m.mv):
+            specs.append(first[0])  # the projection has no derivative kernels
+            continue
+        specs += first
+        if hessians and base[0] != "step_rodas4":
+            specs += _second(m.name, base, first)
     return specs
 
 
@@ -223,11 +178,15 @@ def derivative_kernels(model, hessians=True, rhs_hessian=None):
     """The CasADi library's derivative kernels (gen.plan.ir.Kernel, named
     cs_*), from the model's expressions alone:
 
-    cs_w0(q, u, r, p, t) -> Rw, R0        Rw = dR/dw, R0 = R(z, 0)
-    cs_wz(q, u, r, p, t, ws) -> Rz        dR/dz at w = ws
-    cs_wh(q, u, r, p, t, ws, mu) -> H, W  d2(mu^T R)/dz2, d(Rw^T mu)/dz
-    cs_y1(z) -> J, cs_yh(z, mu) -> H      the outputs (models with outputs)
-    cs_c1(z) -> J, cs_ch(z, mu) -> H      [f_c; A u + b] (constrained models)
+    cs_w0(z) -> Rw, R0                Rw = dR/dw, R0 = R(z, 0)
+    cs_wz(z, ws) -> Rz                dR/dz at w = ws
+    cs_wh(z, ws, mu) -> H, W          d2(mu^T R)/dz2, d(Rw^T mu)/dz
+    cs_y1(z) -> J, cs_yh(z, mu) -> H  the outputs (models with outputs)
+    cs_c1(z) -> J, cs_ch(z, mu) -> H  [f_c; A u + b] (constrained models)
+
+each over one array z = (q, u, r, p, t): the kernels of the runtime's
+gen_rt_deriv_model and gen_rt_cs_model (csrc/derivatives), which compute
+every derivative from them.
 
     hessians=False leaves out the second-derivative kernels (cs_wh, cs_yh,
     cs_ch: the costly ones); rhs_hessian (default: hessians) keeps cs_wh,
@@ -245,8 +204,7 @@ def derivative_kernels(model, hessians=True, rhs_hessian=None):
     Lam = [sm.Dummy(f"lam{i}") for i in range(m.mv)]
     w = Qd + Ud + Lam
     mu = [sm.Dummy(f"mu{i}") for i in range(len(w))]
-    zargs = [Arg("q", tuple(m.q)), Arg("u", tuple(m.u)), Arg("r", tuple(m.r)),
-             Arg("p", tuple(m.p)), Arg("t", (m.t,), scalar=True)]
+    zargs = [Arg("z", tuple(z))]
     Aw, Amu = Arg("ws", tuple(w)), Arg("mu", tuple(mu))
     R = m.Kqd * sm.Matrix(Qd) + m.Ku * U + m.kf
     R = R.col_join(m.M * sm.Matrix(Ud) - m.f - (m.A.T * sm.Matrix(Lam) if m.mv else 0 * U))
@@ -305,3 +263,39 @@ def kernel_context(model, printer_for, hessians=True, rhs_hessian=None):
                     "outputs": [o.name for o in k.outputs], "n_assign": len(k.assignments),
                     "body": print_kernel_body(k, printer_for(smap))})
     return out
+
+
+def library_context(model, printer_for, hessians=True, rodas4=True):
+    """What templates/casadi needs beyond the C model's context: the
+    functions (function_specs), the derivative kernels (kernel_context) and
+    the model as the runtime's gen_rt_cs_model (its sizes, whether f holds
+    t, and the C names of its kernels and of its API functions, "0" for
+    none)."""
+    m = model
+    rodas4_here = rodas4 and not (m.mc or m.mv)
+    kernels = kernel_context(m, printer_for, hessians, hessians or rodas4_here)
+    have = {k["name"] for k in kernels}
+    ny = len(m.output_names)
+
+    def name(c, there=True):
+        return f"{m.name}_{c}" if there else "0"
+    return {
+        "cs_functions": function_specs(m, hessians, rodas4),
+        "cs_kernels": kernels,
+        "cs": {"ny": ny, "nz": m.nx + m.nr + m.np + 1, "nw": m.nx + m.mv,
+               "t_dep": int(_holds_t(m)),
+               "kernels": [name(k, k in have) for k in ("cs_w0", "cs_wz", "cs_wh", "cs_y1",
+                                                         "cs_c1", "cs_yh", "cs_ch")],
+               "api": [name("eval_rhs"), name("step_rk4"), name("jacobian"),
+                       name("eval_outputs", ny), name("eval_constraints", m.mc),
+                       name("eval_velocity_constraints", m.mv)]},
+    }
+
+
+def cdef(specs):
+    """The cffi cdef of functions of a library (function_specs entries):
+    their declarations as <name>_casadi.h has them (the same macro,
+    templates/casadi/casadi_decl.j2), with casadi_real = double and
+    casadi_int = long long."""
+    from .render import template_env
+    return template_env().get_template("casadi/casadi.cdef.j2").render(cs_functions=specs)

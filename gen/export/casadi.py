@@ -23,10 +23,11 @@ the model's, ``<model>_rhs``; the dict's keys are the short names):
 The derivatives, found by CasADi by name in the same library: jac_<f>,
 fwd1_<f>, adj1_<f> (every input: x, xdot, r, p, t, h) and their Jacobians
 jac_jac_<f>, jac_fwd1_<f>, jac_adj1_<f> (the second derivatives CasADi
-forms exact Hessians from), computed by kernels generated from the model's
-expressions (gen/codegen/casadi_kernels.py derivative_kernels: the second-order
-adjoint of the equations x' solves; RK4 differentiated stage by stage for
-step). step of a constrained model has no derivatives (its projection has
+forms exact Hessians from), computed by the runtime
+(csrc/derivatives/gen_rt_deriv.c: the second-order adjoint of the
+equations x' solves; the runtime's RK4 differentiated stage by stage for
+step, its RODAS4 step for step_rodas4) over kernels generated from the
+model's expressions (gen/codegen/casadi_kernels.py derivative_kernels). step of a constrained model has no derivatives (its projection has
 none). The externals are loaded with enable_forward=False: forward products
 through jac_<f> (one Jacobian, not one per seed column). functions(model,
 hessians=False) loads a library without the second derivatives (and
@@ -42,26 +43,20 @@ CasADi says only "Evaluation failed".
 """
 from __future__ import annotations
 
-import importlib
+import threading
 
 from ..codegen.backends import get_backend
-from ..toolchain.build import build
+from ..codegen.casadi_kernels import NAMES, STEP_METHODS, cdef, function_specs
 from ..core.errors import MissingDependencyError, ModelError
-from ..plan.ir import plan as make_plan
+from ..core.optional import require
 from ..intake.model import require_model
-from ..codegen.render import render
+from ..pipeline import build_product
 
 __all__ = ["functions", "library", "function_specs", "NAMES", "GenFunction"]
 
-from ..codegen.casadi_kernels import NAMES, STEP_METHODS, function_specs  # noqa: E402,F401
 
 def _casadi():
-    try:
-        return importlib.import_module("casadi")
-    except ImportError:
-        raise MissingDependencyError(
-            "gen.casadi needs CasADi, which is not installed: pip install eomgen[casadi] "
-            "(or pip install casadi)") from None
+    return require("casadi", "gen.casadi")
 
 
 def library(model, verbose=False, hessians=True, step="rk4"):
@@ -72,40 +67,39 @@ def library(model, verbose=False, hessians=True, step="rk4"):
     both steps and the second derivatives. With ``hessians=False`` it holds
     first derivatives only, and the RODAS4 step only when ``step="rodas4"``
     (its first derivatives need the rhs Hessian kernel, which RK4's do not):
-    no second-derivative kernels to generate."""
+    no second-derivative kernels to generate. A second call in the same
+    process returns the path without generating again
+    (gen.pipeline.build_product)."""
     require_model(model, "gen.casadi")
     hessians = bool(hessians)
     rodas4 = hessians or step == "rodas4"
-    key = (model.fingerprint(), hessians, rodas4)
-    path = _LIBRARIES.get(key)
-    if path is not None and path.exists():
-        return path        # this process built it (rendering the Hessian kernels is the cost)
     b = get_backend("casadi").variant(hessians=hessians, rodas4=rodas4)
-    plan = make_plan(model, lin=b.lin, derivatives=True)
-    rendered = render(plan, real="double", backend=b, project=False)
-    path = _LIBRARIES[key] = build(rendered, verbose=verbose).path
-    return path
+    return build_product(model, b, key=(hessians, rodas4), verbose=verbose)
 
 
-#: model fingerprint -> library path, for this process
-_LIBRARIES = {}
+# the class of functions()' values, made once casadi is imported
+_lock = threading.Lock()
+_classes = {}
 
 
 def _checked_class(ca):
-    """casadi.Function with a clear error for a failing numeric call (the
-    class is made once casadi is imported)."""
-    global _CHECKED
-    if _CHECKED is not None:
-        return _CHECKED
+    """casadi.Function with a clear error for a failing numeric call."""
+    with _lock:
+        cls = _classes.get("GenFunction")
+        if cls is None:
+            cls = _classes["GenFunction"] = _make_class(ca)
+        return cls
 
+
+def _make_class(ca):
     class GenFunction(ca.Function):
         """A casadi.Function of the model's library: everything CasADi's
         has; a numeric call that fails (CasADi says only "Evaluation
         failed") raises a gen error that names the input or the status."""
 
-        def __init__(self, f, path, model):
+        def __init__(self, f, path, model, spec):
             ca.Function.__init__(self, f)
-            self._gen = (path, model)
+            self._gen = (path, model, spec)
 
         def __call__(self, *args, **kwargs):
             try:
@@ -130,11 +124,7 @@ def _checked_class(ca):
                 raise
 
     GenFunction.__module__, GenFunction.__qualname__ = __name__, "GenFunction"
-    _CHECKED = GenFunction
     return GenFunction
-
-
-_CHECKED = None
 
 
 def __getattr__(name):
@@ -150,35 +140,29 @@ def __getattr__(name):
 _OPTIONS = {"enable_forward": False}
 
 
-def _explain(F, args, kwargs, err):
-    """Raise the gen error of a failed numeric call of F: a missing r, p or
-    h; a NaN or infinite input entry; or the library's status (its name and
-    message, from the same C function called again through ctypes)."""
-    import ctypes
-
+def _arrays(F, args, kwargs):
+    """[(name, nonzeros, values or None)] of a call's inputs by name; None
+    for symbolic or odd arguments."""
     import numpy as np
-
-    from ..core.status import EXCEPTIONS, status_message, status_name
-    from ..core.errors import InputError, SolverError
-    path, model = F._gen
     names = F.name_in()
     try:
-        vals = {}
-        for i, a in enumerate(args):
-            vals[names[i]] = a
+        vals = dict(zip(names, args))
         vals.update(kwargs)
-        arrays = []
-        for i, n in enumerate(names):
-            k = F.nnz_in(i)
-            if n in vals:
-                v = np.asarray(np.asarray(vals[n], dtype=float).ravel(order="F"), dtype=float)
-            else:
-                v = None
-            arrays.append((n, k, v))
+        return [(n, F.nnz_in(i), np.asarray(np.asarray(vals[n], dtype=float).ravel(order="F"),
+                                            dtype=float) if n in vals else None)
+                for i, n in enumerate(names)]
     except (TypeError, ValueError):
-        return                      # symbolic or odd arguments: CasADi's error stands
+        return None
+
+
+def _input_error(F, model, arrays, err):
+    """Raise InputError for a missing r, p or h, a NaN or infinite input
+    entry, or h = 0 in a RODAS4 step."""
+    import numpy as np
+
+    from ..core.errors import InputError
     fname = F.name()
-    sig = f"{fname}({', '.join(names)})"
+    sig = f"{fname}({', '.join(F.name_in())})"
     for n, k, v in arrays:
         if v is None and k and n in ("r", "p", "h"):
             what = {"r": f"the model's inputs {list(model.input_names)}",
@@ -193,31 +177,55 @@ def _explain(F, args, kwargs, err):
                 and v[0] == 0:
             raise InputError(f"{sig}: h = 0: a RODAS4 step needs a nonzero step size "
                              f"(its stages divide by h)") from err
-    # the status of the library's function at these inputs
-    lib = ctypes.CDLL(str(path))
-    dp = ctypes.POINTER(ctypes.c_double)
-    fn = getattr(lib, F.name())
-    fn.restype = ctypes.c_int
-    fn.argtypes = [ctypes.POINTER(dp), ctypes.POINTER(dp), ctypes.POINTER(ctypes.c_longlong), dp,
-                   ctypes.c_int]
-    work = getattr(lib, F.name() + "_work")
-    sz = [ctypes.c_longlong() for _ in range(4)]
-    work(*[ctypes.byref(s) for s in sz])
-    keep = [np.ascontiguousarray(v if v is not None else np.zeros(k)) for _, k, v in arrays]
+
+
+def _library_status(F, keep):
+    """The status of the library's function at the inputs keep (arrays),
+    called again through gen.toolchain.host.open_library with the cdef of
+    its declarations (rendered from its spec, as its header is)."""
+    import numpy as np
+
+    from ..toolchain.host import open_library
+    path, _, spec = F._gen
+    ffi, lib = open_library(path, cdef([spec]))
+    sz = ffi.new("long long[4]")
+    getattr(lib, spec["sym"] + "_work")(sz, sz + 1, sz + 2, sz + 3)
     outs = [np.zeros(max(1, F.nnz_out(i))) for i in range(F.n_out())]
-    arg = (dp * max(1, sz[0].value))(*[a.ctypes.data_as(dp) for a in keep])
-    res = (dp * max(1, sz[1].value))(*[o.ctypes.data_as(dp) for o in outs])
-    w = np.zeros(max(1, sz[3].value))
-    iw = (ctypes.c_longlong * max(1, sz[2].value))()
-    st = fn(arg, res, iw, w.ctypes.data_as(dp), 0)
+    arg = ffi.new("double *[]", max(1, sz[0]))
+    res = ffi.new("double *[]", max(1, sz[1]))
+    for i, a in enumerate(keep):
+        arg[i] = ffi.cast("double *", a.ctypes.data)
+    for i, o in enumerate(outs):
+        res[i] = ffi.cast("double *", o.ctypes.data)
+    w = ffi.new("double[]", max(1, sz[3]))
+    iw = ffi.new("long long[]", max(1, sz[2]))
+    return getattr(lib, spec["sym"])(arg, res, iw, w, 0)
+
+
+def _explain(F, args, kwargs, err):
+    """Raise the gen error of a failed numeric call of F: a missing r, p or
+    h; a NaN or infinite input entry; or the library's status (its name and
+    message, from the same C function called again)."""
+    import numpy as np
+
+    from ..core.errors import SolverError
+    from ..core.status import EXCEPTIONS, status_message, status_name
+    path, model, _ = F._gen
+    arrays = _arrays(F, args, kwargs)
+    if arrays is None:
+        return                      # symbolic or odd arguments: CasADi's error stands
+    _input_error(F, model, arrays, err)
+    keep = [np.ascontiguousarray(v if v is not None else np.zeros(k)) for _, k, v in arrays]
+    st = _library_status(F, keep)
     if st == 0:
         return
     name = status_name(st)
-    state = dict(zip(names, keep))
+    names = F.name_in()
     at = ", ".join(f"{n} = {np.array2string(v, precision=6, separator=', ')}" if v.size > 1
-                   else f"{n} = {float(v[0]):g}" for n, v in state.items() if n in ("x", "t", "h"))
+                   else f"{n} = {float(v[0]):g}" for n, v in zip(names, keep)
+                   if n in ("x", "t", "h"))
     cls = EXCEPTIONS.get(name, SolverError)
-    msg = f"{sig} failed with {name}: {status_message(st)} (at {at})"
+    msg = f"{F.name()}({', '.join(names)}) failed with {name}: {status_message(st)} (at {at})"
     try:
         exc = cls(msg, status=st, status_name=name)
     except TypeError:           # an error class without a status (InputError)
@@ -298,7 +306,7 @@ def functions(model, verbose=False, step="rk4", hessians=True):
         if s["kind"] == "step" and want != "step":
             continue
         key = "step" if s["kind"] == want else s["name"]
-        out[key] = _checked_class(ca)(ca.external(s["sym"], path, _OPTIONS), path, model)
+        out[key] = _checked_class(ca)(ca.external(s["sym"], path, _OPTIONS), path, model, s)
     out = {k: out[k] for k in NAMES if k in out}
     if not out:
         raise ModelError(f"model {model.name!r} gave no CasADi functions")
