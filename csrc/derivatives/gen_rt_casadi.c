@@ -43,8 +43,7 @@ static gen_rt_real *cs_read(const gen_rt_cs_model *m, const gen_rt_cs_fn *f,
     c->nin = f->nin;
     c->nrow = cs_rows(m, f->base);
     c->x = work; c->xd = c->x + nx; c->r = c->xd + nx; c->p = c->r + nr; c->z = c->p + np;
-    cs_in(0, nx, c->xd);
-    cs_in(0, nr, c->r);
+    if (f->base == GEN_RT_CS_CONSTRAINTS) cs_in(0, nr, c->r);
     c->t = c->h = 0;
     for (k = 0; k <= GEN_RT_CS_H; ++k) c->off[k] = -1;
     c->nv = 0;
@@ -62,19 +61,19 @@ static gen_rt_real *cs_read(const gen_rt_cs_model *m, const gen_rt_cs_fn *f,
         else if (what == GEN_RT_CS_T) c->t = arg[k] ? arg[k][0] : 0;
         else c->h = arg[k] ? arg[k][0] : 0;
     }
-    /* z = (x, r, p, t) and where its columns go among v */
+    /* z = (x, r, p, t) and, for a derivative, where its columns go among v */
     for (j = 0; j < nx; ++j) c->z[j] = c->x[j];
     for (j = 0; j < nr; ++j) c->z[nx + j] = c->r[j];
     for (j = 0; j < np; ++j) c->z[nx + nr + j] = c->p[j];
     c->z[c->nz - 1] = c->t;
-    for (j = 0; j < c->nz; ++j) {
+    c->cm = cm;
+    for (j = 0; f->mode != GEN_RT_CS_VALUE && j < c->nz; ++j) {
         const int what = j < nx ? GEN_RT_CS_X : j < nx + nr ? GEN_RT_CS_R
                          : j < nx + nr + np ? GEN_RT_CS_P : GEN_RT_CS_T;
         const int first = what == GEN_RT_CS_X ? 0 : what == GEN_RT_CS_R ? nx
                           : what == GEN_RT_CS_P ? nx + nr : c->nz - 1;
         cm[j] = c->off[what] < 0 ? -1 : c->off[what] + j - first;
     }
-    c->cm = cm;
     return c->z + c->nz;
 }
 

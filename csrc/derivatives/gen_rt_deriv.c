@@ -49,14 +49,20 @@ int gen_rt_deriv_hessian(const gen_rt_deriv_model *m, const gen_rt_real *z,
     for (k = 0; k < nw; ++k) mu[k] = lam[k];
     if ((st = gen_rt_lu_solve_t(nw, lu, piv, 1, mu))) return st;
     m->rh(z, w, mu, Hz, Wz);
-    /* the upper triangle, mirrored */
+    /* the upper triangle, summed over k in H's rows (contiguous: the inner
+     * loops vectorize; each entry's sum in the order of k), then mirrored */
     for (a = 0; a < nz; ++a)
-        for (b = a; b < nz; ++b) {
-            gen_rt_real s = GEN_RT_C(0.5) * (Hz[a * nz + b] + Hz[b * nz + a]);
-            for (k = 0; k < nw; ++k)
-                s += Wz[k * nz + a] * Jw[k * nz + b] + Jw[k * nz + a] * Wz[k * nz + b];
-            H[a * nz + b] = H[b * nz + a] = -s;
+        for (b = a; b < nz; ++b) H[a * nz + b] = GEN_RT_C(0.5) * (Hz[a * nz + b] + Hz[b * nz + a]);
+    for (k = 0; k < nw; ++k) {
+        const gen_rt_real *Wk = Wz + k * nz, *Jk = Jw + k * nz;
+        for (a = 0; a < nz; ++a) {
+            const gen_rt_real wa = Wk[a], ja = Jk[a];
+            gen_rt_real *Ha = H + a * nz;
+            for (b = a; b < nz; ++b) Ha[b] += wa * Jk[b] + ja * Wk[b];
         }
+    }
+    for (a = 0; a < nz; ++a)
+        for (b = a; b < nz; ++b) H[b * nz + a] = H[a * nz + b] = -H[a * nz + b];
     return GEN_RT_OK;
 }
 
@@ -66,7 +72,7 @@ int gen_rt_deriv_hessian(const gen_rt_deriv_model *m, const gen_rt_real *z,
  * Z^T B, mirrored. nx of the nz rows of Z are dense, so this costs
  * nx (nz nv + nv^2 / 2) instead of nz nv (nz + nv) */
 static void zhz(int nx, int nz, const gen_rt_real *Hz, const gen_rt_real *X, gen_rt_real c,
-                gen_rt_real *out, gen_rt_real *B)
+                gen_rt_real *out, gen_rt_real *B, gen_rt_real *V)
 {
     const int nv = nz + 1;
     int a, b, al;
@@ -80,19 +86,29 @@ static void zhz(int nx, int nz, const gen_rt_real *Hz, const gen_rt_real *X, gen
             for (b = 0; b < nv; ++b) Ba[b] += hb * Xa[b];
         }
     }
+    /* V = the upper triangle of Z^T B (each entry summed in the order of al,
+     * row by row: the inner loops vectorize), then added to out, mirrored */
+    for (a = 0; a < nv; ++a)
+        for (b = a; b < nv; ++b) V[a * nv + b] = a < nz ? B[a * nv + b] : c * B[(nz - 1) * nv + b];
+    for (al = 0; al < nx; ++al) {
+        const gen_rt_real *Xl = X + al * nv, *Bl = B + al * nv;
+        for (a = 0; a < nv; ++a) {
+            const gen_rt_real xa = Xl[a];
+            gen_rt_real *Va = V + a * nv;
+            for (b = a; b < nv; ++b) Va[b] += xa * Bl[b];
+        }
+    }
     for (a = 0; a < nv; ++a)
         for (b = a; b < nv; ++b) {
-            gen_rt_real v = a < nz ? B[a * nv + b] : c * B[(nz - 1) * nv + b];
-            for (al = 0; al < nx; ++al) v += X[al * nv + a] * B[al * nv + b];
-            out[a * nv + b] += v;
-            if (b != a) out[b * nv + a] += v;
+            out[a * nv + b] += V[a * nv + b];
+            if (b != a) out[b * nv + a] += V[a * nv + b];
         }
 }
 
 /* the RK4 step's scratch (gen_rt_deriv_rk4), carved from its work */
 typedef struct {
     gen_rt_real *w, *lu, *Jw, *sw, *lw, *Hz, *hw, *K, *S, *ak, *g, *zk;
-    gen_rt_real *Dp, *Dk, *DA, *DM, *X, *G, *ZH, *Ep, *Ek, *EA, *EM, *St;
+    gen_rt_real *Dp, *Dk, *DA, *DM, *X, *G, *ZH, *V, *Ep, *Ek, *EA, *EM, *St;
 } rk4_work;
 
 static rk4_work rk4_carve(int nx, int nz, int nw, gen_rt_real *work)
@@ -107,7 +123,7 @@ static rk4_work rk4_carve(int nx, int nz, int nw, gen_rt_real *work)
     r.zk = take(&w, nz);
     r.Dp = take(&w, nx * nv); r.Dk = take(&w, nx * nv); r.DA = take(&w, nx * nv);
     r.DM = take(&w, nx * nv); r.X = take(&w, nx * nv); r.G = take(&w, nx * nv);
-    r.ZH = take(&w, nz * nv);
+    r.ZH = take(&w, nz * nv); r.V = take(&w, nv * nv);
     r.Ep = take(&w, nx * nv * nv); r.Ek = take(&w, nx * nv * nv); r.EA = take(&w, nx * nv * nv);
     r.EM = take(&w, nx * nv * nv);
     r.St = take(&w, 4 * (nz + P + 2 * nx * nv));
@@ -132,19 +148,21 @@ static int rk4_stage_second(const gen_rt_deriv_model *m, const rk4_work *r, cons
 {
     const int nx = m->nx, nz = m->nz, nw = m->nw, nv = nz + 1;
     int i, a, al, k, st;
-    for (i = 0; i < nx; ++i)
-        for (a = 0; a < nv; ++a) {
-            gen_rt_real g = 0;
-            for (al = 0; al < nx; ++al) g += r->Jw[i * nz + al] * r->Dp[al * nv + a];
-            r->G[i * nv + a] = g;
+    for (i = 0; i < nx; ++i) {
+        gen_rt_real *Gi = r->G + i * nv;
+        for (a = 0; a < nv; ++a) Gi[a] = 0;
+        for (al = 0; al < nx; ++al) {
+            const gen_rt_real j_ = r->Jw[i * nz + al], *Da = r->Dp + al * nv;
+            for (a = 0; a < nv; ++a) Gi[a] += j_ * Da[a];
         }
+    }
     for (i = 0; i < nx; ++i) {
         gen_rt_real *E = r->Ek + i * nv * nv;
         for (k = 0; k < nw; ++k) r->lw[k] = k == i;
         st = gen_rt_deriv_hessian(m, r->zk, r->w, r->lu, piv, r->Jw, r->lw, r->hw, r->Hz);
         if (st) return st;
         for (a = 0; a < nv * nv; ++a) E[a] = 0;
-        zhz(nx, nz, r->Hz, r->X, c, E, r->ZH);
+        zhz(nx, nz, r->Hz, r->X, c, E, r->ZH, r->V);
         for (al = 0; al < nx; ++al) {
             const gen_rt_real j_ = c * h * r->Jw[i * nz + al], *Ea = r->Ep + al * nv * nv;
             for (a = 0; a < nv * nv; ++a) E[a] += j_ * Ea[a];
@@ -179,7 +197,7 @@ static int rk4_adjoint(const gen_rt_deriv_model *m, const rk4_work *r, const int
         for (i = 0; i < nw; ++i) r->lw[i] = i < nx ? wt * lam[i] + cn * r->g[i] : 0;
         st = gen_rt_deriv_hessian(m, zs, ws, lus, spiv + s * nw, Jws, r->lw, r->hw, r->Hz);
         if (st) return st;
-        zhz(nx, nz, r->Hz, Xs, cs[s], Hl, r->ZH);
+        zhz(nx, nz, r->Hz, Xs, cs[s], Hl, r->ZH, r->V);
         for (i = 0; i < nx; ++i) {
             gen_rt_real v = 0;
             for (k = 0; k < nx; ++k) v += Jws[k * nz + i] * r->lw[k];
@@ -392,15 +410,21 @@ int gen_rt_deriv_rodas4(const gen_rt_deriv_model *m, const gen_rt_real *z, gen_r
         for (i = 0; i < nx; ++i) {
             const gen_rt_real *Hi = Hr + i * nz * nz;
             gen_rt_real eh = ga_[s] * J0[i * nz + nz - 1] + Ks[i] * ih * hg;
-            for (c = 0; c < nv; ++c) {
-                gen_rt_real v = 0;
-                for (a = 0; a < nz; ++a) v += Js[i * nz + a] * Zt[a * nv + c];
-                for (j = 0; j < s; ++j) v += ih * C_[s][j] * dK[(j * nx + i) * nv + c];
-                if (c < nz) {
-                    v += h * ga_[s] * Hi[(nz - 1) * nz + c];
-                    for (a = 0; a < nx; ++a) v += Hi[a * nz + c] * Ks[a];
-                }
-                B[i * nv + c] = v;
+            gen_rt_real *Bi = B + i * nv;
+            /* each entry summed in the order of the terms, row by row */
+            for (c = 0; c < nv; ++c) Bi[c] = 0;
+            for (a = 0; a < nz; ++a) {
+                const gen_rt_real ja = Js[i * nz + a], *Za = Zt + a * nv;
+                for (c = 0; c < nv; ++c) Bi[c] += ja * Za[c];
+            }
+            for (j = 0; j < s; ++j) {
+                const gen_rt_real cj = ih * C_[s][j], *dKj = dK + (j * nx + i) * nv;
+                for (c = 0; c < nv; ++c) Bi[c] += cj * dKj[c];
+            }
+            for (c = 0; c < nz; ++c) Bi[c] += h * ga_[s] * Hi[(nz - 1) * nz + c];
+            for (a = 0; a < nx; ++a) {
+                const gen_rt_real ka = Ks[a], *Ha = Hi + a * nz;
+                for (c = 0; c < nz; ++c) Bi[c] += Ha[c] * ka;
             }
             for (j = 0; j < s; ++j) eh -= ih * ih * C_[s][j] * K[j * nx + i];
             B[i * nv + nv - 1] += eh;

@@ -88,7 +88,8 @@ int gen_rt_deriv_hessian(const gen_rt_deriv_model *m, const gen_rt_real *z,
 #define GEN_RT_DERIV_RK4_WORK(nx, nz, nw)                                        \
     (GEN_RT_DERIV_POINT_(nz, nw) + GEN_RT_DERIV_SOLVE_WORK(nw) + (nw) + (nz) * (nz) + \
      GEN_RT_DERIV_HESSIAN_WORK(nz, nw) + 8 * (nx) + (nz) +                        \
-     6 * (nx) * ((nz) + 1) + (nz) * ((nz) + 1) + 4 * (nx) * ((nz) + 1) * ((nz) + 1) + \
+     6 * (nx) * ((nz) + 1) + ((nz) + 1) * (2 * (nz) + 1) +                        \
+     4 * (nx) * ((nz) + 1) * ((nz) + 1) +                                         \
      4 * ((nz) + GEN_RT_DERIV_POINT_(nz, nw) + 2 * (nx) * ((nz) + 1)))
 #define GEN_RT_DERIV_RK4_IWORK(nw) (5 * (nw))
 int gen_rt_deriv_rk4(const gen_rt_deriv_model *m, const gen_rt_real *z, gen_rt_real h,
