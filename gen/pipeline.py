@@ -10,6 +10,8 @@ without its derivative kernels when its backend can add them later
 (Backend.lazy_derivatives): the Simulator gets derive(), which plans and
 renders them (derivatives_source), builds the complete library
 (gen.toolchain.build.build_derivatives) and loads it, on first use.
+build_product() runs plan -> render -> build for a product's library that
+is not a Simulator (gen.casadi's), its path kept for the process.
 """
 from __future__ import annotations
 

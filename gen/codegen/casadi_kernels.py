@@ -122,12 +122,13 @@ def _second(p, base, first):
     outs_jf = [block(f"jac_fwd_{yname}_{a[0]}", nrow, j, a) for j, a in enumerate(fwd["ins"])]
     outs_ja = [block(f"jac_adj_{ai}_{a[0]}", k, j, a)
                for ai, k, _ in ins for j, a in enumerate(adj["ins"])]
-    return [_spec(p, base, "jac_jac_", jac["ins"] + [(f"out_{a}", sp_, 0) for a, sp_ in jac["outs"]],
-                  outs_jj),
-            _spec(p, base, "jac_fwd1_", fwd["ins"] + [(f"out_{a}", sp_, 0) for a, sp_ in fwd["outs"]],
-                  outs_jf),
-            _spec(p, base, "jac_adj1_", adj["ins"] + [(f"out_{a}", sp_, 0) for a, sp_ in adj["outs"]],
-                  outs_ja)]
+
+    def ins2(f):
+        """f's inputs, then its outputs as inputs (out_<name>)."""
+        return f["ins"] + [(f"out_{a}", sp_, 0) for a, sp_ in f["outs"]]
+    return [_spec(p, base, "jac_jac_", ins2(jac), outs_jj),
+            _spec(p, base, "jac_fwd1_", ins2(fwd), outs_jf),
+            _spec(p, base, "jac_adj1_", ins2(adj), outs_ja)]
 
 
 def function_specs(model, hessians=True, rodas4=True):

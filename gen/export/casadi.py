@@ -27,8 +27,9 @@ forms exact Hessians from), computed by the runtime
 (csrc/derivatives/gen_rt_deriv.c: the second-order adjoint of the
 equations x' solves; the runtime's RK4 differentiated stage by stage for
 step, its RODAS4 step for step_rodas4) over kernels generated from the
-model's expressions (gen/codegen/casadi_kernels.py derivative_kernels). step of a constrained model has no derivatives (its projection has
-none). The externals are loaded with enable_forward=False: forward products
+model's expressions (gen/codegen/casadi_kernels.py derivative_kernels).
+step of a constrained model has no derivatives (its projection has none).
+The externals are loaded with enable_forward=False: forward products
 through jac_<f> (one Jacobian, not one per seed column). functions(model,
 hessians=False) loads a library without the second derivatives (and
 without generating their kernels, the costly part of a large model's
