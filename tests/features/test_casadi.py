@@ -902,3 +902,24 @@ def test_hessians_false_first_derivatives_only(forced_model):
     for bad in ("no", None, 1):
         with pytest.raises(ValueError, match=r"hessians must be True"):
             gc.functions(model, hessians=bad)
+
+
+def test_library_path_kept_for_the_process(cart_model, monkeypatch):
+    """library(): a second call returns the path without planning or
+    rendering again (gen.pipeline.build_product's memo), from threads too;
+    the memo holds at most MEMO_SIZE libraries, and a dropped one is
+    rendered again to the same path (the cache is keyed by content)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    import gen.pipeline as pl
+    first = gc.library(cart_model)
+    calls = []
+    real = pl.render
+    monkeypatch.setattr(pl, "render", lambda *a, **k: calls.append(1) or real(*a, **k))
+    with ThreadPoolExecutor(2) as ex:
+        assert list(ex.map(lambda _: gc.library(cart_model), range(4))) == [first] * 4
+    assert calls == []
+    monkeypatch.setattr(pl, "MEMO_SIZE", 1)
+    other = gc.library(cart_model, hessians=False)      # another library: drops the oldest
+    assert other != first and calls == [1] and len(pl._built) == 1
+    assert gc.library(cart_model) == first and calls == [1, 1]
