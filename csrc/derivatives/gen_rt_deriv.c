@@ -2,20 +2,13 @@
  * of one RK4 and one RODAS4 step (gen_rt_deriv.h). */
 #include "gen_rt.h"
 #include "gen_rt_deriv.h"
+#include "gen_rt_private.h"
 #include "gen_rt_rodas4.h"
 
 /* RODAS4 coefficients (the tableau of gen_rt_rodas4.h) */
 #define RD_COEF_(name, value) static const gen_rt_real RD_##name = GEN_RT_C(value);
 GEN_RT_RODAS4_TABLEAU(RD_COEF_)
 #undef RD_COEF_
-
-/* the next n reals of a work array (the one helper of this file) */
-static gen_rt_real *take(gen_rt_real **w, int n)
-{
-    gen_rt_real *p = *w;
-    *w += n;
-    return p;
-}
 
 int gen_rt_deriv_solve(const gen_rt_deriv_model *m, const gen_rt_real *z, gen_rt_real *work,
                        gen_rt_real *w, gen_rt_real *lu, int *piv, gen_rt_real *Jw)
@@ -116,17 +109,17 @@ static rk4_work rk4_carve(int nx, int nz, int nw, gen_rt_real *work)
     const int nv = nz + 1, P = GEN_RT_DERIV_POINT_(nz, nw);
     rk4_work r;
     gen_rt_real *w = work;
-    r.w = take(&w, nw); r.lu = take(&w, nw * nw); r.Jw = take(&w, nw * nz);
-    r.sw = take(&w, GEN_RT_DERIV_SOLVE_WORK(nw)); r.lw = take(&w, nw);
-    r.Hz = take(&w, nz * nz); r.hw = take(&w, GEN_RT_DERIV_HESSIAN_WORK(nz, nw));
-    r.K = take(&w, 5 * nx); r.S = take(&w, nx); r.ak = take(&w, nx); r.g = take(&w, nx);
-    r.zk = take(&w, nz);
-    r.Dp = take(&w, nx * nv); r.Dk = take(&w, nx * nv); r.DA = take(&w, nx * nv);
-    r.DM = take(&w, nx * nv); r.X = take(&w, nx * nv); r.G = take(&w, nx * nv);
-    r.ZH = take(&w, nz * nv); r.V = take(&w, nv * nv);
-    r.Ep = take(&w, nx * nv * nv); r.Ek = take(&w, nx * nv * nv); r.EA = take(&w, nx * nv * nv);
-    r.EM = take(&w, nx * nv * nv);
-    r.St = take(&w, 4 * (nz + P + 2 * nx * nv));
+    r.w = rt_take(&w, nw); r.lu = rt_take(&w, nw * nw); r.Jw = rt_take(&w, nw * nz);
+    r.sw = rt_take(&w, GEN_RT_DERIV_SOLVE_WORK(nw)); r.lw = rt_take(&w, nw);
+    r.Hz = rt_take(&w, nz * nz); r.hw = rt_take(&w, GEN_RT_DERIV_HESSIAN_WORK(nz, nw));
+    r.K = rt_take(&w, 5 * nx); r.S = rt_take(&w, nx); r.ak = rt_take(&w, nx); r.g = rt_take(&w, nx);
+    r.zk = rt_take(&w, nz);
+    r.Dp = rt_take(&w, nx * nv); r.Dk = rt_take(&w, nx * nv); r.DA = rt_take(&w, nx * nv);
+    r.DM = rt_take(&w, nx * nv); r.X = rt_take(&w, nx * nv); r.G = rt_take(&w, nx * nv);
+    r.ZH = rt_take(&w, nz * nv); r.V = rt_take(&w, nv * nv);
+    r.Ep = rt_take(&w, nx * nv * nv); r.Ek = rt_take(&w, nx * nv * nv); r.EA = rt_take(&w, nx * nv * nv);
+    r.EM = rt_take(&w, nx * nv * nv);
+    r.St = rt_take(&w, 4 * (nz + P + 2 * nx * nv));
     return r;
 }
 
@@ -280,12 +273,6 @@ static void rk4_stage_first(int nx, int nz, const rk4_work *r, const gen_rt_real
     }
 }
 
-static void copy_n(int n, const gen_rt_real *src, gen_rt_real *dst)
-{
-    int i;
-    for (i = 0; i < n; ++i) dst[i] = src[i];
-}
-
 int gen_rt_deriv_rk4(const gen_rt_deriv_model *m, const gen_rt_real *z, gen_rt_real h,
                      const gen_rt_real *lam, gen_rt_real *work, int *iwork, gen_rt_real *xn,
                      gen_rt_real *J, gen_rt_real *Hl, gen_rt_real *T)
@@ -311,14 +298,14 @@ int gen_rt_deriv_rk4(const gen_rt_deriv_model *m, const gen_rt_real *z, gen_rt_r
         if (adj) {
             /* the stage's data for the adjoint sweep: zeta, w, Rw's LU, dw/dz, X, D_{k-1} */
             gen_rt_real *sb = r.St + s * SB;
-            copy_n(nz, r.zk, sb);
-            copy_n(P, r.w, sb + nz);    /* w, lu, Jw: contiguous */
-            copy_n(nx * nv, r.X, sb + nz + P);
-            copy_n(nx * nv, r.Dp, sb + nz + P + nx * nv);
+            rt_copy(nz, r.zk, sb);
+            rt_copy(P, r.w, sb + nz);    /* w, lu, Jw: contiguous */
+            rt_copy(nx * nv, r.X, sb + nz + P);
+            rt_copy(nx * nv, r.Dp, sb + nz + P + nx * nv);
             for (i = 0; i < nw; ++i) spiv[s * nw + i] = piv[i];
         }
         if (second && (st = rk4_stage_second(m, &r, piv, c, h))) return st;
-        copy_n(nx, r.w, r.K + (s + 1) * nx);
+        rt_copy(nx, r.w, r.K + (s + 1) * nx);
         rk4_sum(s, nx * nv, r.Dk, r.DA, r.DM);
         tmp = r.Dp; r.Dp = r.Dk; r.Dk = tmp;
         if (second) {
@@ -357,12 +344,12 @@ int gen_rt_deriv_rodas4(const gen_rt_deriv_model *m, const gen_rt_real *z, gen_r
     const gen_rt_real b_[6] = {RD_A51, RD_A52, RD_A53, RD_A54, 1, 1};
     const int nx = m->nx, nz = m->nz, nw = m->nw, nv = nz + 1;
     gen_rt_real *wk = work;
-    gen_rt_real *w = take(&wk, nw), *lu = take(&wk, nw * nw), *Jw = take(&wk, nw * nz),
-                *sw = take(&wk, GEN_RT_DERIV_SOLVE_WORK(nw)), *lw = take(&wk, nw),
-                *hw = take(&wk, GEN_RT_DERIV_HESSIAN_WORK(nz, nw)), *f0 = take(&wk, nx),
-                *J0 = take(&wk, nx * nz), *Hr = take(&wk, nx * nz * nz), *G = take(&wk, nx * nx),
-                *K = take(&wk, 6 * nx), *dK = take(&wk, 6 * nx * nv), *Zt = take(&wk, nz * nv),
-                *B = take(&wk, nx * nv), *zk = take(&wk, nz);
+    gen_rt_real *w = rt_take(&wk, nw), *lu = rt_take(&wk, nw * nw), *Jw = rt_take(&wk, nw * nz),
+                *sw = rt_take(&wk, GEN_RT_DERIV_SOLVE_WORK(nw)), *lw = rt_take(&wk, nw),
+                *hw = rt_take(&wk, GEN_RT_DERIV_HESSIAN_WORK(nz, nw)), *f0 = rt_take(&wk, nx),
+                *J0 = rt_take(&wk, nx * nz), *Hr = rt_take(&wk, nx * nz * nz), *G = rt_take(&wk, nx * nx),
+                *K = rt_take(&wk, 6 * nx), *dK = rt_take(&wk, 6 * nx * nv), *Zt = rt_take(&wk, nz * nv),
+                *B = rt_take(&wk, nx * nv), *zk = rt_take(&wk, nz);
     int *piv = iwork, *gpiv = iwork + nw;
     gen_rt_real ih, hg;
     int i, j, k, s, a, c, st;
@@ -371,8 +358,8 @@ int gen_rt_deriv_rodas4(const gen_rt_deriv_model *m, const gen_rt_real *z, gen_r
     hg = 1 / (h * RD_GAMMA);
     /* f, Jf and the Hessians of f's rows at z */
     if ((st = gen_rt_deriv_solve(m, z, sw, w, lu, piv, Jw))) return st;
-    copy_n(nx, w, f0);
-    copy_n(nx * nz, Jw, J0);
+    rt_copy(nx, w, f0);
+    rt_copy(nx * nz, Jw, J0);
     for (i = 0; i < nx; ++i) {
         for (k = 0; k < nw; ++k) lw[k] = k == i;
         if ((st = gen_rt_deriv_hessian(m, z, w, lu, piv, Jw, lw, hw, Hr + i * nz * nz)))
@@ -430,7 +417,7 @@ int gen_rt_deriv_rodas4(const gen_rt_deriv_model *m, const gen_rt_real *z, gen_r
             B[i * nv + nv - 1] += eh;
         }
         if ((st = gen_rt_lu_solve(nx, G, gpiv, nv, B))) return st;
-        copy_n(nx * nv, B, dKs);
+        rt_copy(nx * nv, B, dKs);
     }
     for (i = 0; i < nx; ++i)
         for (c = 0; c < nv; ++c) {
