@@ -59,6 +59,7 @@
 #define gen_rt_linearize GEN_RT_NAME_(linearize)
 #define gen_rt_lu_factor GEN_RT_NAME_(lu_factor)
 #define gen_rt_lu_solve GEN_RT_NAME_(lu_solve)
+#define gen_rt_lu_solve_t GEN_RT_NAME_(lu_solve_t)
 #define gen_rt_matmul GEN_RT_NAME_(matmul)
 #define gen_rt_max_abs GEN_RT_NAME_(max_abs)
 #define gen_rt_min_norm_correct GEN_RT_NAME_(min_norm_correct)
