@@ -6,7 +6,7 @@ Timed in compiled code, not through Python: for each model both backends
 are generated (prefixes <model>_c and <model>_e), and a small C++ driver
 calls the C backend's <p>_eval_rhs / <p>_linearize and the Eigen backend's
 typed eval_rhs / linearize in a loop over 64 precomputed states. The Eigen
-backend is a typed face over the C runtime (gen/codegen/eigen.py): the driver links
+backend is a typed face over the C runtime (gen/codegen/backends/eigen.py): the driver links
 its C model (<model>_e.c, ...) and one copy of the runtime, which both
 models share (the same sources and flags). Batches of
 each are interleaved and repeated; the table shows the median ns/call and

@@ -46,7 +46,7 @@ def require_tool(name):
 
 def require_eigen():
     """The Eigen 3.4 include dir; skip with a reason when missing, fail under CI."""
-    from gen.codegen.eigen import find_eigen
+    from gen.codegen.backends.eigen import find_eigen
     d, why = find_eigen()
     if d is None:
         if os.environ.get("CI") == "true":

@@ -4,7 +4,7 @@ with their sparsity in CasADi's compressed column storage, and each
 function as the runtime's gen_rt_cs_fn), the derivative kernels the
 runtime differentiates with (csrc/derivatives), the template's context
 and the cffi cdef of the functions. Read by the casadi backend
-(gen/codegen/backends.py) to render the library and by gen.casadi to load
+(gen/codegen/backends/) to render the library and by gen.casadi to load
 it; it imports no later stage of the pipeline."""
 from __future__ import annotations
 

@@ -2,7 +2,7 @@
 problem's kernels, a trajectory tracker's tables, the next products'), as
 plain data, the model's (gen/codegen/abi.py) for the products.
 
-A product's backend (gen/codegen/backends.py) holds its ProductInterface:
+A product's backend (gen/codegen/backends/) holds its ProductInterface:
 the enums, structs and macros its runtime shares with the caller, and the
 functions of its library, with names that hold the placeholders of the
 build ({name}: the library's C prefix, and those of the plan's names, such

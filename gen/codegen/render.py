@@ -83,7 +83,7 @@ class Rendered:
     project=False only what gen.build compiles) and the interface
     description. derivatives: whether the derivative kernels are among the
     files (else the build links <name>_lin_stub.c in their place). backend:
-    the backend's name (gen/codegen/backends.py); includes: folders of headers the
+    the backend's name (gen/codegen/backends/); includes: folders of headers the
     build compiles against that are not among the files (the FMI headers)."""
     files: dict
     interface: object

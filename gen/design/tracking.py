@@ -255,7 +255,7 @@ class TrajectoryTracker(LinearFeedback):
 
     def _plan(self, name, real):
         """The tracker as the tracker backend's ProductPlan
-        (gen/codegen/backends.py TrackerBackend): its tables and what its C
+        (gen/codegen/backends/ TrackerBackend): its tables and what its C
         says of them, rendered through gen.codegen.render.render."""
         from ..codegen.product_abi import ProductPlan
         sim = self.sim

@@ -5,7 +5,7 @@
     J = casadi.jacobian(F["step"](X, r, p, t, h), X)   # jac_<f>, exact
 
 One shared library, generated from templates/casadi/casadi_ext.c.j2 over
-the model's C API (the "casadi" backend of gen/codegen/backends.py: the C model,
+the model's C API (the "casadi" backend of gen/codegen/backends/: the C model,
 its derivative kernels, the C runtime, and the CasADi wrappers), built
 into the content-keyed cache by gen.build and loaded with
 ``casadi.external(name, path)``. The functions (CasADi names prefixed with

@@ -60,7 +60,7 @@ FMI_VERSIONS = ("2.0", "3.0")
 KINDS = ("cs", "me", "both")
 CS_METHODS = ADAPTIVE_METHODS      # gen/codegen/abi.py
 
-# the FMU as a backend (gen/codegen/backends.py FmuBackend): the model's sources
+# the FMU as a backend (gen/codegen/backends/ FmuBackend): the model's sources
 # (the C backend's, without the plugin table), the hand-written glue
 # (csrc/fmu, FMU.glue) and the FMU's own templates (FMU.fmu_templates), built
 # through gen.build into the cache like every other library

@@ -1,12 +1,12 @@
 """Build rendered sources into a library (a plain shared library: the
 model's kernels, the runtime and, for a loadable backend, its plugin table
-``<name>_api.c``; or a product's library, gen/codegen/backends.py
+``<name>_api.c``; or a product's library, gen/codegen/backends/
 ProductBackend) in the cache (gen/core/cache.py), keyed by the content of the
 files, the backend's compile recipe and the generator version. Nothing is
 rendered or loaded here: gen/pipeline.py renders, gen/toolchain/host.py loads.
 
 What is compiled, with which compiler and flags, is the backend's recipe
-(gen/codegen/backends.py: Backend.units, runtime_sources); this module runs it,
+(gen/codegen/backends/: Backend.units, runtime_sources); this module runs it,
 the model's files two at a time, the runtime's objects from a cache shared
 by every library and FMU binary of a scalar type.
 

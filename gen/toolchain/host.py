@@ -14,7 +14,7 @@ build), and the host is compiled once per installation into the cache
     api = open_model(path, name, host)    # the model's table, a cdata pointer
     host.lib.eomgen_eval_rhs(api, t, x, r, p, dxdt, lam)
 
-A product's library (an optimal control problem's, gen/codegen/backends.py
+A product's library (an optimal control problem's, gen/codegen/backends/
 ProductBackend) has no plugin table: it is opened in cffi's ABI mode with
 the cdef rendered from its interface description (load_product,
 open_library).

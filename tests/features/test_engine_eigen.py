@@ -3,7 +3,7 @@ through the same cffi wrapper and the same Simulator.
 
 There is one engine (csrc/runtime/gen_rt_engine.c and the rest of the C runtime):
 the Eigen backend's library is the C backend's model and runtime plus the
-typed C++ face (gen/codegen/eigen.py). So every run here is the same on both
+typed C++ face (gen/codegen/backends/eigen.py). So every run here is the same on both
 backends bit for bit: the output times, the states, the inputs, the event
 times and states, the step, rejection, right-hand-side and Jacobian counts
 and h_next, for DOPRI5, RODAS4 and RK4, with tables, feedback, callbacks,

@@ -71,10 +71,10 @@ def eigen_split(model, files):
     what the C backend renders for that type and name."""
     import copy
     import dataclasses
-    import gen.codegen.eigen
+    import gen.codegen.backends.eigen
     plan = gen.plan.ir.plan(model)
     c_files = gen.codegen.render.render(plan, real="double", backend="c").files
-    alt = gen.codegen.eigen.alt_name(model.name, "double")
+    alt = gen.codegen.backends.eigen.alt_name(model.name, "double")
     alt_model = copy.copy(model)
     alt_model.name = alt
     alt_files = gen.codegen.render.render(dataclasses.replace(plan, model=alt_model), real="float",

@@ -254,7 +254,7 @@ def test_cpp_typed_face_eval_auxiliary_forces(tmp_path, ref):
     import subprocess
     from pathlib import Path
     from conftest import require_eigen, require_tool
-    from gen.codegen.eigen import ALT_DEFINE, sources
+    from gen.codegen.backends.eigen import ALT_DEFINE, sources
     from gen.codegen.render import C_TEMPLATES, RUNTIME_SOURCES
     inc = require_eigen()
     cc, cxx = require_tool("gcc"), require_tool("g++")

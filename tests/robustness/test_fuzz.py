@@ -82,7 +82,7 @@ def test_eigen_backend_under_sanitizers(tmp_path, key):
     """The C++/Eigen backend's library (the C model and runtime for both
     scalar types, the second copy's names prefixed, and the face
     instantiated) obeys the same rules through its C API."""
-    from gen.codegen.eigen import ALT_DEFINE, sources
+    from gen.codegen.backends.eigen import ALT_DEFINE, sources
     from gen.codegen.render import C_TEMPLATES, RUNTIME_SOURCES
     inc = require_eigen()
     model = MODELS[key]()

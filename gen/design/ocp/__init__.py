@@ -59,7 +59,7 @@ known constants, path bounds, the duration and the fit data are arguments
 of those calls, never compiled in.
 
 The library is a product of the one pipeline (gen.pipeline.product): the
-families' kernels are the OCP backend's plan (gen/codegen/backends.py
+families' kernels are the OCP backend's plan (gen/codegen/backends/
 OcpBackend), rendered with its templates (templates/ocp) and its
 interface (the gen_rt_ocp_block struct, <prefix>_eval, <prefix>_work_len:
 described once, rendered into its headers and its cdef), built and cached

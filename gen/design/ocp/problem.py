@@ -197,7 +197,7 @@ class OptimalControl:
     def _build(self):
         """Transcribe, render, build (or find in the cache) and open the
         library: the OCP backend through the pipeline (gen.pipeline.product,
-        gen/codegen/backends.py OcpBackend)."""
+        gen/codegen/backends/ OcpBackend)."""
         plan, self._meta = ocp_plan(self)
         built, self._ffi, self._lib = pipeline.product(plan, "ocp")
         iface = built.interface

@@ -4,7 +4,7 @@ instance constraints, the fits), each a family of three generated kernels
 over its local variables: values, the sparse Jacobian and the lower
 triangle of the Hessian of sum_i lam_i g_i, from one CSE'd graph each
 (gen.plan.ir). ocp_plan hands them to the render stage as the OCP
-backend's ProductPlan (gen/codegen/backends.py OcpBackend)."""
+backend's ProductPlan (gen/codegen/backends/ OcpBackend)."""
 from __future__ import annotations
 
 import re

@@ -1,5 +1,5 @@
 """A backend is a type (issue 31): one object per backend in one registry
-(gen/codegen/backends.py), asked by rendering and the build, never compared by
+(gen/codegen/backends/), asked by rendering and the build, never compared by
 name; and the pipeline's modules import one way."""
 import ast
 from pathlib import Path
@@ -90,13 +90,13 @@ def _sources():
 
 
 def test_no_backend_name_compared_outside_the_registry():
-    bad = [f"{p.name}:{i}" for p in _sources() if p.name != "backends.py"
+    bad = [f"{p.name}:{i}" for p in _sources() if "backends" not in p.parts
            for i, line in enumerate(p.read_text().splitlines(), 1)
            if "backend ==" in line or "backend !=" in line]
     assert bad == []
     # BACKENDS is defined once
-    defs = [p.name for p in _sources() for node in ast.walk(ast.parse(p.read_text()))
-            if isinstance(node, ast.Assign)
+    defs = [p.relative_to(GEN).as_posix() for p in _sources()
+            for node in ast.walk(ast.parse(p.read_text())) if isinstance(node, ast.Assign)
             for t in node.targets if isinstance(t, ast.Name) and t.id == "BACKENDS"]
-    assert defs == ["backends.py"]
+    assert defs == ["codegen/backends/__init__.py"]
     assert issubclass(CBackend, Backend)

@@ -12,10 +12,16 @@ import re
 import site
 import sys
 import sysconfig
+
+from ...core.errors import BuildError
+from .base import (C_FLAGS, C_LIN_FLAGS, CXX_FLAGS, CXX_STRICT_FLAGS, RUNTIME_FLAGS, RUNTIME_HEADERS,
+                   RUNTIME_MAIN, RUNTIME_SOURCES, c_compiler, cxx_compiler)
+from .c import C_TEMPLATES, CBackend
 from pathlib import Path
 
 __all__ = ["find_eigen", "eigen_version", "MIN_VERSION", "render", "sources", "alt_name",
-           "other_real"]
+           "other_real", "EigenBackend", "EIGEN_TEMPLATES",
+           "eigen_include_dir", "EIGEN_RUNTIME_HEADERS"]
 
 MIN_VERSION = (3, 4, 0)
 _SYSTEM_DIRS = ["/usr/include/eigen3", "/usr/local/include/eigen3",
@@ -94,7 +100,7 @@ TEMPLATES = [
     ("CMakeLists.txt", "eigen/CMakeLists.txt.j2", "project"),
 ]
 # copied from csrc/ beside the C runtime
-RUNTIME_HEADERS = ["eigen/gen_rt_names.h"]
+EIGEN_RUNTIME_HEADERS = ["eigen/gen_rt_names.h"]
 # the define that makes a translation unit the other scalar type's
 ALT_DEFINE = "GEN_RT_ALT_REAL"
 # BLAS's letters: the suffix of the second copy's prefix
@@ -125,7 +131,7 @@ def render(plan, real, timings, project, only, *, render_c, env, c_templates,
     template list and runtime sources): the C backend's files for `real`,
     the C model again for the other scalar type under alt_name's prefix,
     the face and the CMake project."""
-    from ..core.resources import csrc_file
+    from ...core.resources import csrc_file
     name = plan.model.name
     if name in CXX_RESERVED:
         from ..core.errors import ModelError
@@ -148,7 +154,7 @@ def render(plan, real, timings, project, only, *, render_c, env, c_templates,
     for fname, tname, role in TEMPLATES:
         if role in roles:
             files[fname.format(name=name)] = env.get_template(tname).render(**ctx)
-    for src in RUNTIME_HEADERS if only is None else ():
+    for src in EIGEN_RUNTIME_HEADERS if only is None else ():
         files[Path(src).name] = csrc_file(src).read_text()
     return dataclasses.replace(main, files=files, backend="eigen")
 
@@ -168,8 +174,8 @@ def sources(name, real, derivatives, c_templates):
 
 def context(iface, real, c_templates, runtime_sources):
     """The Jinja2 context of the face."""
-    from .._version import __version__
-    from .abi import METHODS
+    from ..._version import __version__
+    from ..abi import METHODS
     name = iface.name
     alt = alt_name(name, real)
     main_c, alt_c, cxx = sources(name, real, True, c_templates)
@@ -222,3 +228,83 @@ static static_assert static_cast struct switch template this thread_local throw
 true try typedef typeid typename union unsigned using virtual void volatile
 wchar_t while xor xor_eq std Eigen eomgen detail gen_rt
 """.split())
+
+
+# ------------------------------------------------------------ the backend
+# the C++ runtime of the Eigen backend and the tables it shares with the C one
+# the Eigen face's own runtime header (beside the C runtime, which it links
+# once per scalar type; gen/codegen/eigen.py)
+
+# The C++17/Eigen backend's own templates (the face, its CMake project):
+# gen/codegen/eigen.py; the rest of its files are the C backend's, rendered twice.
+EIGEN_TEMPLATES = list(TEMPLATES)
+
+def eigen_include_dir():
+    """The Eigen 3.4 include directory the eigen backend compiles against
+    (BuildError when there is none)."""
+    d, why = find_eigen()
+    if d is None:
+        raise BuildError(f"the eigen backend needs Eigen 3.4: {why}")
+    return d
+
+
+class EigenBackend(CBackend):
+    """C++17 over Eigen 3.4, a typed face over the one C runtime
+    (gen/codegen/eigen.py): its library is the C backend's for the build's scalar
+    type (the same files, the same API, the same bits), the C model and
+    runtime again for the other scalar type under a prefixed name, and the
+    face, <name>.hpp (Eigen types in and out, the scalar a template
+    parameter), instantiated in <name>.cpp."""
+    name = "eigen"
+    templates = tuple(EIGEN_TEMPLATES)
+    runtime_files = tuple(RUNTIME_SOURCES + RUNTIME_HEADERS + EIGEN_RUNTIME_HEADERS)
+    project_runtime_files = tuple(RUNTIME_MAIN)
+    runtime_sources = tuple(RUNTIME_SOURCES)
+    # the plan of the C backend's (its library is the C backend's)
+    lin = "auto"
+    lazy_derivatives = False
+    stack_limit = False
+    composite = True
+    tag = "_eigen"
+    link_cxx = True
+
+    def render(self, plan, real, timings, project, only, *, render_c, env):
+        """The C backend's files for real, the C model again for the other
+        scalar type, the face and the project (render_c: gen.codegen.render.render)."""
+        return render(plan, real, timings, project, only, render_c=render_c,
+                                  env=env, c_templates=C_TEMPLATES,
+                                  runtime_sources=RUNTIME_SOURCES)
+
+    def include_dir(self):
+        """Eigen's include directory (gen/codegen/eigen.py finds it)."""
+        return eigen_include_dir()
+
+    def cache_parts(self):
+        d = self.include_dir()
+        # the backend, its flags and the Eigen it compiles against
+        return [*super().cache_parts(),
+                f"backend={self.name}\0{' '.join(CXX_FLAGS)}\0{cxx_compiler()}\0"
+                f"eigen={d}:{eigen_version(d)}\0face"]
+
+    def units(self, name, files, derivatives, includes=()):
+        """The C backend's units, then the other scalar type's model and
+        runtime (compiled with gen/codegen/eigen.py's ALT_DEFINE: the runtime's names
+        prefixed) and the face (C++): [(file, compiler, flags, object)]."""
+        cc = c_compiler()
+        real = "float" if f"{alt_name(name, 'float')}.c" in files else "double"
+        _, alt, cxx = sources(name, real, derivatives, C_TEMPLATES)
+        alt_flag = "-D" + ALT_DEFINE
+        units = [(f, c, fl, Path(f).stem + ".o")
+                 for f, c, fl in super().units(name, files, derivatives, includes)]
+        units += [(f, cc, [*C_FLAGS, "-fPIC", alt_flag,
+                           *(C_LIN_FLAGS if f.endswith("_lin.c") else ())],
+                   "alt_" + Path(f).stem + ".o") for f in alt]
+        units += [(f, cc, [*RUNTIME_FLAGS, alt_flag], "alt_" + Path(f).stem + ".o")
+                  for f in RUNTIME_SOURCES]
+        units += [(f, cxx_compiler(), [*CXX_FLAGS, "-fPIC", "-isystem", str(self.include_dir())],
+                   Path(f).stem + "_cxx.o") for f in cxx]
+        return units
+
+    def diagnose(self, name, units):
+        cxx = [u[0] for u in units if u[0].endswith(".cpp")]
+        return (cxx_compiler(), [*CXX_STRICT_FLAGS, "-isystem", str(self.include_dir())], cxx)
