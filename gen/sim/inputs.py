@@ -12,7 +12,10 @@
 and for controller a :class:`LinearFeedback`, evaluated inside the
 generated C at every stage (period None) or sampled (period Ts), with one
 gain or a schedule of gains (a time-varying LQR such as
-:class:`gen.TrajectoryTracker`'s).
+:class:`gen.TrajectoryTracker`'s), or a controller written in C by a
+product's library (a model predictive controller, an estimator feeding a
+law): any object with a ``c_controller(sim)`` method that returns a
+:class:`CController`, called from the engine with no Python in the loop.
 
 All of them become one ``<p>_input`` description for the C function
 ``<p>_simulate_input`` (README, "Closed loops").
@@ -26,7 +29,7 @@ import numpy as np
 from ..codegen.abi import hold_code
 from ..core.errors import InputError
 
-__all__ = ["LinearFeedback", "InputPlan", "plan_inputs"]
+__all__ = ["LinearFeedback", "CController", "InputPlan", "plan_inputs"]
 
 
 @dataclass
@@ -232,6 +235,26 @@ class LinearFeedback:
         return r
 
 
+@dataclass(frozen=True)
+class CController:
+    """A controller in C, from a product's library: the address of its
+    function, of the runtime's type ``gen_rt_controller_fn``
+    (``int f(void *ctx, real t, const real *x, real *r)``, r holding the
+    inputs of the rest of the description, a nonzero return stops the run
+    with ERR_CONTROLLER), the address of the context it is called with, the
+    object that keeps both alive for the run, and its sampling period (0:
+    every stage; Ts > 0: at t0 + k Ts, held between).
+
+    A product's face (``gen.MPC``, an estimator) returns one from its
+    ``c_controller(sim)`` method; ``sim.simulate(..., controller=obj)``
+    then closes the loop in C. The function's scalar type must be the
+    simulator's (``sim.dtype``)."""
+    function: int
+    context: int
+    owner: object
+    period: float = 0.0
+
+
 class InputPlan:
     """The input struct (<p>_input) and everything it points to, kept alive for the
     duration of one C call. ``error`` holds an exception raised by a Python
@@ -291,9 +314,12 @@ def plan_inputs(sim, r, controller, dt, method, input_period, input_hold):
     plan = InputPlan(sim)
     s = plan.struct
     s.hold = hold
+    if controller is not None and hasattr(controller, "c_controller"):
+        return _c_controller(plan, controller, r, input_period)
     if controller is not None:
         if not isinstance(controller, LinearFeedback):
-            raise TypeError(f"controller must be a gen.LinearFeedback, got "
+            raise TypeError(f"controller must be a gen.LinearFeedback or a controller in C "
+                            f"(an object with c_controller(sim)), got "
                             f"{type(controller).__name__} (for a Python function, pass it as "
                             "r=lambda t, x: ...)")
         if r is not None:
@@ -344,4 +370,27 @@ def plan_inputs(sim, r, controller, dt, method, input_period, input_hold):
                          f"{input_period!r}")
     s.controller = plan.callback(r)
     s.period = period
+    return plan
+
+
+def _c_controller(plan, controller, r, input_period):
+    """The input description of a controller in C (CController): its
+    function and context in the struct, the base inputs r (constant, or
+    none) before it, its period."""
+    c = controller.c_controller(plan.sim)
+    if not isinstance(c, CController):
+        raise TypeError(f"{type(controller).__name__}.c_controller must return a "
+                        f"gen.sim.inputs.CController, got {type(c).__name__}")
+    if input_period is not None:
+        raise InputError(f"the {type(controller).__name__} has its own period; input_period is "
+                         "for a callable r(t, x)")
+    if not (np.isfinite(c.period) and c.period >= 0):
+        raise InputError(f"a controller's period must be a number >= 0, got {c.period!r}")
+    if r is not None:
+        plan.struct.r = plan.array(np.broadcast_to(np.asarray(r, dtype=float), (plan.sim.nr,)))
+    ffi = plan.sim.library.ffi
+    plan.struct.controller = ffi.cast("eomgen_controller", c.function)
+    plan.struct.ctx = ffi.cast("void *", c.context)
+    plan.struct.period = float(c.period)
+    plan.keep.append(c.owner)
     return plan
