@@ -205,6 +205,9 @@ def test_normal_auxiliary_direction_is_eliminated_and_equals_the_coupled_solve(r
     coupled = gen.Model.from_kanes(km, constants=consts, inputs=[F], name="bead_nc",
                                    eliminate_reactions=False)
     assert coupled.aux_G is not None
+    # the same keyword through Model.from_system (a Kane builder's own)
+    assert gen.Model.from_system(km, constants=consts, inputs=[F], name="bead_nc",
+                                 eliminate_reactions=False).fingerprint() == coupled.fingerprint()
     s1, s2 = gen.compile(elim), gen.compile(coupled)
     for x, Fv in zip(*states(15, 9)):
         n_val = m * (g * np.cos(x[0]) + Rc * x[1]**2)
