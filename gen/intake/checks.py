@@ -169,7 +169,8 @@ def check_partition(model):
     import random
     rng = random.Random(1234)
     if model.mc != len(model.q_dep):
-        raise ModelError(f"{model.mc} configuration constraints but {len(model.q_dep)} dependent coordinates")
+        raise ModelError(f"{model.mc} configuration constraints but {len(model.q_dep)} "
+                         "dependent coordinates")
     if model.mv != len(model.u_dep):
         raise ModelError(f"{model.mv} velocity constraints but {len(model.u_dep)} dependent speeds")
     if model.mv < model.mc:

@@ -46,7 +46,7 @@ true M) or ``hybrid`` impacts (solved with M), CRBA + RNEA as above.
 
 Nothing is expanded or simplified: each body's quantities are kept as shared
 opaque nodes (a graph linear in the bodies, equal nodes one object), every walk
-of the pipeline visits a shared node once, and gen.ir writes each node as one
+of the pipeline visits a shared node once, and gen.plan.ir writes each node as one
 temporary, in order (``_kept_program``). The nodes are one build's: an
 :class:`gen.sym.intern.Interner` made for the build (``Model.from_system``
 makes one per call) and passed down its functions; nothing is kept between

@@ -56,8 +56,8 @@ def xreplace_shared(mat, rule, memo):
         return e.func(*args)
 
     # memo and the rebuilt nodes keyed by object identity: two equal but
-    # distinct deep subexpressions (gen.recursive's graphs once sympy's LRU
-    # cache has dropped the one that made them identical) are never compared
+    # distinct deep subexpressions (the recursive formulation's graphs once
+    # sympy's LRU cache has dropped the one that made them identical) are never compared
     # with sympy's ==, which walks shared nodes as a tree (exponential); equal
     # rebuilt nodes are made one object (hash-consed by their arguments' ids)
     ids = memo.setdefault(_ID_MEMO, {})

@@ -28,16 +28,30 @@ its CSE (any ``UnevaluatedExpr``); :class:`Kept` is the base of their classes.
 """
 from __future__ import annotations
 
+import itertools
+
 import sympy as sm
 
 from .dag import from_args
 
 __all__ = ["Interner", "Kept"]
 
+_BUILDS = itertools.count(1)     # numbers the builds (next() is atomic)
+
 
 class Kept(sm.UnevaluatedExpr):
     """The base class of every Interner's node class (an ``UnevaluatedExpr``
     of one build)."""
+
+    _build = 0          # the build's number, in the hash
+
+    def __hash__(self):
+        # equal nodes of different builds (never ==) hash apart: the entries
+        # an earlier build left in sympy's cache do not share their slots
+        h = self._mhash
+        if h is None:
+            h = self._mhash = hash((type(self).__name__, self._build) + self._hashable_content())
+        return h
 
     def __reduce_ex__(self, protocol):
         # the build's class is made at run time: pickled, a node is a plain
@@ -57,7 +71,8 @@ class Interner:
 
     def __init__(self):
         self.node = type("UnevaluatedExpr", (Kept,), {"__module__": __name__,
-                                                     "__qualname__": "Kept.UnevaluatedExpr"})
+                                                     "__qualname__": "Kept.UnevaluatedExpr",
+                                                     "_build": next(_BUILDS)})
         self._table = {}
 
     def __len__(self):

@@ -235,7 +235,7 @@ class ModelCxxPrinter(ModelCPrinter):
 # nodes printed by the printers' own structure (operators, ternaries)
 _STRUCTURAL = (sm.Add, sm.Mul, sm.Pow, sm.Piecewise, sm.core.relational.Relational,
                sm.And, sm.Or, sm.Not, BooleanAtom, sm.Symbol, sm.NumberSymbol,
-               sm.UnevaluatedExpr)     # gen.recursive's opaque nodes, unwrapped after CSE
+               sm.UnevaluatedExpr)     # opaque nodes (gen.sym.intern), unwrapped after CSE
 
 
 def _printers():
