@@ -177,8 +177,12 @@ class ProductPlan:
     values its interface is bound with ({p}: the model's prefix, ...);
     kernels: gen.plan.ir Kernel objects (printed by the backend's printer as
     static functions <name>_<kernel name>); data: plain values for its
-    templates and its backend's context."""
+    templates and its backend's context; files: {file: text} compiled with
+    it as they are."""
     name: str
     names: dict = field(default_factory=dict)
     kernels: list = field(default_factory=list)
     data: dict = field(default_factory=dict)
+    #: files rendered elsewhere that the library compiles with its own (a
+    #: model's C sources, for a product that runs the model: gen.EKF's)
+    files: dict = field(default_factory=dict)

@@ -454,8 +454,9 @@ def _render_product(plan, b, real, timings):
     t1 = time.perf_counter()
     ctx.update(b.context(plan, iface, real))
     env = template_env()
-    files = {fname.format(name=plan.name): env.get_template(tname).render(**ctx)
-             for fname, tname, _ in b.file_templates(iface)}
+    files = dict(plan.files)
+    files.update({fname.format(name=plan.name): env.get_template(tname).render(**ctx)
+                  for fname, tname, _ in b.file_templates(iface)})
     for src in b.runtime_files:
         files[Path(src).name] = csrc_file(src).read_text()
     timings["printing"] = t1 - t0
