@@ -520,7 +520,7 @@ class EKF:
                 f"t = {self.t}>")
 
     # ------------------------------------------------- the loop, firmware
-    def feedback(self, law, *, seed=0, noise=None, theta=None, log=True):
+    def feedback(self, law, *, seed=0, noise=None, theta=None, log=10000):
         """The filter feeding a controller, closed in C by ``sim.simulate``:
         see :class:`gen.design.estimator.loop.EstimatorFeedback`."""
         from .loop import EstimatorFeedback
