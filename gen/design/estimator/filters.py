@@ -198,11 +198,17 @@ class EKF:
         self.measurement_names = list(fm.z_names)
         self.n, self.nz, self.ne = fm.ns, fm.nz, fm.ne
         self.nx, self.nr = model.nx, model.nr
+        # every argument checked before the library is built
+        Q, R = _matrix("Q", Q, self.n), _matrix("R", R, self.nz, diag_only=True)
+        P0, x0 = _matrix("P0", P0, self.n), self._full_state(x0)
+        self._p = self._constants(p)
+        if not np.isfinite(t0):
+            raise InputError(f"t0 must be finite, got {t0!r}", "t0", None, t0)
         self.built, self._ffi, self._lib = pipeline.product(fm.plan, "estimator")
         self._ws = self._new_workspace()
-        self._p = self._constants(p)
-        self.Q, self.R = Q, R
-        self.reset(x0, P0, t0)
+        self._ws.Q[:], self._ws.R[:] = Q.ravel(), np.diag(R)
+        self._ws.x[:], self._ws.P[:] = x0, P0.ravel()
+        self.reset(t0=t0)
 
     # ----------------------------------------------------------- settings
     def _settings(self, period, method, substeps, gate):
@@ -299,13 +305,15 @@ class EKF:
         """Restart the filter from x0 and P0 at t0 (each None: as it is);
         the statuses and counts cleared."""
         ws = self._ws
-        if x0 is not None:
-            ws.x[:] = self._full_state(x0)
-        if P0 is not None:
-            ws.P[:] = _matrix("P0", P0, self.n).ravel()
+        x = None if x0 is None else self._full_state(x0)
+        P = None if P0 is None else _matrix("P0", P0, self.n).ravel()
+        if t0 is not None and not np.isfinite(t0):
+            raise InputError(f"t0 must be finite, got {t0!r}", "t0", None, t0)
+        if x is not None:
+            ws.x[:] = x
+        if P is not None:
+            ws.P[:] = P
         if t0 is not None:
-            if not np.isfinite(t0):
-                raise InputError(f"t0 must be finite, got {t0!r}", "t0", None, t0)
             ws.scalars["t"][0] = float(t0)
         ws.p[:] = self._p
         self._write_settings(ws)
@@ -526,11 +534,13 @@ class EKF:
         from .loop import EstimatorFeedback
         return EstimatorFeedback(self, law, seed=seed, noise=noise, theta=theta, log=log)
 
-    def to_c(self, path, real="double", name=None):
-        """Write the filter as a firmware module and a standalone program:
-        see :func:`gen.design.estimator.firmware.to_c`."""
+    def to_c(self, path, real="double"):
+        """Write the filter as a firmware module and a standalone program,
+        with its values now (estimate, covariance, time, noise, settings):
+        see :func:`gen.design.estimator.firmware.to_c`. The C prefix is the
+        filter's ``name``."""
         from .firmware import to_c
-        return to_c(self, path, real=real, name=name)
+        return to_c(self, path, real=real)
 
     def footprint(self, real="float", target="cortex-m4f", build_dir=None):
         """Flash, RAM, stack and operation counts of the firmware module:
