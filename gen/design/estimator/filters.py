@@ -440,7 +440,7 @@ class EKF:
         bad = np.nonzero(np.abs(t - want) > tol)[0]
         if len(bad):
             k = int(bad[0])
-            raise InputError(f"t[{k}] = {t[k]!r}: the rows must be the filter's samples "
+            raise InputError(f"t[{k}] = {float(t[k])!r}: the rows must be the filter's samples "
                              f"t = {self.t!r} + k * {self.period!r} (row 0 at the estimate's "
                              "time)", "t", k, float(t[k]))
         Z = np.ascontiguousarray(np.asarray(Z, dtype=float).reshape(N, -1)
