@@ -22,7 +22,7 @@ import numpy as np
 
 from ... import pipeline
 from ...codegen.backends.estimator import LAYOUT
-from ...core.errors import InputError
+from ...core.errors import InputError, SolverError
 from ...core.resources import csrc_file
 from ...core.status import exception_for, status_message, status_name
 from .model import filter_model
@@ -340,11 +340,17 @@ class EKF:
     def _check(self, st, what):
         if st:
             name = status_name(st)
-            raise exception_for(name)(
-                f"{self.kind}.{what} at t = {self.t!r}: {status_message(st)} ({name})",
-                status=st, status_name=name, time=self.t, state=self.x)
+            exc = exception_for(name)
+            msg = f"{self.kind}.{what} at t = {self.t!r}: {status_message(st)} ({name})"
+            if issubclass(exc, SolverError):
+                raise exc(msg, status=st, status_name=name, time=self.t, state=self.x)
+            raise exc(msg)
 
     def _inputs(self, r):
+        ws = self._ws
+        if type(r) is np.ndarray and r.shape == ws.rbuf.shape and self.nr:
+            ws.rbuf[:] = r          # the common case, fast (NaN: the C call's InputError)
+            return
         if self.nr == 0:
             if r is not None and np.size(r):
                 raise InputError(f"the model '{self.model.name}' has no inputs; r must be None",
@@ -361,6 +367,10 @@ class EKF:
         self._ws.rbuf[:] = a
 
     def _measurements(self, z):
+        ws = self._ws
+        if type(z) is np.ndarray and z.shape == ws.zbuf.shape:
+            ws.zbuf[:] = z
+            return
         a = np.asarray(z, dtype=float).ravel()
         if a.shape != (self.nz,):
             raise InputError(f"z must hold the {self.nz} measurement(s) "
@@ -377,7 +387,14 @@ class EKF:
             The inputs (None when the model has none).
         """
         self._inputs(r)
-        self._check(self._ws.f_predict(self._ws.ptr, self._ws.rptr), "predict")
+        ws = self._ws
+        st = ws.f_predict(ws.ptr, ws.rptr)
+        if st:
+            if not np.all(np.isfinite(ws.rbuf)):
+                raise InputError(f"r = {ws.rbuf[:self.nr].tolist()} "
+                                 f"[{', '.join(self.model.input_labels)}]: every entry must be "
+                                 "finite", "r")
+            self._check(st, "predict")
 
     def update(self, z):
         """One update with the measurements z (a NaN entry: missing, not
@@ -389,13 +406,19 @@ class EKF:
             In the order of ``measurement_names``.
         """
         self._measurements(z)
-        self._check(self._ws.f_update(self._ws.ptr, self._ws.zptr), "update")
+        ws = self._ws
+        st = ws.f_update(ws.ptr, ws.zptr)
+        if st:
+            self._check(st, "update")
 
     def step(self, z, r=None):
         """``predict(r)`` then ``update(z)``: one period of the filter."""
         self._inputs(r)
         self._measurements(z)
-        self._check(self._ws.f_step(self._ws.ptr, self._ws.zptr, self._ws.rptr), "step")
+        ws = self._ws
+        st = ws.f_step(ws.ptr, ws.zptr, ws.rptr)
+        if st:
+            self._check(st, "step")
 
     def filter(self, t, Z, R_inputs=None):
         """Filter a recording in one C call: row 0 updates at the current
