@@ -184,6 +184,18 @@ class EKF:
     rejected : numpy.ndarray
         Measurements not fused so far, counted per measurement.
     state_names, measurement_names : list of str
+
+    Raises
+    ------
+    gen.InputError
+        On bad input, named in the model's terms before anything is built: Q,
+        R or P0 not symmetric positive semidefinite (R not diagonal), a
+        measurement naming a symbol the model does not know or an output it
+        does not have, ``estimate`` naming a state, an input or an unknown
+        name, x0 of the wrong length or not finite, a period, substeps, gate
+        or method out of range.
+    gen.BuildError
+        When the filter's library does not compile.
     """
     kind = "EKF"
 
@@ -302,8 +314,24 @@ class EKF:
         self._ws.R[:] = np.diag(_matrix("R", R, self.nz, diag_only=True))
 
     def reset(self, x0=None, P0=None, t0=None):
-        """Restart the filter from x0 and P0 at t0 (each None: as it is);
-        the statuses and counts cleared."""
+        """Restart the filter; the statuses and counts cleared.
+
+        Parameters
+        ----------
+        x0 : array_like, shape (nx + ne,), optional
+            The estimate (as the constructor's; None: as it is).
+        P0 : array_like, shape (n, n) or (n,), optional
+            Its covariance (None: as it is).
+        t0 : float, optional
+            Its time (None: as it is).
+
+        Raises
+        ------
+        gen.InputError
+            On a wrong shape or value (named).
+        gen.SolverError
+            When the dependent entries of x0 cannot be completed.
+        """
         ws = self._ws
         x = None if x0 is None else self._full_state(x0)
         P = None if P0 is None else _matrix("P0", P0, self.n).ravel()
@@ -385,6 +413,14 @@ class EKF:
         ----------
         r : array_like, shape (nr,)
             The inputs (None when the model has none).
+
+        Raises
+        ------
+        gen.InputError
+            On a wrong shape, or a NaN or infinite input.
+        gen.SolverError
+            When the model's step fails (a singular configuration, a
+            diverged state): the estimate is left as it was.
         """
         self._inputs(r)
         ws = self._ws
@@ -404,6 +440,13 @@ class EKF:
         ----------
         z : array_like, shape (nz,)
             In the order of ``measurement_names``.
+
+        Raises
+        ------
+        gen.InputError
+            On a wrong shape.
+        gen.SolverError
+            When the measurement kernels or the constraints fail there.
         """
         self._measurements(z)
         ws = self._ws
@@ -412,7 +455,16 @@ class EKF:
             self._check(st, "update")
 
     def step(self, z, r=None):
-        """``predict(r)`` then ``update(z)``: one period of the filter."""
+        """``predict(r)`` then ``update(z)``: one period of the filter, in one
+        C call.
+
+        Parameters
+        ----------
+        z : array_like, shape (nz,)
+            The measurements at the end of the period.
+        r : array_like, shape (nr,)
+            The inputs held over it.
+        """
         self._inputs(r)
         self._measurements(z)
         ws = self._ws
@@ -438,6 +490,13 @@ class EKF:
         Returns
         -------
         FilterResult
+
+        Raises
+        ------
+        gen.InputError
+            On times that are not the filter's samples, or wrong shapes.
+        gen.SolverError
+            When a row fails (the filter stops there; the message names the row).
         """
         t, Z, Rin = self._recording(t, Z, R_inputs)
         N, n, nz, ffi = len(t), self.n, self.nz, self._ffi
@@ -552,22 +611,72 @@ class EKF:
 
     # ------------------------------------------------- the loop, firmware
     def feedback(self, law, *, seed=0, noise=None, theta=None, log=10000):
-        """The filter feeding a controller, closed in C by ``sim.simulate``:
-        see :class:`gen.design.estimator.loop.EstimatorFeedback`."""
+        """The filter feeding a controller, closed in C by ``sim.simulate``
+        (:class:`gen.design.estimator.loop.EstimatorFeedback`): at every
+        sample the simulation's true state measured through the filter's
+        kernels plus seeded noise, predict, update, the law on the estimate.
+
+        Parameters
+        ----------
+        law : gen.LinearFeedback or object with ``c_controller(sim)``
+            The controller fed with the estimate.
+        seed : int, optional
+            The measurement noise's seed (the same seed, the same run).
+        noise : array_like, shape (nz,), optional
+            The noise's standard deviations (None: sqrt(R)).
+        theta : array_like, shape (ne,), optional
+            The estimated constants' true values (None: the model's).
+        log : int, optional
+            The samples whose estimates are kept.
+
+        Returns
+        -------
+        gen.design.estimator.loop.EstimatorFeedback
+            Pass it as ``controller=`` to ``sim.simulate``.
+        """
         from .loop import EstimatorFeedback
         return EstimatorFeedback(self, law, seed=seed, noise=noise, theta=theta, log=log)
 
     def to_c(self, path, real="double"):
         """Write the filter as a firmware module and a standalone program,
-        with its values now (estimate, covariance, time, noise, settings):
-        see :func:`gen.design.estimator.firmware.to_c`. The C prefix is the
-        filter's ``name``."""
+        with its values now (estimate, covariance, time, noise, settings) as
+        ``<name>_defaults`` (:func:`gen.design.estimator.firmware.to_c`; the
+        C prefix is the filter's ``name``).
+
+        Parameters
+        ----------
+        path : str or Path
+            A folder (created, written atomically).
+        real : {"double", "float"}, optional
+            The scalar type.
+
+        Returns
+        -------
+        list of Path
+            The files written.
+        """
         from .firmware import to_c
         return to_c(self, path, real=real)
 
     def footprint(self, real="float", target="cortex-m4f", build_dir=None):
-        """Flash, RAM, stack and operation counts of the firmware module:
-        see :func:`gen.design.estimator.firmware.footprint`."""
+        """The firmware module cross-built for a Cortex-M4F and measured
+        (:func:`gen.design.estimator.firmware.footprint`; arm-none-eabi-gcc).
+
+        Parameters
+        ----------
+        real : {"float", "double"}, optional
+            The scalar type.
+        target : {"cortex-m4f"}, optional
+            The target.
+        build_dir : str or Path, optional
+            Where to build (None: a temporary folder).
+
+        Returns
+        -------
+        dict
+            ``flash``, ``ram``, ``workspace`` (bytes), ``stack`` (worst case
+            per function), ``heap`` (none), ``libc``, ``table``.
+        """
         from .firmware import footprint
         return footprint(self, real=real, target=target, build_dir=build_dir)
 
@@ -587,6 +696,11 @@ class UKF(EKF):
         and the secondary scaling (ns + kappa > 0).
     gate, p, t0, name
         As :class:`EKF`.
+
+    Raises
+    ------
+    gen.InputError
+        As :class:`EKF`, and alpha not > 0, kappa with ns + kappa <= 0.
     """
     kind = "UKF"
 

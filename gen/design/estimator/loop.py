@@ -182,4 +182,5 @@ class EstimatorFeedback:
 
     @property
     def covariance(self):
+        """The loop's covariance now (after a run: at the last sample)."""
         return self._ws.P.reshape(self.kf.n, self.kf.n).copy()
