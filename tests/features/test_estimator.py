@@ -73,6 +73,11 @@ def test_bad_input_is_named_in_the_users_terms(cart):
         make(x0=np.zeros(3))
     with pytest.raises(gen.InputError, match="method must be 'rk4'"):
         make(method="dopri5")
+    # the UKF's parameters, before its build too
+    with pytest.raises(gen.InputError, match=r"kappa must make ns \+ kappa > 0 \(ns = 4\)"):
+        gen.UKF(model, z, DT, good["Q"], good["R"], good["x0"], good["P0"], kappa=-4.0)
+    with pytest.raises(gen.InputError, match="alpha must be > 0"):
+        gen.UKF(model, z, DT, good["Q"], good["R"], good["x0"], good["P0"], alpha=0.0)
 
 
 @pytest.mark.slow

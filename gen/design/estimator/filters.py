@@ -214,6 +214,7 @@ class EKF:
         Q, R = _matrix("Q", Q, self.n), _matrix("R", R, self.nz, diag_only=True)
         P0, x0 = _matrix("P0", P0, self.n), self._full_state(x0)
         self._p = self._constants(p)
+        self._check_kind()
         if not np.isfinite(t0):
             raise InputError(f"t0 must be finite, got {t0!r}", "t0", None, t0)
         self.built, self._ffi, self._lib = pipeline.product(fm.plan, "estimator")
@@ -223,6 +224,10 @@ class EKF:
         self.reset(t0=t0)
 
     # ----------------------------------------------------------- settings
+    def _check_kind(self):
+        """The kind's own checks, once the filter's sizes are known (before
+        the build)."""
+
     def _settings(self, period, method, substeps, gate):
         if method != "rk4":
             raise InputError(f"method must be 'rk4' (the filter's prediction is RK4's step and "
@@ -715,6 +720,8 @@ class UKF(EKF):
         self.alpha, self.beta, self.kappa = float(alpha), float(beta), float(kappa)
         super().__init__(model, measurements, period, Q, R, x0, P0, estimate, method, substeps,
                          gate=gate, p=p, t0=t0, name=name)
+
+    def _check_kind(self):
         if not self.n + self.kappa > 0:
-            raise InputError(f"kappa must make ns + kappa > 0 (ns = {self.n}), got {kappa!r}",
-                             "kappa", None, kappa)
+            raise InputError(f"kappa must make ns + kappa > 0 (ns = {self.n}), got "
+                             f"{self.kappa!r}", "kappa", None, self.kappa)
