@@ -20,11 +20,12 @@
 #include "gen_rt_casadi.h"
 #include "gen_rt_deriv_inline.h"
 
-/* one call: the sizes, each input's entries (size), where each input's
- * columns start among v (off, -1: not an input), whether z's columns are
- * v's first, and the inputs: x, r, p inside z = (x, r, p, t) */
+/* one call: the function's sizes (the model's are m's), each input's
+ * entries (size), where each input's columns start among v (off, -1: not
+ * an input), whether z's columns are v's first, and the inputs: x, r, p
+ * inside z = (x, r, p, t) */
 typedef struct {
-    int nx, nr, np, nz, nv, nrow, nin;
+    int nv, nrow, nin;
     int size[GEN_RT_CS_MAX_IN], off[GEN_RT_CS_H + 1];
     int zfirst;                /* z's columns are v's first nz, in order */
     gen_rt_real *x, *xd, *r, *p, *z, t, h;
@@ -55,46 +56,34 @@ GEN_RT_DERIV_ALWAYS int rt_cs_size(const gen_rt_cs_model *m, int what)
            : what == GEN_RT_CS_R ? m->nr : what == GEN_RT_CS_P ? m->np : 1;
 }
 
-/* the argument of input what (NULL: zeros, or not an input of f) */
-GEN_RT_DERIV_ALWAYS const gen_rt_real *rt_cs_arg(const gen_rt_cs_fn *f, const gen_rt_real **arg,
-                                                 int what)
-{
-    int k;
-    for (k = 0; k < f->nin; ++k)
-        if (f->in[k] == what) return arg[k];
-    return 0;
-}
-
 /* the inputs of arg into c (work: z = (x, r, p, t), then xd; an input the
- * function does not have is zero), their columns, z's segments; returns
+ * function does not have is zero, as a NULL one), their columns; returns
  * the rest of work */
 GEN_RT_DERIV_ALWAYS gen_rt_real *rt_cs_read(const gen_rt_cs_model *m, const gen_rt_cs_fn *f,
                                             const gen_rt_real **arg, gen_rt_real *work,
                                             rt_cs_call *c)
 {
     const int nx = m->nq + m->nu, nr = m->nr, np = m->np;
+    const gen_rt_real *in[GEN_RT_CS_H + 1] = {0, 0, 0, 0, 0, 0, 0};
     int k;
-    c->nx = nx;
-    c->nr = nr;
-    c->np = np;
-    c->nz = nx + nr + np + 1;
     c->nin = f->nin;
     c->nrow = rt_cs_rows(m, f->base);
-    c->z = work; c->x = c->z; c->r = c->x + nx; c->p = c->r + nr; c->xd = c->z + c->nz;
+    c->z = work; c->x = c->z; c->r = c->x + nx; c->p = c->r + nr; c->xd = c->z + nx + nr + np + 1;
     for (k = 0; k <= GEN_RT_CS_H; ++k) c->off[k] = -1;
     c->nv = 0;
     for (k = 0; k < f->nin; ++k) {
         c->size[k] = rt_cs_size(m, f->in[k]);
         c->off[f->in[k]] = c->nv;
         c->nv += c->size[k];
+        in[f->in[k]] = arg[k];
     }
-    rt_cs_in(rt_cs_arg(f, arg, GEN_RT_CS_X), nx, c->x);
-    rt_cs_in(rt_cs_arg(f, arg, GEN_RT_CS_XDOT), c->off[GEN_RT_CS_XDOT] < 0 ? 0 : nx, c->xd);
-    rt_cs_in(rt_cs_arg(f, arg, GEN_RT_CS_R), nr, c->r);
-    rt_cs_in(rt_cs_arg(f, arg, GEN_RT_CS_P), np, c->p);
-    rt_cs_in(rt_cs_arg(f, arg, GEN_RT_CS_T), 1, &c->t);
-    rt_cs_in(rt_cs_arg(f, arg, GEN_RT_CS_H), 1, &c->h);
-    c->z[c->nz - 1] = c->t;
+    rt_cs_in(in[GEN_RT_CS_X], nx, c->x);
+    rt_cs_in(in[GEN_RT_CS_XDOT], c->off[GEN_RT_CS_XDOT] < 0 ? 0 : nx, c->xd);
+    rt_cs_in(in[GEN_RT_CS_R], nr, c->r);
+    rt_cs_in(in[GEN_RT_CS_P], np, c->p);
+    rt_cs_in(in[GEN_RT_CS_T], 1, &c->t);
+    rt_cs_in(in[GEN_RT_CS_H], 1, &c->h);
+    c->z[nx + nr + np] = c->t;
     c->zfirst = c->off[GEN_RT_CS_X] == 0 && c->off[GEN_RT_CS_R] == nx &&
                 c->off[GEN_RT_CS_P] == nx + nr && c->off[GEN_RT_CS_T] == nx + nr + np;
     return c->xd + nx;
@@ -160,7 +149,7 @@ GEN_RT_DERIV_ALWAYS int rt_cs_value(const gen_rt_cs_model *m, const gen_rt_cs_fn
                                     const rt_cs_call *c, gen_rt_real *out, gen_rt_real *wk,
                                     int *iwk)
 {
-    const int nx = c->nx;
+    const int nx = m->nq + m->nu;
     int i, st;
     switch (f->base) {
     case GEN_RT_CS_RHS:
@@ -297,7 +286,7 @@ GEN_RT_DERIV_ALWAYS int rt_cs_deriv(const gen_rt_cs_model *m, const gen_rt_cs_fn
                                     const rt_cs_call *c, const gen_rt_real *lam, gen_rt_real *J,
                                     gen_rt_real *Hl, gen_rt_real *T, gen_rt_real *wk, int *iwk)
 {
-    const int nx = c->nx, nv = c->nv, nrow = c->nrow, mk = m->mc + m->mv;
+    const int nx = m->nq + m->nu, nv = c->nv, nrow = c->nrow, mk = m->mc + m->mv;
     int i, st = GEN_RT_OK;
     if (f->base != GEN_RT_CS_STEP && f->base != GEN_RT_CS_STEP_RODAS4) {
         /* the rest add into them (the steps write every entry) */
@@ -477,12 +466,10 @@ GEN_RT_DERIV_ALWAYS int gen_rt_cs_eval_inline(const gen_rt_cs_model *m, const ge
     gen_rt_real *J = out + mrow, *Hl = J + mrow * nvmax, *T = Hl + nvmax * nvmax,
                 *sv = T + mrow * nvmax * nvmax, *wk = sv + nvmax;
     int *iwk = iwork;
-    int i, st;
+    int st;
     switch (f->mode) {
-    case GEN_RT_CS_VALUE:
-        if ((st = rt_cs_value(m, f, &c, out, wk, iwk))) return st;
-        if (res[0]) for (i = 0; i < c.nrow; ++i) res[0][i] = out[i];
-        return GEN_RT_OK;
+    case GEN_RT_CS_VALUE:         /* into res[0] (the inputs are read: no alias) */
+        return rt_cs_value(m, f, &c, res[0] ? res[0] : out, wk, iwk);
     case GEN_RT_CS_JAC:
     case GEN_RT_CS_FWD:
     case GEN_RT_CS_ADJ:

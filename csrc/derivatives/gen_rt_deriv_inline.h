@@ -6,10 +6,18 @@
  * gen_rt_deriv.c defines the library functions over them. A model's
  * translation unit (the CasADi library's <name>_casadi.c, through
  * gen_rt_casadi_inline.h) includes this header and calls them with its own
- * model, a static const gen_rt_deriv_model: the compiler then sees the
- * model's sizes as constants (loops over them unrolled and vectorized,
- * offsets folded) and its kernels as direct calls, as in code generated
- * for the model, while the algorithm is written once, here.
+ * model, a static const gen_rt_deriv_model, the same one at every call:
+ * the compiler then sees the model's sizes as constants (loops over them
+ * unrolled and vectorized, offsets folded; the LU of gen_rt_private.h
+ * with them) and its kernels as direct calls, as in code generated for
+ * the model, while the algorithm is written once, here. The steps
+ * (GEN_RT_DERIV_APART) stay functions of their own, which the compiler
+ * specializes all the same (every call passes the one model) and which
+ * keep its loop passes over each function short.
+ *
+ * The products are written for that: an entry's sum in a register (the
+ * dot form, each entry's terms in a fixed order), restrict operands, and
+ * only the nx dense rows of a stage's dzeta/dv multiplied.
  */
 #ifndef GEN_RT_DERIV_INLINE_H
 #define GEN_RT_DERIV_INLINE_H
