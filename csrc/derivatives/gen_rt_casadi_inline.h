@@ -3,7 +3,7 @@
  * inline function, gen_rt_cs_eval_inline (the same arguments, the same
  * bits), over gen_rt_deriv_inline.h.
  *
- * gen_rt_casadi.c defines the library function over it. A CasADi library
+ * gen_rt_casadi_extern.c defines the library function over it. A CasADi library
  * (<name>_casadi.c) includes this header and calls it with its model, a
  * static const gen_rt_cs_model, from one function of its own: the
  * compiler specializes the whole call tree for the model's sizes and

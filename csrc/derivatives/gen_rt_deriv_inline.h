@@ -3,7 +3,7 @@
  * functions: gen_rt_deriv_<f>_inline is gen_rt_deriv_<f> (the same
  * arguments, the same IEEE operations in the same order: the same bits).
  *
- * gen_rt_deriv.c defines the library functions over them. A model's
+ * gen_rt_deriv_extern.c defines the library functions over them. A model's
  * translation unit (the CasADi library's <name>_casadi.c, through
  * gen_rt_casadi_inline.h) includes this header and calls them with its own
  * model, a static const gen_rt_deriv_model, the same one at every call:

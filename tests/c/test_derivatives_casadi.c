@@ -1,6 +1,6 @@
 /*
  * test_derivatives_casadi.c - gen_rt_cs_eval (csrc/derivatives/
- * gen_rt_casadi.c): a model's functions in CasADi's calling convention, on
+ * gen_rt_casadi_extern.c): a model's functions in CasADi's calling convention, on
  * the hand-written model of test_derivatives_model.h with stand-ins for
  * the model's C API (the right-hand side and its Jacobian from the
  * kernels, the runtime's RK4 for step_rk4, the outputs and the velocity

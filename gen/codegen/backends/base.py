@@ -27,7 +27,7 @@ RUNTIME_HEADERS = ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h", "gen_rt_rod
 # convention over them (csrc/derivatives), as the CasADi library holds them:
 # headers of static inline functions (*_inline.h) that its own file compiles
 # with its model as a constant (the sizes unrolled, the kernels called
-# directly); gen_rt_deriv.c and gen_rt_casadi.c, the same functions with the
+# directly); gen_rt_deriv_extern.c and gen_rt_casadi_extern.c, the same functions with the
 # model a run-time value, are the C runtime's (CMake, tests/c), not the
 # library's
 DERIVATIVE_HEADERS = ["gen_rt_deriv.h", "gen_rt_casadi.h", "gen_rt_deriv_inline.h",

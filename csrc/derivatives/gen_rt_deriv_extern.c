@@ -1,4 +1,4 @@
-/* gen_rt_deriv.c - the implicit function's derivatives and the derivatives
+/* gen_rt_deriv_extern.c - the implicit function's derivatives and the derivatives
  * of one RK4 and one RODAS4 step (gen_rt_deriv.h): the library functions
  * over the algorithms of gen_rt_deriv_inline.h. */
 #include "gen_rt.h"

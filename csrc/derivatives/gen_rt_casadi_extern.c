@@ -1,4 +1,4 @@
-/* gen_rt_casadi.c - a model's functions in CasADi's calling convention
+/* gen_rt_casadi_extern.c - a model's functions in CasADi's calling convention
  * (gen_rt_casadi.h): the library function over gen_rt_casadi_inline.h. */
 #include "gen_rt.h"
 #include "gen_rt_casadi.h"
