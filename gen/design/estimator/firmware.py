@@ -20,7 +20,8 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-from ...codegen.render import fmt_real, render, template_env, write_atomic
+from ...codegen.render import render, write_atomic
+from ...codegen.templating import fmt_real, template_env
 from ...core.errors import BuildError, InputError
 from ...core.resources import csrc_file
 from ...toolchain.stack import (analyze, display_name, find_tool, image_stack, parse_callgraph,

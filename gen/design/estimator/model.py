@@ -18,7 +18,8 @@ import sympy as sm
 from sympy.physics import mechanics as me
 
 from ...codegen.product_abi import ProductPlan
-from ...codegen.render import fmt_real, render
+from ...codegen.render import render
+from ...codegen.templating import fmt_real
 from ...core.errors import InputError
 from ...core.names import validate_name
 from ...plan.ir import Arg, make_jacobian_kernel, make_kernel, plan as make_plan
