@@ -316,4 +316,4 @@ def hybrid_work_len(nq, nu, mv, nh):
 
 def hybrid_iwork_len(nq, nu, mv, nh):
     """Ints of the engine's hybrid scratch: GEN_RT_HYBRID_IWORK."""
-    return nq + (nu + mv + nh + 1) + 2 * nh + 4
+    return nq + (nu + mv + nh + 1) + 3 * nh + 4

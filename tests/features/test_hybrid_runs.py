@@ -59,3 +59,61 @@ def test_ensemble_of_the_ball_is_each_runs_simulate_bit_for_bit(ball):
     with cluster, client:
         remote = ball.ensemble(X0, 3.0, 0.01, chunk=4, client=client, **kw)
     assert remote.final.tobytes() == res["final"].tobytes()
+
+
+# --------------------------------------------------------- penetrated starts
+PENETRATED = ("hyb_ball_simulate_events: the run starts inside the contact of impact 'ground': "
+              "its gap is -0.5 at t = 0, below zero, the side its impact closes onto (the "
+              "motion would run through it); start with the gap on its open side, or at zero "
+              "[ERR_PENETRATED], state: y=-0.5, v=0")
+
+
+@pytest.mark.slow
+def test_penetrated_start_is_refused_in_python_and_an_ensemble(ball):
+    """The hybrid guide's ball from y = -0.5 (it used to fall to y = -5.4 with
+    status 0): refused, naming the impact and its gap, whatever the method;
+    in an ensemble that run fails with ERR_PENETRATED and the others run."""
+    for method in ("rk4", "dopri5", "rodas4"):
+        with pytest.raises(gen.InputError) as err:
+            ball.simulate([-0.5, 0.0], 1.0, 0.01, method=method)
+        assert str(err.value) == PENETRATED
+        assert err.value.argument == "x0" and err.value.value == -0.5
+    np.testing.assert_array_equal(ball.hybrid_values(0.0, [-0.5, 0.0]), [-0.5])
+    res = ball.ensemble(np.array([[1.0, 0.0], [-0.5, 0.0]]), 1.0, 0.01)
+    assert res.failures[0][:2] == (1, "ERR_PENETRATED") and res.status[0] == 0
+    # on the surface: at rest it is held from t0 (it used to fall through),
+    # moving down it bounces at t0 with v = +e |v|
+    sol = ball.simulate([0.0, 0.0], 1.0, 0.1, method="dopri5")
+    assert [e.name for e in sol.events] == ["ground", "ground.hold"]
+    assert np.all(sol.x == 0.0)
+    sol = ball.simulate([0.0, -2.0], 0.3, 0.1, method="dopri5", rtol=1e-12, atol=1e-12)
+    assert sol.events[0].t == 0.0 and sol.x[0, 1] == pytest.approx(1.6, abs=1e-15)
+    assert sol.x[1, 0] == pytest.approx(1.6 * 0.1 - G / 2 * 0.01, abs=1e-12)
+
+
+@pytest.mark.slow
+def test_penetrated_start_in_the_binary_and_the_fmu(tmp_path):
+    """The same refusal in the standalone binary (exit status 1, the message
+    on stderr) and in the FMU (fmi2ExitInitializationMode: fmi2Error, the
+    message through the logger)."""
+    import subprocess
+    from conftest import build_binary
+    model = hybrid._ball(name="hyb_ball_pen")
+    exe = build_binary(model, tmp_path / "bin")
+    r = subprocess.run([str(exe), "--x0", "-0.5,0", "--t-end", "1", "--dt", "0.01"],
+                       capture_output=True, text=True)
+    assert r.returncode == 1
+    assert ("hyb_ball_pen_sim: the run starts inside the contact of impact 'ground': its gap "
+            "is -0.5 at t = 0, below zero, the side its impact closes onto (refused: "
+            "ERR_PENETRATED)") in r.stderr
+    fmpy = pytest.importorskip("fmpy", reason="FMPy (pip install eomgen[fmu])")
+    path = tmp_path / "ball.fmu"
+    gen.export_fmu(model, str(path), kind="me", fmi_version="2.0")
+    logged = []
+    with pytest.raises(Exception, match=r"fmi2ExitInitializationMode failed with status 3"):
+        fmpy.simulate_fmu(str(path), fmi_type="ModelExchange", stop_time=1.0,
+                          start_values={"y": -0.5}, logger=lambda *a: logged.append(a[-1]))
+    assert logged[-1].decode() == (
+        "ExitInitializationMode: the start is inside the contact of impact 'ground': its gap "
+        "is -0.5 at t = 0, below zero, the side its impact closes onto (ERR_PENETRATED: the "
+        "state would run through it)")
