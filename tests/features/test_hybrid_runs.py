@@ -61,6 +61,36 @@ def test_ensemble_of_the_ball_is_each_runs_simulate_bit_for_bit(ball):
     assert remote.final.tobytes() == res["final"].tobytes()
 
 
+
+@pytest.mark.slow
+def test_interpolant_is_piecewise_between_the_impacts(ball):
+    """sol.sol(t) never interpolates across a jump: just after each of the
+    first 10 impacts it gives the analytic rebound e^k sqrt(2 g h0) - g dt
+    (before: v = -3.17 where the exact value is +3.53), just before it the
+    analytic fall, at the impact's time the state after it; at rest (held)
+    the ball stays on the floor between the rows."""
+    h0, e = 1.0, 0.8
+    sol = ball.simulate([h0, 0.0], 8.0, 0.01, method="dopri5", rtol=1e-12, atol=1e-12)
+    impacts = [ev for ev in sol.events if ev.name == "ground"]
+    v1 = np.sqrt(2 * G * h0)
+    t_k = np.sqrt(2 * h0 / G) + np.concatenate([[0.0], np.cumsum(2 * v1 * e ** np.arange(1, 10)
+                                                                  / G)])
+    for k, ev in enumerate(impacts[:10]):
+        v_before, v_after = v1 * e ** k, v1 * e ** (k + 1)
+        assert abs(ev.t - t_k[k]) < 1e-11
+        for dt in (1e-6, 1e-3, 4e-3):
+            x = sol.sol(ev.t + dt)
+            assert abs(x[1] - (v_after - G * dt)) < 1e-9, (k, dt, x)
+            assert abs(x[0] - (v_after * dt - G * dt * dt / 2)) < 1e-9
+            assert abs(sol.sol(ev.t - dt)[1] - (-v_before + G * dt)) < 1e-9
+        np.testing.assert_array_equal(sol.sol(ev.t), ev.x_after)
+    names = [ev.name for ev in sol.events]
+    assert names[-1] == "ground.hold" and names.count("ground") == len(names) - 1
+    rest = sol.events[-1].t
+    ts = np.linspace(rest + 0.001, 8.0, 777)
+    assert np.abs(sol.sol(ts)).max() < 1e-12        # held on the floor, not falling
+
+
 # --------------------------------------------------------- penetrated starts
 PENETRATED = ("hyb_ball_simulate_events: the run starts inside the contact of impact 'ground': "
               "its gap is -0.5 at t = 0, below zero, the side its impact closes onto (the "
