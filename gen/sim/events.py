@@ -184,7 +184,7 @@ def hybrid_error(sim, plan, status, n_events, p, where):
                           f"{_pairs(sim, x)}", "x0", None, g)
     if name not in ("ERR_NONFINITE_MODEL", "ERR_SINGULAR", "ERR_INCONSISTENT_RESET"):
         return None
-    bad = [f"{n} = {v!r}" for n, v in zip(sim.state_names, xa) if not np.isfinite(v)]
+    bad = [f"{n} = {float(v)!r}" for n, v in zip(sim.state_names, xa) if not np.isfinite(v)]
     if reset and name == "ERR_INCONSISTENT_RESET":
         body = (f"the map of {what} at t = {t:.17g} gives a state that violates the model's "
                 f"constraints: {_pairs(sim, xa)}")
