@@ -43,7 +43,7 @@ static gen_rt_real *cs_read(const gen_rt_cs_model *m, const gen_rt_cs_fn *f,
     c->nin = f->nin;
     c->nrow = cs_rows(m, f->base);
     c->x = work; c->xd = c->x + nx; c->r = c->xd + nx; c->p = c->r + nr; c->z = c->p + np;
-    if (f->base == GEN_RT_CS_CONSTRAINTS) cs_in(0, nr, c->r);
+    cs_in(0, nr, c->r);   /* a function without r (constraints, guard_, map_): zero */
     c->t = c->h = 0;
     for (k = 0; k <= GEN_RT_CS_H; ++k) c->off[k] = -1;
     c->nv = 0;
