@@ -9,6 +9,7 @@ it; it imports no later stage of the pipeline."""
 from __future__ import annotations
 
 from ..intake.hybrid import KIND_IMPACT
+from .templating import template_env
 
 __all__ = ["NAMES", "HYBRID_PREFIXES", "STEP_METHODS", "MODES", "function_specs",
            "hybrid_bases", "derivative_kernels", "hybrid_derivative_kernels", "kernel_context",
@@ -452,5 +453,4 @@ def cdef(specs):
     their declarations as <name>_casadi.h has them (the same macro,
     templates/casadi/casadi_decl.j2), with casadi_real = double and
     casadi_int = long long."""
-    from .render import template_env
     return template_env().get_template("casadi/casadi.cdef.j2").render(cs_functions=specs)
