@@ -192,48 +192,25 @@ def test_step_refuses_to_cross_a_guard(ball, wheel):
         F["step"]([GAMMA + ALPHA - 0.0236, 2.0], [], p, 0.0, 0.05)
 
 
-def _two_steps(F, p, sim, N=40):
-    """Two phases of the wheel's gait as a casadi.Opti problem built from
-    the functions: each phase N RK4 steps of its own free duration (multiple
-    shooting), ending on the strike's guard, the strike's map carrying the
-    state into the next phase, and after the second strike the first state
-    again (a periodic gait of two steps). The guess is one simulated step
-    from 1.5 rad/s, cut just before its strike: a guess whose steps cross
-    the guard would be refused (step integrates one phase); IPOPT cuts back
-    a trial point that crosses it."""
-    first = sim.simulate([GAMMA - ALPHA, 1.5], 3.0, 0.01, method="dopri5", rtol=1e-12,
-                         atol=1e-12)
-    t_guess = 0.999 * first.events[0].t
-    guess = np.array([first.sol(t) for t in np.linspace(0, t_guess, N + 1)]).T
-    opti = ca.Opti()
-    X = [opti.variable(2, N + 1) for _ in range(2)]
-    T = [opti.variable() for _ in range(2)]
-    for i in range(2):
-        h = T[i] / N
-        for k in range(N):
-            opti.subject_to(X[i][:, k + 1] == F["step"](X[i][:, k], [], p, k * h, h))
-        opti.subject_to(F["guard_strike"](X[i][:, N], p, T[i]) == 0)
-        opti.subject_to(opti.bounded(0.05, T[i], 5.0))
-        nxt = X[(i + 1) % 2][:, 0]
-        opti.subject_to(nxt == F["map_strike"](X[i][:, N], p, T[i]))
-        opti.set_initial(X[i], guess)
-        opti.set_initial(T[i], t_guess)
-    opti.minimize((T[0] - T[1]) ** 2)
-    opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "tol": 1e-12,
-                                                  "sb": "yes"})
-    sol = opti.solve()
-    return [sol.value(x) for x in X], [sol.value(t) for t in T]
+def _guide_block():
+    """docs/guides/casadi.md's two-phase Opti problem (its section "A hybrid
+    model"), the block as the guide shows it."""
+    from pathlib import Path
+    text = (Path(__file__).resolve().parents[2] / "docs" / "guides" / "casadi.md").read_text()
+    section = text[text.index("## A hybrid model"):]
+    return section[section.index("```python\n") + 10:section.index("\n```\n")]
 
 
 @pytest.mark.slow
 def test_two_phase_opti_gives_the_rimless_wheels_steady_state(wheel):
     """The acceptance: a two-phase Opti problem over the rimless wheel built
-    from step, guard_strike and map_strike gives its analytic steady-state
-    speeds to 1e-6 (after and before each strike); replayed through
-    sim.simulate, the gait returns to itself."""
-    model, F, sim = wheel
-    p = np.array(model.p_values)
-    X, T = _two_steps(F, p, sim)
+    from step, guard_strike and map_strike (the casadi guide's block, run
+    here) gives its analytic steady-state speeds to 1e-6 (after and before
+    each strike); replayed through sim.simulate, the gait returns to itself."""
+    _, _, sim = wheel
+    ns = {}
+    exec(compile(_guide_block(), "docs/guides/casadi.md", "exec"), ns)  # noqa: S102
+    X, T = ns["X"], ns["T"]
     after, before = steady_speed()
     for i in range(2):
         assert abs(X[i][1, 0] - after) < 1e-6, (X[i][1, 0], after)
