@@ -64,6 +64,7 @@ from ..codegen.backends import get_backend
 from ..codegen.casadi_kernels import NAMES, STEP_METHODS, cdef, function_specs, hybrid_bases
 from ..core.errors import MissingDependencyError, ModelError
 from ..core.optional import require
+from ..intake.hybrid import KIND_RESET
 from ..intake.model import require_model
 from ..pipeline import build_product
 
@@ -264,7 +265,7 @@ def _crossed(F, args, x_next):
         a = float(np.asarray(g(args["x"], args["p"], t)).ravel()[0])
         b = float(np.asarray(g(x_next, args["p"], t + h)).ravel()[0])
         if (d.direction <= 0 and a > 0 > b) or (d.direction >= 0 and a < 0 < b):
-            kind = "reset" if d.kind == 1 else "impact"
+            kind = "reset" if d.kind == KIND_RESET else "impact"
             parts.append(f"{kind} {d.name!r} goes from {a:.6g} at x to {b:.6g} at x_next")
     return ("; " + "; ".join(parts) + " (a phase ends on its guard: guard_<name>(x_N) = 0, "
             "then map_<name>)") if parts else ""
