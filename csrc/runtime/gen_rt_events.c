@@ -203,7 +203,7 @@ int gen_rt_events_start(gen_rt_engine *e, gen_rt_real t0, gen_rt_real *x)
         /* a gap at zero that closes, or rests there: the impact (and the
          * contact held while it pushes) at t0 */
         if (e->hy->kind[k] != GEN_RT_HYBRID_IMPACT || d == 0 || !(rt_abs(e->hva[k]) <= tol) ||
-            !(d * e->gd[k] >= 0))
+            !((gen_rt_real)d * e->gd[k] >= 0))
             continue;
         rt_copy(e->nx, x, e->xe);
         if ((st = hybrid_jump_(e, k, t0, 0, &jumped))) return st;
