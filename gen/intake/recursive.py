@@ -377,6 +377,7 @@ def accelerations_of_tree(system, interner=None):
             sw, sv = n.Sw[:3, :], n.Sw[3:, :]
             Uw, Uv = ik.kept(A * sw + B * sv), ik.kept(B.T * sw + C * sv)
             D = ik.sym_kept(sw.T * Uw + sv.T * Uv)
+            _check_moved(n, D)
             n.Dinv = Dinv = _inv_small(D, ik)
             n.uu = uu = ik.kept(-(sw.T * pw + sv.T * pv))
             n.U = (Uw, Uv)
@@ -413,6 +414,20 @@ def accelerations_of_tree(system, interner=None):
             av = av + n.Sw[3:, :] * uj
         n.al, n.a = ik.kept(aw), ik.kept(av)
     return ud, tree.q, tree.u, tree.kdes
+
+
+def _check_moved(n, D):
+    """A ModelError naming the body when its joint moves no mass or
+    inertia (D = S^T IA S has a zero on its diagonal: a massless body, and
+    nothing beyond it that the joint's motion moves), whose accelerations
+    the equations then do not determine (1 / 0 in the recursion)."""
+    zero = [n.joint.speeds[k] for k in range(D.shape[0]) if D[k, k] == 0]
+    if zero:
+        raise ModelError(
+            f"body {_name(n.body)!r} has no mass or inertia that its joint "
+            f"{_name(n.joint)!r} moves (nor has any body beyond it), so the equations do "
+            f"not determine the acceleration of {', '.join(str(s.func) for s in zero)}: "
+            "give it a mass or inertia, or weld it to its parent (WeldJoint)")
 
 
 def _inv_small(D, ik):
