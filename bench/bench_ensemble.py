@@ -108,6 +108,7 @@ def kept_worker(model, what, n, rows):
     traced = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
     return {"what": what, "n": n, "rows": rows, "rss_growth_kb": peak_rss_kb() - base,
+            "peak_rss_kb": peak_rss_kb(),
             "traced_peak_bytes": traced, "seconds": seconds}
 
 
