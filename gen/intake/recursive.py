@@ -75,6 +75,7 @@ from ..sym.intern import Interner
 from .sympy_compat import time_symbol
 
 __all__ = ["equations_of_tree", "accelerations_of_tree", "constraints_of_tree",
+           "check_joints_move", "massless_joint_error",
            "SUPPORTED_JOINTS"]
 
 SUPPORTED_JOINTS = ("PinJoint", "PrismaticJoint", "CylindricalJoint", "PlanarJoint",
@@ -423,11 +424,30 @@ def _check_moved(n, D):
     the equations then do not determine (1 / 0 in the recursion)."""
     zero = [n.joint.speeds[k] for k in range(D.shape[0]) if D[k, k] == 0]
     if zero:
-        raise ModelError(
-            f"body {_name(n.body)!r} has no mass or inertia that its joint "
-            f"{_name(n.joint)!r} moves (nor has any body beyond it), so the equations do "
-            f"not determine the acceleration of {', '.join(str(s.func) for s in zero)}: "
-            "give it a mass or inertia, or weld it to its parent (WeldJoint)")
+        raise massless_joint_error(n.joint, zero)
+
+
+def check_joints_move(system, M, speeds):
+    """For CRBA's M of an open tree: a ModelError naming the body when the
+    rows of M of one of its joint's speeds are all zero (the same refusal
+    as the articulated body algorithm's)."""
+    idx = {s: i for i, s in enumerate(speeds)}
+    n = len(speeds)
+    for j in system.joints:
+        zero = [s for s in j.speeds if s in idx
+                and all(M[idx[s], k] == 0 for k in range(n))]
+        if zero:
+            raise massless_joint_error(j, zero)
+
+
+def massless_joint_error(joint, speeds):
+    """The ModelError of a joint that moves no mass or inertia: its child
+    body named, and the speeds whose accelerations are undetermined."""
+    return ModelError(
+        f"body {_name(joint.child)!r} has no mass or inertia that its joint "
+        f"{_name(joint)!r} moves (nor has any body beyond it), so the equations do "
+        f"not determine the acceleration of {', '.join(str(s.func) for s in speeds)}: "
+        "give it a mass or inertia, or weld it to its parent (WeldJoint)")
 
 
 def _inv_small(D, ik):

@@ -61,12 +61,13 @@ def test_a_model_without_speeds_is_refused():
 
 def test_a_massless_body_carrying_a_joint_is_refused_naming_it():
     system, consts = _two_pins(1, 0)
-    with pytest.raises(gen.ModelError) as e:
-        gen.Model.from_system(system, constants=consts, formulation="recursive")
-    assert str(e.value) == (
-        "body 'lower' has no mass or inertia that its joint 'j2' moves (nor has any body "
-        "beyond it), so the equations do not determine the acceleration of u2: give it a "
-        "mass or inertia, or weld it to its parent (WeldJoint)")
+    for formulation in ("recursive", "crba"):
+        with pytest.raises(gen.ModelError) as e:
+            gen.Model.from_system(system, constants=consts, formulation=formulation)
+        assert str(e.value) == (
+            "body 'lower' has no mass or inertia that its joint 'j2' moves (nor has any body "
+            "beyond it), so the equations do not determine the acceleration of u2: give it a "
+            "mass or inertia, or weld it to its parent (WeldJoint)")
 
 
 @pytest.mark.slow
