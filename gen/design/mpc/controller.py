@@ -175,7 +175,7 @@ class MPC:
         bad = np.nonzero(~np.isfinite(x))[0]
         if len(bad):
             i = int(bad[0])
-            raise InputError(f"gen.MPC: {what}[{i}] = {x[i]!r} ({m.state_names[i]}): the "
+            raise InputError(f"gen.MPC: {what}[{i}] = {float(x[i])!r} ({m.state_names[i]}): the "
                              "state must be finite", what, i, float(x[i]))
         return np.ascontiguousarray(x, dtype=self._dtype)
 
