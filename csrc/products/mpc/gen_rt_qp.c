@@ -909,6 +909,8 @@ int gen_rt_qp_solve(const gen_rt_qp *qp, const gen_rt_qp_options *opt, gen_rt_re
     real sg, sb, sz, wbig, merit, best_merit = GEN_RT_QP_INF;
     if ((st = check(qp, opt))) return st;
     if (!work || !x || !u) return GEN_RT_ERR_NULL;
+    best.stat = best.ineq = best.soft = best.mu = 0;
+    best.m = 0;
     ws.qp = qp;
     layout(&ws, qp->N, qp->nx, qp->nu, qp->nbx, qp->nbu, qp->ng, work);
     if ((st = sides_setup(&ws))) return st;

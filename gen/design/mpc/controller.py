@@ -111,11 +111,8 @@ class MPC:
             self.P, self.terminal = _terminal_weight(model, pb, ref, pb.p)
         else:
             self.P, self.terminal = pb.P, "given"
-        self.options = {
-            "tol": float(tol if tol is not None else (1e-8 if real == "double" else 1e-4)),
-            "qp_tol": float(qp_tol if qp_tol is not None else
-                            (1e-10 if real == "double" else 1e-5)),
-            "qp_max_iter": int(qp_max_iter), "penalty": float(penalty)}
+        self._tols = (tol, qp_tol, qp_max_iter, penalty)
+        self.options = self._options(real)
         for k in ("tol", "qp_tol"):
             if not (self.options[k] > 0 and math.isfinite(self.options[k])):
                 raise InputError(f"gen.MPC: {k} must be a positive number, got "
@@ -135,6 +132,15 @@ class MPC:
         self._info = self._ffi.new(f"{self.name}_info *")
         self._check(self._fn["init"](self._mem), "init")
         self.build_seconds = time.perf_counter() - t0
+
+    def _options(self, real):
+        """The solver's options in a scalar type: the tolerances given, or
+        the type's defaults (double 1e-8 and 1e-10, float 1e-4 and 1e-5)."""
+        tol, qp_tol, qp_max_iter, penalty = self._tols
+        return {"tol": float(tol if tol is not None else (1e-8 if real == "double" else 1e-4)),
+                "qp_tol": float(qp_tol if qp_tol is not None else
+                                (1e-10 if real == "double" else 1e-5)),
+                "qp_max_iter": int(qp_max_iter), "penalty": float(penalty)}
 
     @staticmethod
     def _check_name(name, model):
@@ -347,7 +353,7 @@ class MPC:
             raise InputError(f"gen.MPC: real must be 'double' or 'float', got {real!r}",
                              "real", None, real)
         plan = mpc_plan(self.model, self.problem, self.reference, self.P, name, real,
-                        self.options, with_model=False)
+                        self._options(real), with_model=False)
         return render(plan, real=real, backend="mpc").files
 
     def to_c(self, path, name=None, real=None):
