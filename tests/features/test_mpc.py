@@ -329,3 +329,126 @@ def test_bad_input_named_before_build(cart, kw, match):
     args.update(kw)
     with pytest.raises(gen.InputError, match=match):
         gen.MPC(cart, **args)
+
+
+@pytest.mark.slow
+def test_phases_separately_and_the_time_limit(cart, rti):
+    """prepare(t) then feedback(x) is the call mpc(x, t), bit for bit; a
+    time budget too short for the QP ends the call with TIME_LIMIT and the
+    best control so far, finite and inside the bounds."""
+    rti.reset()
+    u1 = rti(X0_CP, t=0.0)
+    rti.reset()
+    assert rti.prepare(0.0) == 0
+    u2 = rti.feedback(X0_CP)
+    assert np.array_equal(u1, u2) and rti.status == 0
+    fast = gen.MPC(cart, N_CP, PERIOD, Q_CP, R_CP, P=P_CP, bounds={"F": (-20.0, 20.0)},
+                   time_limit=1e-7)
+    u = fast(X0_CP, t=0.0)
+    assert fast.status == 2 and fast.status_name == "TIME_LIMIT", fast.message
+    assert np.all(np.isfinite(u)) and abs(u[0]) <= 20.0
+
+
+# ------------------------------------------------------------------ path, residuals
+@pytest.mark.slow
+def test_path_constraint_and_residuals_against_ipopt(cart):
+    """A path constraint on the cart's position (soft, linearized at each
+    iteration) and a nonlinear least-squares residual (the pole tip's
+    height below its upright height, Gauss-Newton): the converged SQP
+    equals IPOPT's solution of the NLP with the constraint hard (the L1
+    penalty is exact) and the residual in the cost, to 1e-6."""
+    cs = pytest.importorskip("casadi", reason="CasADi + IPOPT, the independent NLP solver")
+    import sympy.physics.mechanics as mech
+    xc, th = mech.dynamicsymbols("x theta")
+    lo = -0.355
+    w = 4.0
+    mpc = gen.MPC(cart, N_CP, PERIOD, Q_CP, R_CP, P=P_CP, bounds={"F": (-20.0, 20.0)},
+                  path=[(xc, lo, 1.0)], residuals=[(1 - sm.cos(th), w)], method="sqp",
+                  max_iter=100, penalty=1e3)
+    mpc(X0_CP, t=0.0)
+    assert mpc.status == 0, mpc.message
+    xs, us = cs.SX.sym("x", 4), cs.SX.sym("u", 1)
+    f = cs.Function("f", [xs, us], [casadi_rhs(cart, xs, us)])
+    U = cs.SX.sym("U", N_CP)
+    x, h, J, g = cs.DM(X0_CP), PERIOD, 0, []
+    X = [x]
+    for k in range(N_CP):
+        J += PERIOD * (cs.mtimes([x.T, Q_CP, x]) + R_CP[0, 0] * U[k] ** 2
+                       + w * (1 - cs.cos(x[1])) ** 2)
+        k1 = f(x, U[k])
+        k2 = f(x + h / 2 * k1, U[k])
+        k3 = f(x + h / 2 * k2, U[k])
+        k4 = f(x + h * k3, U[k])
+        x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        X.append(x)
+        if k < N_CP - 1:
+            g.append(x[0])
+    J += cs.mtimes([x.T, P_CP, x])
+    solver = cs.nlpsol("s", "ipopt", {"x": U, "f": J, "g": cs.vertcat(*g)},
+                       {"ipopt.print_level": 0, "print_time": 0, "ipopt.tol": 1e-12,
+                        "ipopt.sb": "yes", "ipopt.bound_relax_factor": 0.0})
+    sol = solver(x0=np.zeros(N_CP), lbx=-20.0, ubx=20.0, lbg=lo, ubg=1.0)
+    assert solver.stats()["success"]
+    Uref = np.array(sol["x"]).ravel()
+    Xref = np.array(cs.Function("X", [U], [cs.horzcat(*X)])(Uref)).T
+    assert np.min(Xref[1:N_CP, 0]) == pytest.approx(lo, abs=1e-9)     # the path, active
+    np.testing.assert_allclose(mpc.u.ravel(), Uref, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(mpc.x, Xref, rtol=0, atol=1e-6)
+
+
+# ------------------------------------------------------------------ constrained model
+def forced_pendulum():
+    """The seed's nonminimal pendulum (q1, q2 Cartesian, |P| = L; gravity
+    along N.x) with a force F along N.y on the particle."""
+    from sympy import Matrix, atan, solve, symbols
+    from sympy.physics.mechanics import (KanesMethod, Particle, Point, ReferenceFrame,
+                                         dynamicsymbols)
+    q1, q2 = dynamicsymbols("q1:3")
+    q1d, q2d = dynamicsymbols("q1:3", level=1)
+    u1, u2 = dynamicsymbols("u1:3")
+    F = dynamicsymbols("F")
+    L, m, g = symbols("L, m, g")
+    N = ReferenceFrame("N")
+    pN = Point("N*")
+    pN.set_vel(N, 0)
+    A = N.orientnew("A", "axis", [atan(q2 / q1), N.z])
+    P = pN.locatenew("P1", q1 * N.x + q2 * N.y)
+    kde = Matrix([q1d - u1, q2d - u2])
+    P.set_vel(N, P.pos_from(pN).dt(N).subs(solve(kde, [q1d, q2d])))
+    f_c = Matrix([P.pos_from(pN).magnitude() - L])
+    f_v = Matrix([P.vel(N).express(A).dot(A.x)])
+    f_v.simplify()
+    KM = KanesMethod(N, q_ind=[q2], u_ind=[u2], q_dependent=[q1], u_dependent=[u1],
+                     configuration_constraints=f_c, velocity_constraints=f_v, kd_eqs=kde)
+    KM.kanes_equations([Particle("pP", P, m)], [(P, m * g * N.x + F * N.y)])
+    return gen.Model.from_kanes(KM, constants={L: 1.0, m: 1.0, g: 9.81}, inputs=[F],
+                                name="pendulum_forced")
+
+
+@pytest.mark.slow
+def test_constrained_pendulum_stabilized_upright():
+    """The nonminimal pendulum held upright (q1 = -L) by MPC on its
+    independent state (q2, u2), the loop closed in C: it converges, the
+    force stays in its bounds, and the configuration and velocity
+    constraints hold to 1e-10 along the loop and in the predictions."""
+    model = forced_pendulum()
+    assert model.independent_state_names == ["q2", "u2"]
+    i = {n: k for k, n in enumerate(model.state_names)}
+    up = np.zeros(4)
+    up[i["q1"]] = -1.0
+    mpc = gen.MPC(model, 20, 0.05, [20.0, 1.0], [0.01], P=np.diag([200.0, 10.0]),
+                  bounds={"F": (-15.0, 15.0)}, reference=(up, [0.0]))
+    x0 = np.zeros(4)
+    x0[i["q2"]], x0[i["q1"]] = 0.4, -np.sqrt(1 - 0.16)
+    sim = gen.compile(model, derivatives=True)
+    sol = sim.simulate(x0, 4.0, 5e-3, controller=mpc)
+    q1, q2, u1, u2 = (sol.x[:, i[n]] for n in ("q1", "q2", "u1", "u2"))
+    assert np.max(np.abs(np.hypot(q1, q2) - 1.0)) < 1e-10
+    assert np.max(np.abs(q1 * u1 + q2 * u2)) < 1e-10
+    assert np.max(np.abs(sol.r)) == pytest.approx(15.0) and np.max(np.abs(sol.r)) <= 15.0
+    assert abs(q2[-1]) < 1e-3 and q1[-1] == pytest.approx(-1.0, abs=1e-6)
+    u = mpc(sol.x[len(sol.t) // 4], t=1.0)
+    assert mpc.status == 0 and np.all(np.isfinite(u))
+    X = mpc.x
+    assert np.max(np.abs(np.hypot(X[:, i["q1"]], X[:, i["q2"]]) - 1.0)) < 1e-10
+    assert np.max(np.abs(X[:, i["q1"]] * X[:, i["u1"]] + X[:, i["q2"]] * X[:, i["u2"]])) < 1e-10

@@ -528,13 +528,20 @@ int gen_rt_mpc_set_guess(const gen_rt_mpc_problem *pb, gen_rt_mpc_state *st,
     return GEN_RT_OK;
 }
 
-int gen_rt_mpc_solution(const gen_rt_mpc_problem *pb, const gen_rt_real *work, gen_rt_real *x,
-                        gen_rt_real *u)
+int gen_rt_mpc_solution(const gen_rt_mpc_problem *pb, const gen_rt_mpc_state *st,
+                        const gen_rt_real *work, gen_rt_real *x, gen_rt_real *u)
 {
-    if (!pb || !work) return GEN_RT_ERR_NULL;
+    int k, s;
+    if (!pb || !st || !work) return GEN_RT_ERR_NULL;
     /* X and U lead the work array (layout) */
-    if (x) copy((pb->N + 1) * pb->nx, work, x);
     if (u) copy(pb->N * pb->nr, work + (pb->N + 1) * pb->nx, u);
+    if (!x) return GEN_RT_OK;
+    copy((pb->N + 1) * pb->nx, work, x);
+    /* a constrained model: the QP moved the independent entries only, the
+     * dependent ones follow (the next preparation does the same) */
+    for (k = 1; k <= pb->N && pb->complete && st->has_iterate; ++k)
+        if ((s = pb->complete(pb->ctx, st->t_prepared + (real)k * pb->period, x + k * pb->nx)))
+            return s;
     return GEN_RT_OK;
 }
 

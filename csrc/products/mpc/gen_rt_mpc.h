@@ -139,9 +139,11 @@ int gen_rt_mpc_feedback(const gen_rt_mpc_problem *pb, gen_rt_mpc_state *st,
 int gen_rt_mpc_step(const gen_rt_mpc_problem *pb, gen_rt_mpc_state *st, gen_rt_real t,
                     const gen_rt_real *x, gen_rt_real *work, gen_rt_real *u);
 
-/* the predicted states ((N + 1) x nx) and inputs (N x nr) of the last call */
-int gen_rt_mpc_solution(const gen_rt_mpc_problem *pb, const gen_rt_real *work, gen_rt_real *x,
-                        gen_rt_real *u);
+/* the predicted states ((N + 1) x nx; a constrained model's dependent
+ * entries completed from the independent ones) and inputs (N x nr) of the
+ * last call; either may be NULL */
+int gen_rt_mpc_solution(const gen_rt_mpc_problem *pb, const gen_rt_mpc_state *st,
+                        const gen_rt_real *work, gen_rt_real *x, gen_rt_real *u);
 
 /* the message of a status of the runtime's or the MPC's table */
 const char *gen_rt_mpc_status_message(int status);
