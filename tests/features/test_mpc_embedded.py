@@ -124,3 +124,28 @@ def test_cortex_m4f_firmware_footprint(mpc, tmp_path):
           f"(.text {img['text']}, .rodata {img['rodata']}), RAM {ram} B (.data {img['data']}, "
           f".bss {img['bss']}: the controller's static memory), stack of main "
           f"{stack['main']['stack']} B (disassembly estimate, indirect calls aside)")
+
+
+@pytest.mark.slow
+def test_standalone_binary_closed_by_the_mpc(mpc, tmp_path):
+    """The model's generated project built with -DCART_POLE_TRACKER=cp_mpc_loop:
+    its simulator is closed by the controller of mpc.to_c, the same run as
+    sim.simulate(..., controller=mpc)."""
+    require_tool("cmake")
+    src, _ = _sources(mpc, tmp_path, "double")
+    b = tmp_path / "build"
+    for cmd in (["cmake", "-S", str(src), "-B", str(b), "-DCART_POLE_TRACKER=cp_mpc_loop"],
+                ["cmake", "--build", str(b), "--target", "cart_pole_sim"]):
+        p = subprocess.run(cmd, capture_output=True, text=True)
+        assert p.returncode == 0, p.stdout + p.stderr
+    out = subprocess.run([str(b / "cart_pole_sim"), "--t-end", "3", "--dt", "5e-3",
+                          "--x0", "theta=0.3"], capture_output=True, text=True,
+                         check=True).stdout.strip().splitlines()
+    head = out[0].split(",")
+    data = np.array([[float(v) for v in ln.split(",")] for ln in out[1:]])
+    sim = gen.compile(mpc.model, derivatives=True)
+    sol = sim.simulate(X0, 3.0, 5e-3, controller=mpc)
+    assert data.shape[0] == len(sol.t)
+    assert np.max(np.abs(data[:, 1:5] - sol.x)) < 1e-10
+    assert np.max(np.abs(data[:, head.index("F")] - sol.r[:, 0])) < 1e-9
+    assert np.max(np.abs(sol.r)) == pytest.approx(20.0)

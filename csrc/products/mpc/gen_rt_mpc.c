@@ -13,7 +13,12 @@
  */
 #include "gen_rt_mpc.h"
 
+/* real: once, when gen_rt_qp.c and gen_rt_mpc.c are one unit (a
+ * standalone program's <name>_loop.c) */
+#ifndef GEN_RT_MPC_REAL_TYPEDEF_
+#define GEN_RT_MPC_REAL_TYPEDEF_
 typedef gen_rt_real real;
+#endif
 
 /* ---- the work array ----------------------------------------------------- */
 
@@ -26,7 +31,7 @@ typedef struct {
     real *xs, *xe, *Fx, *Fr, *Gx, *Gr, *Hs, *ev, *xr, *ur, *uf;   /* temporaries */
 } mpc_ws;
 
-static real *take(real **w, int n)
+static real *mpc_take(real **w, int n)
 {
     real *r = *w;
     *w += n;
@@ -34,26 +39,26 @@ static real *take(real **w, int n)
 }
 
 /* the pieces of work; returns the reals used */
-static int layout(const gen_rt_mpc_problem *pb, real *w, mpc_ws *ws)
+static int mpc_layout(const gen_rt_mpc_problem *pb, real *w, mpc_ws *ws)
 {
     int N = pb->N, S = N + 1, nx = pb->nx, ns = pb->ns, nr = pb->nr, nh = pb->nh;
     int ne = (nh > pb->ny ? nh : pb->ny) * (1 + ns + nr);
     real *w0 = w;
-    ws->X = take(&w, S * nx); ws->U = take(&w, S * nr);
-    ws->A = take(&w, S * ns * ns); ws->B = take(&w, S * ns * nr); ws->b = take(&w, S * ns);
-    ws->Q = take(&w, S * ns * ns); ws->S = take(&w, S * nr * ns); ws->R = take(&w, S * nr * nr);
-    ws->q = take(&w, S * ns); ws->r = take(&w, S * nr);
-    ws->lbx = take(&w, S * pb->nbx); ws->ubx = take(&w, S * pb->nbx);
-    ws->lbu = take(&w, S * pb->nbu); ws->ubu = take(&w, S * pb->nbu);
-    ws->C = take(&w, S * nh * ns); ws->D = take(&w, S * nh * nr);
-    ws->lg = take(&w, S * nh); ws->ug = take(&w, S * nh);
-    ws->dX = take(&w, S * ns); ws->dU = take(&w, S * nr);
-    ws->xs = take(&w, nx); ws->xe = take(&w, nx); ws->dx0 = take(&w, nx);
-    ws->Fx = take(&w, ns * ns); ws->Fr = take(&w, ns * nr);
-    ws->Gx = take(&w, ns * ns); ws->Gr = take(&w, ns * nr); ws->Hs = take(&w, ns * (ns + nr));
-    ws->ev = take(&w, ne > 0 ? ne : 1);
-    ws->xr = take(&w, ns); ws->ur = take(&w, nr); ws->uf = take(&w, nr);
-    ws->qpw = take(&w, GEN_RT_QP_WORK(N, ns, nr, pb->nbx, pb->nbu, nh));
+    ws->X = mpc_take(&w, S * nx); ws->U = mpc_take(&w, S * nr);
+    ws->A = mpc_take(&w, S * ns * ns); ws->B = mpc_take(&w, S * ns * nr); ws->b = mpc_take(&w, S * ns);
+    ws->Q = mpc_take(&w, S * ns * ns); ws->S = mpc_take(&w, S * nr * ns); ws->R = mpc_take(&w, S * nr * nr);
+    ws->q = mpc_take(&w, S * ns); ws->r = mpc_take(&w, S * nr);
+    ws->lbx = mpc_take(&w, S * pb->nbx); ws->ubx = mpc_take(&w, S * pb->nbx);
+    ws->lbu = mpc_take(&w, S * pb->nbu); ws->ubu = mpc_take(&w, S * pb->nbu);
+    ws->C = mpc_take(&w, S * nh * ns); ws->D = mpc_take(&w, S * nh * nr);
+    ws->lg = mpc_take(&w, S * nh); ws->ug = mpc_take(&w, S * nh);
+    ws->dX = mpc_take(&w, S * ns); ws->dU = mpc_take(&w, S * nr);
+    ws->xs = mpc_take(&w, nx); ws->xe = mpc_take(&w, nx); ws->dx0 = mpc_take(&w, nx);
+    ws->Fx = mpc_take(&w, ns * ns); ws->Fr = mpc_take(&w, ns * nr);
+    ws->Gx = mpc_take(&w, ns * ns); ws->Gr = mpc_take(&w, ns * nr); ws->Hs = mpc_take(&w, ns * (ns + nr));
+    ws->ev = mpc_take(&w, ne > 0 ? ne : 1);
+    ws->xr = mpc_take(&w, ns); ws->ur = mpc_take(&w, nr); ws->uf = mpc_take(&w, nr);
+    ws->qpw = mpc_take(&w, GEN_RT_QP_WORK(N, ns, nr, pb->nbx, pb->nbu, nh));
     return (int)(w - w0);
 }
 
@@ -326,7 +331,7 @@ int gen_rt_mpc_prepare(const gen_rt_mpc_problem *pb, gen_rt_mpc_state *st, gen_r
     int s;
     if (!pb || !st || !work) return GEN_RT_ERR_NULL;
     if (!(t - t == 0)) return GEN_RT_ERR_NONFINITE_INPUT;
-    layout(pb, work, &ws);
+    mpc_layout(pb, work, &ws);
     st->t_prepare = 0;
     s = prepare_(pb, st, t, &ws);
     if (s) st->has_iterate = 0;    /* a failed preparation leaves no iterate to build on */
@@ -362,6 +367,9 @@ static int feedback_(const gen_rt_mpc_problem *pb, gen_rt_mpc_state *st, const r
     gen_rt_qp_options qo;
     gen_rt_qp_stats qs;
     double t0 = now(st);
+    /* a call error of the QP leaves its stats unwritten */
+    qs.iterations = 0;
+    qs.res_stat = qs.res_ineq = qs.mu = qs.objective = 0;
     for (i = 0; i < ns; ++i) ws->dx0[i] = x[pb->ind[i]] - ws->X[pb->ind[i]];
     qp.N = N; qp.nx = ns; qp.nu = nr;
     qp.nbx = pb->nbx; qp.nbu = pb->nbu; qp.ng = pb->nh;
@@ -400,7 +408,7 @@ int gen_rt_mpc_feedback(const gen_rt_mpc_problem *pb, gen_rt_mpc_state *st,
     int s;
     double deadline = 0;
     if (!pb || !st || !x || !work || !u) return GEN_RT_ERR_NULL;
-    layout(pb, work, &ws);
+    mpc_layout(pb, work, &ws);
     fallback(pb, st, &ws, st->t_prepared, ws.uf);
     copy(pb->nr, ws.uf, u);
     st->t_feedback = 0;
@@ -457,7 +465,7 @@ int gen_rt_mpc_step(const gen_rt_mpc_problem *pb, gen_rt_mpc_state *st, gen_rt_r
     int s = GEN_RT_OK, it, iters;
     double deadline = 0;
     if (!pb || !st || !x || !work || !u) return GEN_RT_ERR_NULL;
-    layout(pb, work, &ws);
+    mpc_layout(pb, work, &ws);
     st->iterations = 0;
     st->qp_iterations = 0;
     st->t_feedback = 0;
@@ -515,7 +523,7 @@ int gen_rt_mpc_set_guess(const gen_rt_mpc_problem *pb, gen_rt_mpc_state *st,
 {
     mpc_ws ws;
     if (!pb || !st || !work) return GEN_RT_ERR_NULL;
-    layout(pb, work, &ws);
+    mpc_layout(pb, work, &ws);
     if ((x && !finite((pb->N + 1) * pb->nx, x)) || (u && !finite(pb->N * pb->nr, u)))
         return GEN_RT_ERR_NONFINITE_INPUT;
     if (x) copy((pb->N + 1) * pb->nx, x, ws.X);

@@ -24,7 +24,12 @@
 
 #include "gen_rt_qp.h"
 
+/* real: once, when gen_rt_qp.c and gen_rt_mpc.c are one unit (a
+ * standalone program's <name>_loop.c) */
+#ifndef GEN_RT_MPC_REAL_TYPEDEF_
+#define GEN_RT_MPC_REAL_TYPEDEF_
 typedef gen_rt_real real;
+#endif
 
 /* ---- small dense helpers (row-major) ------------------------------------ */
 

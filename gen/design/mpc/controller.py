@@ -346,7 +346,8 @@ class MPC:
         text: ``<name>.h``, ``<name>.c``, the driver of the standalone
         simulator ``<name>_loop.c``/``.h`` and the MPC runtime
         (gen_rt_mpc.c/.h, gen_rt_qp.c/.h, gen_rt_mpc_status.h)."""
-        from ...codegen.render import render
+        from ..._version import __version__
+        from ...codegen.render import render, template_env
         name = self._check_name(name or self.name, self.model)
         real = real or self.real
         if real not in ("double", "float"):
@@ -354,7 +355,13 @@ class MPC:
                              "real", None, real)
         plan = mpc_plan(self.model, self.problem, self.reference, self.P, name, real,
                         self._options(real), with_model=False)
-        return render(plan, real=real, backend="mpc").files
+        files = dict(render(plan, real=real, backend="mpc").files)
+        env = template_env()
+        ctx = {"name": name, "p": self.model.name, "P": self.model.name.upper(),
+               "N": name.upper(), "version": __version__}
+        for ext in ("h", "c"):
+            files[f"{name}_loop.{ext}"] = env.get_template(f"mpc/mpc_loop.{ext}.j2").render(**ctx)
+        return files
 
     def to_c(self, path, name=None, real=None):
         """Write the controller as C into a folder (usually the model's
