@@ -121,7 +121,7 @@ class MpcBackend(ProductBackend):
 
     def context(self, plan, iface, real):
         """The tables as rows of C literals (an infinite bound as HUGE_VAL)."""
-        from ..render import fmt_real
+        from ..templating import fmt_real
         import math
         d = plan.data
 
