@@ -1,6 +1,6 @@
 """
 Model predictive control: a cart-pole under a disturbance, a quadrotor's figure-eight
-====================================================================================
+=====================================================================================
 
 :class:`gen.MPC` re-plans the next second at every sample from the measured
 state. It takes one real-time iteration of a Gauss-Newton SQP along the

@@ -84,11 +84,65 @@ def _terminal_weight(model, pb, ref, p):
 class MPC:
     """A nonlinear model predictive controller by real-time iterations, in C.
 
-    See gen.design.mpc for the problem and the algorithm. ``u = mpc(x,
-    t=t)`` returns the control; the predicted states and inputs, the
-    status and the phase times are then attributes. The same C closes the
-    loop in ``sim.simulate(..., controller=mpc)`` and runs on a
-    microcontroller (:meth:`to_c`).
+    See gen.design.mpc and docs/guides/mpc.md for the problem and the
+    algorithm. ``u = mpc(x, t=t)`` returns the control; the predicted
+    states and inputs, the status and the phase times are then attributes.
+    The same C closes the loop in ``sim.simulate(..., controller=mpc)`` and
+    runs on a microcontroller (:meth:`to_c`).
+
+    Parameters
+    ----------
+    model : gen.Model
+        The model; its inputs are the controls.
+    horizon : int
+        N, the shooting intervals (N + 1 states).
+    period : float
+        An interval's length and the sample period, seconds.
+    Q, R : array_like
+        The stage weights on the independent state (ns x ns or ns diagonal
+        values, positive semidefinite) and on the inputs (nr x nr or nr
+        values, positive definite); the stage cost is weighted by the period.
+    P : array_like, optional
+        The terminal weight (not weighted by the period); None: the discrete
+        Riccati solution at the reference's end (SciPy).
+    bounds : dict, optional
+        {state or input (symbol or name): (lo, hi)}: inputs hard,
+        independent states soft (L1 penalty).
+    path : list, optional
+        (expr, lo, hi) constraints on sympy expressions of the states and
+        inputs, linearized at each iteration (soft where a state appears).
+    reference : optional
+        None (zero), (x, u) constant, (t, X, U) a table, or a trajectory
+        such as a gen.OptimalSolution.
+    substeps : int, optional
+        RK4 steps per interval.
+    method : {"rti", "sqp"}, optional
+        One SQP iteration per call, or iterations to convergence.
+    max_iter : int, optional
+        SQP iterations per call (method="sqp").
+    time_limit : float, optional
+        Seconds per call; on expiry the best control so far, status
+        TIME_LIMIT.
+    residuals : list, optional
+        (expr, weight) nonlinear least-squares terms (Gauss-Newton).
+    penalty : float, optional
+        The L1 weight of the soft constraints.
+    p : array_like or dict, optional
+        The model's constants (default: its own).
+    real : {"double", "float"}, optional
+        The scalar type of the library.
+    name : str, optional
+        The C prefix (default ``<model>_mpc``).
+    tol, qp_tol : float, optional
+        The SQP step's and the QP's tolerances (default by the scalar type).
+    qp_max_iter : int, optional
+        The QP's interior-point iterations.
+
+    Raises
+    ------
+    gen.InputError
+        On a bad argument (named in the user's own names), before anything
+        is built.
     """
 
     def __init__(self, model, horizon, period, Q, R, P=None, bounds=None, path=None,
@@ -162,10 +216,12 @@ class MPC:
     # ------------------------------------------------------------ sizes
     @property
     def horizon(self):
+        """N, the shooting intervals."""
         return self.problem.N
 
     @property
     def period(self):
+        """The sample period, seconds."""
         return self.problem.period
 
     # ------------------------------------------------------------ calls
@@ -224,12 +280,44 @@ class MPC:
     def prepare(self, t):
         """The preparation phase for the call at time t (the last solution
         shifted, the model's steps and sensitivities along it, the QP's
-        data): what does not need the new state. Returns the status."""
+        data): what does not need the new state.
+
+        Parameters
+        ----------
+        t : float
+            The time of the next feedback.
+
+        Returns
+        -------
+        int
+            The status (0, or a negative failure of the model's steps).
+
+        Raises
+        ------
+        gen.InputError
+            On a time that is not finite.
+        """
         return self._check(self._fn["prepare"](self._mem, self._time(t)), "prepare")
 
     def feedback(self, x):
         """The feedback phase: the state x in, the control out (the QP
-        solved from the prepared data)."""
+        solved from the prepared data; prepared first when it is not).
+
+        Parameters
+        ----------
+        x : array_like, shape (nx,)
+            The measured state.
+
+        Returns
+        -------
+        numpy.ndarray, shape (nr,)
+            The control, never NaN.
+
+        Raises
+        ------
+        gen.InputError
+            On a state of the wrong shape or not finite.
+        """
         xs = self._state(x)
         u = np.zeros(self.model.nr, dtype=self._dtype)
         self._fn["feedback"](self._mem, self._ptr(xs), self._ptr(u))
@@ -238,7 +326,20 @@ class MPC:
     def reset(self, x=None, u=None):
         """Forget the iterate: the next call starts from zero states and
         inputs (a constrained model: the state it gets, repeated), or from
-        the guess x ((N + 1, nx) or (nx,) repeated) and u ((N, nr) or (nr,))."""
+        a guess.
+
+        Parameters
+        ----------
+        x : array_like, optional
+            States, (N + 1, nx) or (nx,) repeated.
+        u : array_like, optional
+            Inputs, (N, nr) or (nr,) repeated.
+
+        Raises
+        ------
+        gen.InputError
+            On a guess that is not finite.
+        """
         if x is None and u is None:
             self._fn["reset"](self._mem)
             return
@@ -285,6 +386,7 @@ class MPC:
 
     @property
     def status_name(self):
+        """The last call's status by name ('OK', 'TIME_LIMIT', ...)."""
         return status_name(self.status)
 
     @property
@@ -293,10 +395,22 @@ class MPC:
         return self.message_of(self.status)
 
     def message_of(self, code):
+        """The message of a status code.
+
+        Parameters
+        ----------
+        code : int
+            A status.
+
+        Returns
+        -------
+        str
+        """
         return self._ffi.string(self._fn["status_message"](int(code))).decode()
 
     @property
     def qp_status(self):
+        """The last QP's status."""
         return int(self._read_info().qp_status)
 
     @property
@@ -326,7 +440,22 @@ class MPC:
         """The controller in C for ``sim.simulate(..., controller=mpc)``
         (gen.sim.inputs.CController): ``<name>_controller`` on this
         object's memory, sampled every period. The iterate is forgotten
-        first: a closed loop starts from the first guess."""
+        first: a closed loop starts from the first guess.
+
+        Parameters
+        ----------
+        sim : gen.Simulator
+            The model's simulator, in the controller's scalar type.
+
+        Returns
+        -------
+        gen.sim.inputs.CController
+
+        Raises
+        ------
+        gen.InputError
+            On another model's simulator or another scalar type.
+        """
         m = self.model
         if (sim.name != m.name or sim.nx != m.nx or sim.nr != m.nr):
             raise InputError(f"gen.MPC of model {m.name!r} cannot close a loop on model "
@@ -345,7 +474,26 @@ class MPC:
         """The controller's C for a firmware or the standalone binary, as
         text: ``<name>.h``, ``<name>.c``, the driver of the standalone
         simulator ``<name>_loop.c``/``.h`` and the MPC runtime
-        (gen_rt_mpc.c/.h, gen_rt_qp.c/.h, gen_rt_mpc_status.h)."""
+        (gen_rt_mpc.c/.h, gen_rt_qp.c/.h, gen_rt_mpc_status.h).
+
+        Parameters
+        ----------
+        name : str, optional
+            The C prefix (default: this controller's).
+        real : {"double", "float"}, optional
+            The scalar type (default: this controller's; the tolerances not
+            given take the type's defaults).
+
+        Returns
+        -------
+        dict
+            {file name: text}.
+
+        Raises
+        ------
+        gen.InputError
+            On a bad name or scalar type.
+        """
         from ..._version import __version__
         from ...codegen.render import render, template_env
         name = self._check_name(name or self.name, self.model)
@@ -369,7 +517,19 @@ class MPC:
         sized at generation (``<name>_memory``, the caller's static
         instance), no heap, no stdio and no global that is written; and the
         standalone simulator's driver: ``cmake -D<P>_TRACKER=<name>_loop``
-        builds the model's binary closed by the controller. Returns the
-        paths written."""
+        builds the model's binary closed by the controller.
+
+        Parameters
+        ----------
+        path : str or Path
+            The folder.
+        name, real : optional
+            As :meth:`sources`.
+
+        Returns
+        -------
+        list of Path
+            The paths written.
+        """
         from ...codegen.render import write_atomic
         return write_atomic(self.sources(name, real), Path(path))
