@@ -122,7 +122,7 @@ ax.set_title("quadrotor along a figure-eight")
 # model's generated sources (``gen.generate(model, folder, real="float")``).
 # Its memory is one static instance sized at generation, and there is no
 # heap. ``tests/features/test_mpc_embedded.py`` builds it for the Cortex-M4F
-# with newlib-nano. For the cart-pole (N = 20) it measures a flash of 37.5 kB,
+# with newlib-nano. For the cart-pole (N = 20) it measures a flash of 35.8 kB,
 # a RAM of 14.8 kB (the memory) and a stack of about 1.5 kB. Under qemu-arm,
 # its float controls agree with the double build's to 8e-5 relative over a
 # 100-step closed loop.

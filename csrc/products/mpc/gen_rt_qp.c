@@ -31,6 +31,14 @@
 typedef gen_rt_real real;
 #endif
 
+/* the scalar type's square root (float: sqrtf, no double on a single-
+ * precision FPU) */
+#ifdef GEN_RT_REAL_FLOAT
+#define QP_SQRT sqrtf
+#else
+#define QP_SQRT sqrt
+#endif
+
 /* ---- small dense helpers (row-major) ------------------------------------ */
 
 static void vcopy(int n, const real *a, real *b)
@@ -435,7 +443,7 @@ static int chol_cols(int n, int ncol, int nstrict, real *W)
             for (i = j; i < n; ++i) W[i * n + j] = 0;
             continue;
         }
-        d = (real)sqrt((double)d);
+        d = QP_SQRT(d);
         W[j * n + j] = d;
         for (i = j + 1; i < n; ++i) {
             real sum = W[i * n + j];
