@@ -463,7 +463,7 @@ static int chol_cols(int n, int ncol, int nstrict, real *W)
 static int factorize(qp_ws *ws)
 {
     const gen_rt_qp *qp = ws->qp;
-    int N = ws->N, nx = ws->nx, nu = ws->nu, nz = nx + nu, k, a, b, l;
+    int N = ws->N, nx = ws->nx, nu = ws->nu, nz = nx + nu, k, a, b, l, i;
     real *W = ws->W, *M = ws->BA;
     stage_hessian(ws, N);
     vcopy(nx * nx, ws->Hxx, W);
@@ -474,22 +474,31 @@ static int factorize(qp_ws *ws)
         const real *Lp = ws->P + (k + 1) * nx * nx;
         real *L = ws->L + k * nu * nu, *K = ws->K + k * nu * nx;
         stage_hessian(ws, k);
-        /* M = Lp' [B A] (Lp lower: Lp'[a][l] = Lp[l][a], l >= a) */
-        for (a = 0; a < nx; ++a)
-            for (b = 0; b < nz; ++b) {
-                real sum = 0;
-                for (l = a; l < nx; ++l)
-                    sum += Lp[l * nx + a] * (b < nu ? B[l * nu + b] : A[l * nx + b - nu]);
-                M[a * nz + b] = sum;
+        /* M = Lp' [B A] (Lp lower: Lp'[a][l] = Lp[l][a], l >= a), row by
+         * row of [B A]: the inner loops run along contiguous rows */
+        for (i = 0; i < nx * nz; ++i) M[i] = 0;
+        for (l = 0; l < nx; ++l) {
+            const real *Bl = B + l * nu, *Al = A + l * nx;
+            for (a = 0; a <= l; ++a) {
+                real c = Lp[l * nx + a], *Ma = M + a * nz;
+                for (b = 0; b < nu; ++b) Ma[b] += c * Bl[b];
+                for (b = 0; b < nx; ++b) Ma[nu + b] += c * Al[b];
             }
-        /* W = [Huu Hux; Hux' Hxx] + M'M, the lower triangle */
+        }
+        /* W = [Huu Hux; Hux' Hxx] + M'M, the lower triangle, accumulated
+         * over M's rows */
         for (a = 0; a < nz; ++a)
-            for (b = 0; b <= a; ++b) {
-                real sum = a < nu ? ws->Huu[a * nu + b]
-                           : b < nu ? ws->Hux[b * nx + a - nu] : ws->Hxx[(a - nu) * nx + b - nu];
-                for (l = 0; l < nx; ++l) sum += M[l * nz + a] * M[l * nz + b];
-                W[a * nz + b] = sum;
+            for (b = 0; b <= a; ++b)
+                W[a * nz + b] = a < nu ? ws->Huu[a * nu + b]
+                                : b < nu ? ws->Hux[b * nx + a - nu]
+                                : ws->Hxx[(a - nu) * nx + b - nu];
+        for (l = 0; l < nx; ++l) {
+            const real *Ml = M + l * nz;
+            for (a = 0; a < nz; ++a) {
+                real c = Ml[a], *Wa = W + a * nz;
+                for (b = 0; b <= a; ++b) Wa[b] += c * Ml[b];
             }
+        }
         if (chol_cols(nz, k > 0 ? nz : nu, nu, W)) return GEN_RT_MPC_ERR_QP_SINGULAR;
         for (a = 0; a < nu; ++a)
             for (b = 0; b < nu; ++b) L[a * nu + b] = b <= a ? W[a * nz + b] : 0;
