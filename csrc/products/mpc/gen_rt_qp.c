@@ -518,10 +518,12 @@ static int factorize(qp_ws *ws)
 static void pmul(int nx, const real *Lp, const real *v, const real *y0, real *tmp, real *y)
 {
     int a, l;
-    for (a = 0; a < nx; ++a) {
-        real sum = 0;
-        for (l = a; l < nx; ++l) sum += Lp[l * nx + a] * v[l];
-        tmp[a] = sum;
+    /* tmp = Lp' v, along Lp's rows */
+    for (a = 0; a < nx; ++a) tmp[a] = 0;
+    for (l = 0; l < nx; ++l) {
+        const real *row = Lp + l * nx;
+        real vl = v[l];
+        for (a = 0; a <= l; ++a) tmp[a] += row[a] * vl;
     }
     for (a = 0; a < nx; ++a) {
         real sum = y0[a];
