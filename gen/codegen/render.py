@@ -388,8 +388,9 @@ def _product_kernel(kernel, backend, real):
 
 
 def _render_product(plan, b, real, timings):
-    """A product's files: its templates and its interface's headers over
-    the plan's data, its printed kernels and its backend's context, and its
+    """A product's files: the plan's files (another backend's, such as the
+    model's sources), its templates and its interface's headers over the
+    plan's data, its printed kernels and its backend's context, and its
     runtime files (b: a ProductBackend)."""
     t0 = time.perf_counter()
     iface = b.interface.bind(**b.names(plan, real))
