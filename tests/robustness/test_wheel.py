@@ -97,7 +97,7 @@ def test_every_product_runs_from_the_installed_wheel(wheel, tmp_path):
     _run([py, "-m", "pip", "install", "-q", f"{wheel}[{EXTRAS}]"], env=env)
     out = _run([py, str(HERE / "products.py"), str(tmp_path)], cwd=work, env=env)
     done = [line.split()[1] for line in out.splitlines() if line.startswith("ok ")]
-    assert done == ["simulate", "eigen", "fmu", "casadi", "ocp+tracker", "hybrid", "recursive", "mpc"]
+    assert done == ["simulate", "eigen", "fmu", "casadi", "ocp+tracker", "hybrid", "recursive", "mpc", "estimator"]
     # the command line: a standalone binary from a model file
     exe = Path(_run([env_dir / "bin" / "eomgen", "build", str(HERE / "model_file.py"), "-o",
                      str(tmp_path / "spring")], cwd=work, env=env).split()[-1])
