@@ -243,6 +243,131 @@ def run_ident(a):
                 lbfgs=lm)
 
 
+# ------------------------------------------------- the brachistochrone
+BRACH = dict(N=201, g=9.81, fmax=10.0, T=(0.1, 5.0), end=(2.0, -1.0))
+
+
+def brach_model():
+    """A particle under gravity steered by Fn (-vy, vx) (no work): Kane's
+    equations, unit mass."""
+    import gen
+    from sympy.physics import mechanics as me
+    x, y, vx, vy, Fn = me.dynamicsymbols("x y v_x v_y F_n")
+    g, m = sm.symbols("g m")
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x + y * N.y)
+    P.set_vel(N, vx * N.x + vy * N.y)
+    km = me.KanesMethod(N, [x, y], [vx, vy], kd_eqs=[x.diff() - vx, y.diff() - vy])
+    km.kanes_equations([me.Particle("p", P, m)],
+                       [(P, -m * g * N.y + Fn * (-vy * N.x + vx * N.y))])
+    model = gen.Model.from_kanes(km, constants={g: BRACH["g"], m: 1.0}, inputs=[Fn],
+                                 name="brachistochrone")
+    return model, (x, y, vx, vy, Fn)
+
+
+def brach_guess(which, N):
+    """The issue's two guesses as (positions, speeds, T): "positions" moves
+    the positions linearly with zero speeds in T = 1; "default" is
+    OptimalControl's (states linear between the boundary values, zero
+    speeds, T the middle of its bounds)."""
+    T = 1.0 if which == "positions" else 0.5 * sum(BRACH["T"])
+    return np.linspace(0, BRACH["end"][0], N), np.linspace(0, BRACH["end"][1], N), T
+
+
+def brach_ours(which, repeat):
+    import gen
+    model, (x, y, vx, vy, Fn) = brach_model()
+    N = BRACH["N"]
+    ocp = gen.OptimalControl(model, N, BRACH["T"], terminal_cost=sm.Symbol("t"),
+                             method="trapezoidal", bounds={Fn: (-BRACH["fmax"], BRACH["fmax"])},
+                             initial={x: 0, y: 0, vx: 0, vy: 0},
+                             final={x: BRACH["end"][0], y: BRACH["end"][1]})
+    X, Y, T = brach_guess(which, N)
+    guess = {x: X, y: Y, "duration": T} if which == "positions" else None
+    runs = []
+    for _ in range(repeat):
+        t0, c0 = time.perf_counter(), time.process_time()
+        sol = ocp.solve(guess, tol=1e-8)
+        runs.append(dict(wall=time.perf_counter() - t0, cpu=time.process_time() - c0,
+                         iterations=sol.iterations, objective=sol.objective, status=sol.status,
+                         inf_pr0=sol.first_iterate[0], inf_du0=sol.first_iterate[1]))
+    return median(runs)
+
+
+def brach_casadi(which, repeat, lifted=False):
+    """The same trapezoidal transcription in CasADi's Opti: the explicit
+    right-hand side f(x, u) in the defects, or (lifted) the slopes as
+    unknowns with the equations of motion as constraints at every node, as
+    eomgen transcribes them; the same guess, IPOPT's defaults, tol 1e-8."""
+    import casadi as ca
+    N, g = BRACH["N"], BRACH["g"]
+    opti = ca.Opti()
+    X, U, T = opti.variable(4, N), opti.variable(1, N), opti.variable()
+    h = T / (N - 1)
+
+    def f(x, u):
+        return ca.vertcat(x[2], x[3], -u * x[3], -g + u * x[2])
+    if lifted:
+        S = opti.variable(4, N)
+        for k in range(N):
+            opti.subject_to(S[:, k] - f(X[:, k], U[k]) == 0)
+        slope = [S[:, k] for k in range(N)]
+        opti.set_initial(S[3, :], -g)
+    else:
+        slope = [f(X[:, k], U[k]) for k in range(N)]
+    for k in range(N - 1):
+        opti.subject_to(X[:, k + 1] - X[:, k] - h / 2 * (slope[k] + slope[k + 1]) == 0)
+    opti.subject_to(X[:, 0] == 0)
+    opti.subject_to(X[0, -1] == BRACH["end"][0])
+    opti.subject_to(X[1, -1] == BRACH["end"][1])
+    opti.subject_to(opti.bounded(-BRACH["fmax"], U, BRACH["fmax"]))
+    opti.subject_to(opti.bounded(BRACH["T"][0], T, BRACH["T"][1]))
+    opti.minimize(T)
+    Xg, Yg, Tg = brach_guess(which, N)
+    opti.set_initial(T, Tg)
+    opti.set_initial(X[0, :], Xg)
+    opti.set_initial(X[1, :], Yg)
+    opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "sb": "yes", "tol": 1e-8,
+                                                 "max_iter": 3000})
+    runs = []
+    for _ in range(repeat):
+        t0, c0 = time.perf_counter(), time.process_time()
+        sol = opti.solve_limited()
+        st = sol.stats()
+        runs.append(dict(wall=time.perf_counter() - t0, cpu=time.process_time() - c0,
+                         iterations=st["iter_count"], objective=float(sol.value(T)),
+                         status=st["return_status"],
+                         inf_pr0=st["iterations"]["inf_pr"][0],
+                         inf_du0=st["iterations"]["inf_du"][0]))
+    return median(runs)
+
+
+def run_brach(a):
+    """eomgen and CasADi on the issue 47 brachistochrone, both guesses."""
+    print(f"\nbrachistochrone (trapezoidal, N = {BRACH['N']}, |Fn| <= {BRACH['fmax']}, min T; "
+          f"medians of {a.repeat}; CPU = process time, the peers single-threaded)")
+    print("| guess | solver | iterations | CPU | wall | T* | inf_pr, inf_du at iteration 0 |")
+    print("|---|---|---|---|---|---|---|")
+    out = {}
+    for which in ("positions", "default"):
+        rows = {"eomgen": brach_ours(which, a.repeat),
+                "CasADi (explicit f)": brach_casadi(which, a.repeat)}
+        if a.lifted:
+            rows["CasADi (lifted, eomgen's form, unscaled)"] = brach_casadi(which, 1, True)
+        for name, r in rows.items():
+            print(f"| {which} | {name} | {r['iterations']} | {r['cpu']:.3f} s | {r['wall']:.3f} s "
+                  f"| {r['objective']:.12f} | {r['inf_pr0']:.3g}, {r['inf_du0']:.3g} |", flush=True)
+        e, c = rows["eomgen"], rows["CasADi (explicit f)"]
+        print(f"| {which} | ratio eomgen / CasADi | {e['iterations'] / c['iterations']:.2f}x | "
+              f"{e['cpu'] / c['cpu']:.2f}x | {e['wall'] / c['wall']:.2f}x | "
+              f"{abs(e['objective'] - c['objective']):.1e} | "
+              f"{e['inf_pr0'] / c['inf_pr0']:.2f}x |")
+        out[which] = rows
+    return out
+
+
 def median(runs):
     out = {}
     for k in runs[0]:
@@ -257,8 +382,10 @@ def main(argv=None):
     ap.add_argument("--methods", nargs="+", default=["backward-euler", "midpoint"])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--opty-repeat", type=int, default=1)
-    ap.add_argument("--problems", nargs="+", default=["swing-up", "ident"],
-                    choices=["swing-up", "ident"])
+    ap.add_argument("--problems", nargs="+", default=["swing-up", "ident", "brach"],
+                    choices=["swing-up", "ident", "brach"])
+    ap.add_argument("--lifted", action="store_true",
+                    help="brach: also CasADi on eomgen's lifted form (stalls: minutes)")
     ap.add_argument("--ident-nodes", type=int, default=5000)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--json")
@@ -277,8 +404,10 @@ def main(argv=None):
     if rows:
         table(rows)
     ident = run_ident(a) if "ident" in a.problems else None
+    brach = run_brach(a) if "brach" in a.problems else None
     if a.json:
-        Path(a.json).write_text(json.dumps({"swing_up": rows, "ident": ident}, indent=1))
+        Path(a.json).write_text(json.dumps({"swing_up": rows, "ident": ident, "brach": brach},
+                                           indent=1))
 
 
 def table(rows):

@@ -273,6 +273,9 @@ class OptimalControl:
         """The layout, the gathers and scatters, bounds: everything a solve
         needs that is not compiled (gen/design/ocp/layout.py)."""
         self._check_runtime()
+        key = self._assembly_key()
+        if key == getattr(self, "_asm_key", None):
+            return                  # the same structure, rows and data: kept
         a = assemble(self, self._meta)
         self._lay = a.lay
         self._m_rows = a.rows
@@ -284,6 +287,19 @@ class OptimalControl:
         self._cblocks = self._c_blocks(blocks, self._arrays)
         self._nblocks = len(blocks)
         self._n = a.lay.n
+        self._asm_key = key
+
+    def _assembly_key(self):
+        """What the assembly depends on besides the compiled families: the
+        nodes and method, a fixed duration (the instance constraints' and
+        fit data's nodes), the path bounds, the fit data and the end nodes
+        whose manifold rows the boundary values fix. The bounds, boundary
+        values and constants are arguments of every solve, not in it."""
+        fit = tuple((np.asarray(td, float).tobytes(), np.asarray(v, float).tobytes())
+                    for td, v in (self.fit or {}).values())
+        skip = tuple(sorted((k, tuple(sorted(v))) for k, v in self._fixed_manifold_nodes().items()))
+        return (self.method, self.nodes, None if self.free_time else float(self.duration),
+                tuple(tuple(map(float, b)) for b in self.path_bounds), fit, skip)
 
     def _c_blocks(self, blocks, arrays):
         """The blocks as the library's gen_rt_ocp_block array over the
@@ -462,8 +478,10 @@ class OptimalControl:
         z, info, iterations = run_ipopt(self, z0, lb, ub, hessian, ipopt_options)
         solve_seconds = time.perf_counter() - t0
         status, msg = status_message(info)
-        return OptimalSolution._make(self, np.asarray(z, float), float(info["obj_val"]), status,
-                                     msg, iterations, solve_seconds)
+        sol = OptimalSolution._make(self, np.asarray(z, float), float(info["obj_val"]), status,
+                                    msg, iterations, solve_seconds)
+        sol.first_iterate = info["first_iterate"]
+        return sol
 
     # --------------------------------------------------------- helpers
     @property

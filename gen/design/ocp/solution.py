@@ -24,6 +24,8 @@ class OptimalSolution:
     status : int           IPOPT's status (0 solved, 1 acceptable, 2 infeasible, < 0 failed)
     message : str          the status in words
     iterations : int
+    first_iterate : (float, float)
+                           IPOPT's primal and dual infeasibility at iteration 0
     build_seconds, solve_seconds : float
     success : bool         status 0 or 1
 
@@ -56,6 +58,7 @@ class OptimalSolution:
         s.status = status
         s.message = message
         s.iterations = iterations
+        s.first_iterate = (float("nan"), float("nan"))
         s.build_seconds = ocp.build_seconds
         s.solve_seconds = solve_seconds
         s.success = status in (0, 1)
