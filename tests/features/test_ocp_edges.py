@@ -161,3 +161,67 @@ def test_replay_uses_the_constants_it_was_solved_with(cart):
     with pytest.raises(gen.InputError) as e:
         ocp.solve()
     assert str(e.value) == "constants[g] = nan: not a finite number"
+
+
+# ----------------------------------------------------- the brachistochrone
+def _brachistochrone_casadi(N, T0, X0, Y0):
+    """The same trapezoidal transcription in CasADi's Opti (explicit
+    right-hand side), from the same guess: (T*, iterations, inf_pr at
+    iteration 0)."""
+    ca = pytest.importorskip("casadi", reason="CasADi is the brachistochrone's peer "
+                                              "(pip install eomgen[casadi])")
+    g = 9.81
+    opti = ca.Opti()
+    X, U, T = opti.variable(4, N), opti.variable(1, N), opti.variable()
+    f = [ca.vertcat(X[2, k], X[3, k], -U[k] * X[3, k], -g + U[k] * X[2, k]) for k in range(N)]
+    for k in range(N - 1):
+        opti.subject_to(X[:, k + 1] - X[:, k] - T / (N - 1) / 2 * (f[k] + f[k + 1]) == 0)
+    opti.subject_to(X[:, 0] == 0)
+    opti.subject_to(X[0, -1] == 2)
+    opti.subject_to(X[1, -1] == -1)
+    opti.subject_to(opti.bounded(-10, U, 10))
+    opti.subject_to(opti.bounded(0.1, T, 5.0))
+    opti.minimize(T)
+    opti.set_initial(T, T0)
+    opti.set_initial(X[0, :], X0)
+    opti.set_initial(X[1, :], Y0)
+    opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "sb": "yes", "tol": 1e-10})
+    sol = opti.solve()
+    st = sol.stats()
+    return float(sol.value(T)), st["iter_count"], st["iterations"]["inf_pr"][0]
+
+
+@pytest.mark.slow
+@needs_ipopt
+def test_brachistochrone_does_not_stall():
+    """Issue 47's brachistochrone (a particle under gravity steered by
+    Fn (-vy, vx), rest at the origin to (2, -1) in minimum time,
+    trapezoidal, N = 201, |Fn| <= 10), from a guess whose positions move
+    while its speeds are zero and from the default guess: the minimum time
+    of CasADi's transcription to 1e-9, in at most twice CasADi's iterations
+    (it stalled for 123 iterations), the first iterate's infeasibility
+    within 10x of CasADi's and its dual infeasibility not 1e11."""
+    from sympy.physics import mechanics as me
+    x, y, vx, vy, Fn = me.dynamicsymbols("x y v_x v_y F_n")
+    g, m = sm.symbols("g m")
+    N_ = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N_, 0)
+    P = O.locatenew("P", x * N_.x + y * N_.y)
+    P.set_vel(N_, vx * N_.x + vy * N_.y)
+    km = me.KanesMethod(N_, [x, y], [vx, vy], kd_eqs=[x.diff() - vx, y.diff() - vy])
+    km.kanes_equations([me.Particle("p", P, m)], [(P, -m * g * N_.y + Fn * (-vy * N_.x + vx * N_.y))])
+    model = gen.Model.from_kanes(km, constants={g: 9.81, m: 1.0}, inputs=[Fn], name="brach_ocp")
+    N = 201
+    ocp = gen.OptimalControl(model, N, (0.1, 5.0), terminal_cost=sm.Symbol("t"),
+                             method="trapezoidal", bounds={Fn: (-10, 10)},
+                             initial={x: 0, y: 0, vx: 0, vy: 0}, final={x: 2, y: -1})
+    X0, Y0 = np.linspace(0, 2, N), np.linspace(0, -1, N)
+    for guess, T0 in (({x: X0, y: Y0, "duration": 1.0}, 1.0), (None, 2.55)):
+        sol = ocp.solve(guess, tol=1e-10)
+        T_ref, it_ref, pr_ref = _brachistochrone_casadi(N, T0, X0, Y0)
+        assert sol.status == 0, sol.message
+        assert sol.objective == pytest.approx(T_ref, rel=1e-9), (sol.objective, T_ref)
+        assert sol.iterations <= 2 * it_ref, (sol.iterations, it_ref)
+        pr, du = sol.first_iterate
+        assert pr <= 10 * pr_ref and du < 1e3, (pr, pr_ref, du)
