@@ -28,6 +28,23 @@ difference against the standard error of p (Gauss-Newton on the simulated
 misfit, p and the initial state free), and the ratios.
 
     python bench/bench_ocp.py --problems ident [--ident-nodes 5000] [--seed 0]
+
+Issue 47's brachistochrone (a particle under gravity steered by Fn (-vy,
+vx), from rest at the origin to (2, -1) in minimum time, trapezoidal,
+N = 201, |Fn| <= 10) from its two guesses (positions moving with zero
+speeds in T = 1; the default guess), eomgen against the same trapezoidal
+transcription in CasADi's Opti (explicit f; with --lifted also eomgen's
+form, the slopes as unknowns, unscaled: it stalls as eomgen did): the
+iterations, process (CPU) and wall times, the optimum and IPOPT's
+infeasibilities at iteration 0.
+
+    python bench/bench_ocp.py --problems brach [--repeat 5] [--lifted]
+
+The large problem: a pendulum swing-up (Hermite-Simpson) at 1,001 and
+--big-nodes nodes (100,001: minutes, about 2.5 GB): status, iterations,
+times, peak memory, the objective against the coarse grid's.
+
+    python bench/bench_ocp.py --problems big [--big-nodes 100001]
 """
 import argparse
 import importlib.util
@@ -368,6 +385,57 @@ def run_brach(a):
     return out
 
 
+# ------------------------------------------- the 100,000-node swing-up
+def pendulum_swing_up(nodes):
+    """A pendulum (unit mass and length) swung up from hanging to upright
+    in 4 s by a torque |tau| <= 6, minimum integral tau^2, Hermite-Simpson:
+    (its OptimalControl, build seconds)."""
+    import gen
+    from sympy.physics import mechanics as me
+    th, om, tau = me.dynamicsymbols("theta omega tau")
+    m, l, g = sm.symbols("m l g")
+    N = me.ReferenceFrame("N")
+    A = N.orientnew("A", "Axis", (th, N.z))
+    A.set_ang_vel(N, om * N.z)
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", -l * A.y)
+    P.v2pt_theory(O, N, A)
+    km = me.KanesMethod(N, [th], [om], kd_eqs=[th.diff() - om])
+    km.kanes_equations([me.Particle("p", P, m)], [(P, -m * g * N.y), (A, tau * N.z)])
+    model = gen.Model.from_kanes(km, constants={m: 1.0, l: 1.0, g: 9.81}, inputs=[tau],
+                                 name="pendulum_swing_up")
+    t0 = time.perf_counter()
+    ocp = gen.OptimalControl(model, nodes, 4.0, objective=tau**2, method="hermite-simpson",
+                             bounds={tau: (-6, 6)}, initial={th: 0, om: 0},
+                             final={th: sm.pi, om: 0})
+    return ocp, time.perf_counter() - t0
+
+
+def run_big(a):
+    """The pendulum swing-up at 1,001 nodes and at --big-nodes (100,001):
+    status, iterations, times, peak memory, the objective against the
+    coarse one (Hermite-Simpson converges to the same optimum)."""
+    import resource
+    print(f"\npendulum swing-up (Hermite-Simpson, 4 s, |tau| <= 6, min int tau^2)")
+    print("| nodes | unknowns | status | iterations | build | solve (CPU) | peak RSS | objective |")
+    print("|---|---|---|---|---|---|---|---|")
+    out = []
+    for nodes in (1001, a.big_nodes):
+        ocp, build = pendulum_swing_up(nodes)
+        t0, c0 = time.perf_counter(), time.process_time()
+        sol = ocp.solve()
+        r = dict(nodes=nodes, unknowns=ocp._lay.n, status=sol.status, message=sol.message,
+                 iterations=sol.iterations, build=build, solve=time.perf_counter() - t0,
+                 cpu=time.process_time() - c0, objective=sol.objective,
+                 rss_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+        print(f"| {nodes:,} | {r['unknowns']:,} | {r['status']} | {r['iterations']} | "
+              f"{build:.2f} s | {r['solve']:.1f} s ({r['cpu']:.1f} s) | {r['rss_mb']:.0f} MB | "
+              f"{r['objective']:.10f} |", flush=True)
+        out.append(r)
+    return out
+
+
 def median(runs):
     out = {}
     for k in runs[0]:
@@ -383,7 +451,9 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--opty-repeat", type=int, default=1)
     ap.add_argument("--problems", nargs="+", default=["swing-up", "ident", "brach"],
-                    choices=["swing-up", "ident", "brach"])
+                    choices=["swing-up", "ident", "brach", "big"])
+    ap.add_argument("--big-nodes", type=int, default=100001,
+                    help="big: the nodes of the large pendulum swing-up (minutes)")
     ap.add_argument("--lifted", action="store_true",
                     help="brach: also CasADi on eomgen's lifted form (stalls: minutes)")
     ap.add_argument("--ident-nodes", type=int, default=5000)
@@ -405,9 +475,10 @@ def main(argv=None):
         table(rows)
     ident = run_ident(a) if "ident" in a.problems else None
     brach = run_brach(a) if "brach" in a.problems else None
+    big = run_big(a) if "big" in a.problems else None
     if a.json:
-        Path(a.json).write_text(json.dumps({"swing_up": rows, "ident": ident, "brach": brach},
-                                           indent=1))
+        Path(a.json).write_text(json.dumps({"swing_up": rows, "ident": ident, "brach": brach,
+                                            "big": big}, indent=1))
 
 
 def table(rows):
