@@ -116,7 +116,8 @@ class Names:
         a string is parsed in the model's own symbols, a matrix refused."""
         if isinstance(e, str):
             e = self.parse(e, what)
-        if isinstance(e, (sm.MatrixBase, sm.NDimArray, list, tuple)) or hasattr(e, "shape"):
+        if isinstance(e, (sm.MatrixBase, sm.NDimArray, list, tuple)) \
+                or tuple(getattr(e, "shape", ())) != ():
             shape = getattr(e, "shape", None) or (len(e),)
             raise InputError(f"{what} must be a scalar expression, got "
                              f"{type(e).__name__} of shape {tuple(shape)}")
