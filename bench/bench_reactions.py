@@ -4,8 +4,8 @@ coupled solve, on a model where both apply (issue 33).
 The bead on a circular track of tests/physics/test_reactions_coupled.py with its
 auxiliary speed along the track's normal: the normal force's coefficient is
 1, so Model.from_kanes eliminates it exactly (N = m (g cos + R omega^2) put
-into f, today's path); with gen.intake.model._ELIMINATE_CONSTANT = False the same
-model goes through the coupled solve ([M, -G; C, H] [u'; N] = [f; -g0] by
+into f, today's path); with Model.from_kanes(..., eliminate_reactions=False) the
+same model goes through the coupled solve ([M, -G; C, H] [u'; N] = [f; -g0] by
 pivoted LU at each evaluation). Also the cart-pole with Coulomb friction
 (examples/cart_pole_friction.py), which only the coupled solve handles,
 next to the same cart-pole without friction.
@@ -30,7 +30,6 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "examples")]
 
 import gen                                      # noqa: E402
-from gen.intake import model as gen_model              # noqa: E402
 
 
 def step_time(sim, x0, r, steps, repeats, dt=1e-5):
@@ -66,11 +65,8 @@ def main(argv=None):
     import cart_pole_friction as cpf
     km, consts, F, _ = bead_kane("normal")
     elim = gen.Model.from_kanes(km, constants=consts, inputs=[F], name="bench_elim")
-    gen_model._ELIMINATE_CONSTANT = False
-    try:
-        coupled = gen.Model.from_kanes(km, constants=consts, inputs=[F], name="bench_cpl")
-    finally:
-        gen_model._ELIMINATE_CONSTANT = True
+    coupled = gen.Model.from_kanes(km, constants=consts, inputs=[F], name="bench_cpl",
+                                   eliminate_reactions=False)
     assert elim.aux_G is None and coupled.aux_G is not None
     s_e, b_e = compile_cold(elim)
     s_c, b_c = compile_cold(coupled)

@@ -24,6 +24,7 @@ import numbers
 import sympy as sm
 
 from ..core.errors import ModelError
+from .sympy_compat import time_symbol
 
 __all__ = ["Impact", "Reset", "attach_hybrid", "hybrid_kernels", "HybridDecl",
            "KIND_IMPACT", "KIND_RESET", "hybrid_work_len", "hybrid_iwork_len"]
@@ -174,8 +175,7 @@ def attach_hybrid(model, hybrid):
         raise ModelError(f"model '{model.name}': gen.Impact on a model whose reactions ({names}) "
                          f"enter its motion is not supported (the impulse and the held contact "
                          f"would leave out the coupled reaction solve); gen.Reset is")
-    from sympy.physics import mechanics as me
-    t = me.dynamicsymbols._t
+    t = time_symbol()
     # the user's symbols -> the internal ones
     sub = {}
     qdots = [qo.diff(t) for qo in model.q_orig]

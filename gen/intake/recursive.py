@@ -45,9 +45,14 @@ such a model is the identity; the physical M and f are
 true M) or ``hybrid`` impacts (solved with M), CRBA + RNEA as above.
 
 Nothing is expanded or simplified: each body's quantities are kept as shared
-opaque nodes (``_keep``: a graph linear in the bodies, equal nodes one object,
-``_intern``), every walk of the pipeline visits a shared node once, and gen.ir
-writes each node as one temporary, in order (``_kept_program``).
+opaque nodes (a graph linear in the bodies, equal nodes one object), every walk
+of the pipeline visits a shared node once, and gen.plan.ir writes each node as one
+temporary, in order (``_kept_program``). The nodes are one build's: an
+:class:`gen.sym.intern.Interner` made for the build (``Model.from_system``
+makes one per call) and passed down its functions; nothing is kept between
+builds or shared with a build in another thread, and sympy's own cache is
+left alone (nodes of different builds never compare equal, so an earlier
+build's nodes left in it are never walked).
 
 Taken: trees of ``PinJoint``, ``PrismaticJoint``, ``CylindricalJoint``,
 ``PlanarJoint``, ``SphericalJoint`` and ``WeldJoint`` between rigid bodies,
@@ -66,6 +71,8 @@ import sympy as sm
 import sympy.physics.mechanics as me
 
 from ..core.errors import ModelError
+from ..sym.intern import Interner
+from .sympy_compat import time_symbol
 
 __all__ = ["equations_of_tree", "accelerations_of_tree", "constraints_of_tree",
            "SUPPORTED_JOINTS"]
@@ -73,7 +80,7 @@ __all__ = ["equations_of_tree", "accelerations_of_tree", "constraints_of_tree",
 SUPPORTED_JOINTS = ("PinJoint", "PrismaticJoint", "CylindricalJoint", "PlanarJoint",
                     "SphericalJoint", "WeldJoint")
 
-_T = me.dynamicsymbols._t
+_T = time_symbol()
 
 
 def _name(obj):
@@ -93,56 +100,6 @@ def _col(xs):
 
 def _skew(a):
     return sm.Matrix([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-
-
-_UE = sm.UnevaluatedExpr
-
-
-# the opaque nodes made so far (equations_of_tree, accelerations_of_tree):
-# equal nodes are one object, so sympy's == (dict lookups, CSE) compares
-# two nodes through identical arguments, never down two equal DAGs (a walk
-# that grows exponentially with the depth)
-_KEPT = {}
-
-
-def _keep(e):
-    """e as one opaque node (``UnevaluatedExpr``): sums and products built
-    on it keep it as one argument instead of flattening its terms into
-    theirs, so each body's quantities stay a few nodes over its parent's
-    (a DAG linear in the bodies), where flattened they grow with the depth.
-    ``gen.ir`` unwraps the nodes after its CSE."""
-    if e.is_Atom or isinstance(e, _UE) or (e.is_Mul and len(e.args) == 2
-                                           and e.args[0].is_Number and e.args[1].is_Atom):
-        return e
-    ue = _UE(_intern(e))
-    return _KEPT.setdefault(ue, ue)
-
-
-def _intern(e):
-    """e with every subexpression (down to the opaque nodes) one object per
-    value: equal products built apart (the two sides of a symmetric
-    matrix, a cross product's terms) would make sympy's == and its cache
-    compare down two equal copies of the graph below them."""
-    if e.is_Atom or isinstance(e, _UE):
-        return e
-    args = tuple(_intern(a) for a in e.args)
-    if any(a is not b for a, b in zip(args, e.args)):
-        # equal arguments: the same canonical form, not re-flattened (a
-        # sum's flatten would make its products anew)
-        e = e.func._from_args(args, e.is_commutative) if (e.is_Add or e.is_Mul) \
-            else e.func(*args)
-    return _KEPT.setdefault(e, e)
-
-
-def _sym_kept(mat):
-    """A symmetric matrix kept from its lower triangle (one node per pair)."""
-    n = mat.shape[0]
-    low = {(i, j): _keep(mat[i, j]) for i in range(n) for j in range(i + 1)}
-    return sm.Matrix(n, n, lambda i, j: low[max(i, j), min(i, j)])
-
-
-def _kept(mat):
-    return mat.applyfunc(_keep)
 
 
 def _is_zero(e):
@@ -288,9 +245,15 @@ class _Tree:
         self.qdot = dict(zip(qd, sol))
 
 
-def equations_of_tree(system):
+def equations_of_tree(system, interner=None):
     """M, f, q, u, kinematics of a System's joint tree by CRBA and RNEA (see
     the module docstring).
+
+    Parameters
+    ----------
+    system : sympy System
+    interner : gen.sym.intern.Interner, optional
+        The build's interner (its opaque nodes); a new one when None.
 
     Returns
     -------
@@ -301,12 +264,13 @@ def equations_of_tree(system):
         System's order), without the constraint forces, as a Kane model's
         are; see :func:`constraints_of_tree`.
     """
-    tree = _walk(system)
+    ik = Interner() if interner is None else interner
+    tree = _walk(system, ik)
     nu = len(tree.u)
     zero = sm.zeros(3, 1)
     for n in tree.order:
         al_p, a_p = (zero, zero) if n.parent is None else (n.parent.al, n.parent.a)
-        n.al, n.a = _kept(al_p + n.cw), _kept(a_p + _cross(al_p, n.rw) + n.cv)
+        n.al, n.a = ik.kept(al_p + n.cw), ik.kept(a_p + _cross(al_p, n.rw) + n.cv)
     # forces in: each body's F - m a and T - I al - w x I w, plus its
     # children's (formed with their signs: negating a large sum would make
     # sympy distribute the -1 over every term)
@@ -318,7 +282,7 @@ def equations_of_tree(system):
         for c in n.children:
             Fi += c.Ftot
             Ni += c.Ntot + _cross(c.rw, c.Ftot)
-        n.Ftot, n.Ntot = Fi, Ni = _kept(Fi), _kept(Ni)
+        n.Ftot, n.Ntot = Fi, Ni = ik.kept(Fi), ik.kept(Ni)
         tau = n.Sw.T * sm.Matrix.vstack(Ni, Fi)
         for k, idx in enumerate(n.speed_idx):
             f[idx] = tau[k]
@@ -336,32 +300,32 @@ def equations_of_tree(system):
             mt += c.mt
             h += c.h + c.mt * d
             J += c.J + (ht * ndt + ndt * ht) + c.mt * (dt_ * ndt)
-        n.mt, n.h, n.J = _keep(mt), _kept(h), _kept(J)
+        n.mt, n.h, n.J = ik.keep(mt), ik.kept(h), ik.kept(J)
     for n in tree.order:
         nj = n.Sw.shape[1]
         if not nj:
             continue
         ht = _skew(n.h)
         sw, sv = n.Sw[:3, :], n.Sw[3:, :]
-        L = _kept(n.J * sw + ht * sv)
-        P = _kept(n.mt * sv + sm.Matrix.hstack(*[_cross(sw[:, k], n.h) for k in range(nj)]))
+        L = ik.kept(n.J * sw + ht * sv)
+        P = ik.kept(n.mt * sv + sm.Matrix.hstack(*[_cross(sw[:, k], n.h) for k in range(nj)]))
         m = n
         while m is not None:
             if m is not n:
-                L = _kept(L + sm.Matrix.hstack(*[_cross(prev.rw, P[:, k]) for k in range(nj)]))
+                L = ik.kept(L + sm.Matrix.hstack(*[_cross(prev.rw, P[:, k]) for k in range(nj)]))
             blk = m.Sw.T * sm.Matrix.vstack(L, P)    # rows: m's speeds, columns: n's
             for a_, ia in enumerate(m.speed_idx):
                 for b_, ib in enumerate(n.speed_idx):
                     M[ia, ib] = blk[a_, b_]
                     M[ib, ia] = blk[a_, b_]
             prev, m = m, m.parent
-    _KEPT.clear()
     return M, f, tree.q, tree.u, tree.kdes
 
 
-def accelerations_of_tree(system):
+def accelerations_of_tree(system, interner=None):
     """u' of a System's joint tree by the articulated body algorithm (see
-    the module docstring), for an open tree without constraints.
+    the module docstring), for an open tree without constraints; interner as
+    for :func:`equations_of_tree`.
 
     Spatial quantities in the inertial frame's axes at each body's mass
     centre (angular part first; accelerations are those of the mass centres,
@@ -372,8 +336,8 @@ def accelerations_of_tree(system):
     for pins and sliders, up to 3 x 3), ``uu = -S^T pA``; then, outward,
     ``u'_j = D^-1 (uu - U^T a')`` and the body's acceleration ``a' + S u'_j``
     (``a'``: the parent's carried to the body, plus the velocity-product
-    part). Every body's quantities are shared opaque nodes (``_keep``): the
-    expression graph, and so the straight-line C, is linear in the bodies.
+    part). Every body's quantities are shared opaque nodes (``Interner.keep``):
+    the expression graph, and so the straight-line C, is linear in the bodies.
 
     Returns
     -------
@@ -381,7 +345,8 @@ def accelerations_of_tree(system):
         The accelerations in the System's speed order and the System's
         kinematic equations (``kdes = 0``).
     """
-    tree = _walk(system)
+    ik = Interner() if interner is None else interner
+    tree = _walk(system, ik)
     nu = len(tree.u)
     # the graph is a few nodes deep per body, inward and outward: the
     # pipeline's recursive walks (model conversion, CSE) go that deep
@@ -405,19 +370,19 @@ def accelerations_of_tree(system):
             C = C + Cc
             pw = pw + pcw + _cross(c.rw, pcv)
             pv = pv + pcv
-        A, B, C, pw, pv = _sym_kept(A), _kept(B), _sym_kept(C), _kept(pw), _kept(pv)
+        A, B, C, pw, pv = ik.sym_kept(A), ik.kept(B), ik.sym_kept(C), ik.kept(pw), ik.kept(pv)
         nj = n.Sw.shape[1]
         cw, cv = n.cw, n.cv
         if nj:
             sw, sv = n.Sw[:3, :], n.Sw[3:, :]
-            Uw, Uv = _kept(A * sw + B * sv), _kept(B.T * sw + C * sv)
-            D = _sym_kept(sw.T * Uw + sv.T * Uv)
-            n.Dinv = Dinv = _inv_small(D)
-            n.uu = uu = _kept(-(sw.T * pw + sv.T * pv))
+            Uw, Uv = ik.kept(A * sw + B * sv), ik.kept(B.T * sw + C * sv)
+            D = ik.sym_kept(sw.T * Uw + sv.T * Uv)
+            n.Dinv = Dinv = _inv_small(D, ik)
+            n.uu = uu = ik.kept(-(sw.T * pw + sv.T * pv))
             n.U = (Uw, Uv)
             # the articulated inertia seen through the joint: IA - U D^-1 U^T,
             # and its bias pA + Ia c + U D^-1 uu
-            UDw, UDv = _kept(Uw * Dinv), _kept(Uv * Dinv)
+            UDw, UDv = ik.kept(Uw * Dinv), ik.kept(Uv * Dinv)
             Aa = A - UDw * Uw.T
             Ba = B - UDw * Uv.T
             Ca = C - UDv * Uv.T
@@ -425,10 +390,10 @@ def accelerations_of_tree(system):
         else:
             Aa, Ba, Ca = A, B, C
             g = (sm.zeros(3, 1), sm.zeros(3, 1))
-        Aa, Ba, Ca = _sym_kept(Aa), _kept(Ba), _sym_kept(Ca)
+        Aa, Ba, Ca = ik.sym_kept(Aa), ik.kept(Ba), ik.sym_kept(Ca)
         n.IA = (Aa, Ba, Ca)
-        n.pA = (_kept(pw + Aa * cw + Ba * cv + g[0]),
-                _kept(pv + Ba.T * cw + Ca * cv + g[1]))
+        n.pA = (ik.kept(pw + Aa * cw + Ba * cv + g[0]),
+                ik.kept(pv + Ba.T * cw + Ca * cv + g[1]))
     ud = sm.zeros(nu, 1)
     for n in tree.order:
         if n.parent is None:
@@ -437,52 +402,60 @@ def accelerations_of_tree(system):
             pal, pa = n.parent.al, n.parent.a
             aw = pal + n.cw
             av = pa + _cross(pal, n.rw) + n.cv
-        aw, av = _kept(aw), _kept(av)
+        aw, av = ik.kept(aw), ik.kept(av)
         nj = n.Sw.shape[1]
         if nj:
             Uw, Uv = n.U
-            uj = _kept(n.Dinv * (n.uu - (Uw.T * aw + Uv.T * av)))
+            uj = ik.kept(n.Dinv * (n.uu - (Uw.T * aw + Uv.T * av)))
             for k, idx in enumerate(n.speed_idx):
                 ud[idx] = uj[k]
             aw = aw + n.Sw[:3, :] * uj
             av = av + n.Sw[3:, :] * uj
-        n.al, n.a = _kept(aw), _kept(av)
-    _KEPT.clear()
+        n.al, n.a = ik.kept(aw), ik.kept(av)
     return ud, tree.q, tree.u, tree.kdes
 
 
-def _inv_small(D):
+def _inv_small(D, ik):
     """The inverse of a small symmetric matrix of kept entries, by its
     adjugate over placeholder symbols (sympy's inv would test the kept
     entries for zero, a walk down the whole graph)."""
     k = D.shape[0]
     if k == 1:
-        return sm.Matrix([[_keep(1 / D[0, 0])]])
+        return sm.Matrix([[ik.keep(1 / D[0, 0])]])
     X = sm.Matrix(k, k, lambda i, j: sm.Symbol(f"_D{min(i, j)}_{max(i, j)}"))
     sub = {X[i, j]: D[i, j] for i in range(k) for j in range(k)}
-    idet = _keep(1 / _keep(X.det(method="berkowitz").xreplace(sub)))
+    idet = ik.keep(1 / ik.keep(X.det(method="berkowitz").xreplace(sub)))
     adj = X.adjugate(method="berkowitz").xreplace(sub)
-    return _sym_kept(adj * idet)
+    return ik.sym_kept(adj * idet)
 
 
-def _walk(system):
+def _walk(system, ik):
     """The checked tree with, per body, its joint's kinematics, external
     loads, orientation R, and (inertial axes, at the mass centres) S, the
     joint vector, velocities, velocity-product accelerations (absolute: al,
     a; the joint's own share: cw, cv) and central inertia: what CRBA/RNEA
-    (equations_of_tree) and ABA (accelerations_of_tree) both start from."""
-    # no node of an earlier build in sympy's cache: one equal to a new node
-    # (an ancestor's quantities when the same tree is built again) would be
-    # compared with it down the two graphs
-    _KEPT.clear()
-    from sympy.core.cache import clear_cache
-    clear_cache()
+    (equations_of_tree) and ABA (accelerations_of_tree) both start from. ik:
+    the build's Interner (tree.ik)."""
     tree = _Tree(system)
-    N = tree.N
-    qset = set(tree.q)
+    tree.ik = ik
+    _joint_kinematics(tree)
+    places = _Places(tree, system)
+    # each body's axes in the inertial frame's: R = A Rot(k, theta) B, the
+    # angles of consecutive joints about one axis summed (a chain of parallel
+    # pins keeps cos(q1 + ... + qn), not a product of n rotations)
+    for n in tree.order:
+        _orientation(n, tree)
+    _external_loads(tree, system, places)
+    _velocities(tree)
+    return tree
 
+
+def _joint_kinematics(tree):
+    """Per joint: E, the joint vector's parts r_pp and r_cc, S and the
+    velocity-product part of d/dt [w_rel; v_rel] (rel_bias), in the child's
+    axes."""
+    qset = set(tree.q)
     udots = [s.diff(_T) for s in tree.u]
-    # ---- per joint: E, r, S and the velocity-product part of d/dt [w_rel; v_rel]
     for n in tree.order:
         j, child, parent = n.joint, n.body, n.joint.parent
         try:
@@ -518,71 +491,72 @@ def _walk(system):
             n.rel_bias = None
         n.S = S
 
-    # ---- external loads, per body, in its axes at its mass centre
-    known_points, known_frames = {}, {}
-    for n in tree.order:
-        known_points[n.body.masscenter] = n.body
-        known_frames[n.body.frame] = n.body
-    ground_frames = {N} | {g.frame for g in tree.ground}
-    ground_points = {g.masscenter for g in tree.ground} | {system.fixed_point}
-    for j in system.joints:
-        for pt, fr, b in ((j.child_point, j.child_interframe, j.child),
-                          (j.parent_point, j.parent_interframe, j.parent)):
-            if b in tree.ground:
-                ground_points.add(pt)
-                ground_frames.add(fr)
-            else:
-                known_points.setdefault(pt, b)
-                known_frames.setdefault(fr, b)
 
-    def body_of_point(pt, what):
-        if pt in known_points:
-            return known_points[pt]
-        if pt in ground_points:
-            return None
+class _Places:
+    """Which body a load's point or frame belongs to (None: the ground), and
+    a vector in the inertial axes."""
+
+    def __init__(self, tree, system):
+        self.tree = tree
+        self.points, self.frames = {}, {}
         for n in tree.order:
+            self.points[n.body.masscenter] = n.body
+            self.frames[n.body.frame] = n.body
+        self.ground_frames = {tree.N} | {g.frame for g in tree.ground}
+        self.ground_points = {g.masscenter for g in tree.ground} | {system.fixed_point}
+        for j in system.joints:
+            for pt, fr, b in ((j.child_point, j.child_interframe, j.child),
+                              (j.parent_point, j.parent_interframe, j.parent)):
+                if b in tree.ground:
+                    self.ground_points.add(pt)
+                    self.ground_frames.add(fr)
+                else:
+                    self.points.setdefault(pt, b)
+                    self.frames.setdefault(fr, b)
+
+    def body_of_point(self, pt, what):
+        if pt in self.points:
+            return self.points[pt]
+        if pt in self.ground_points:
+            return None
+        for n in self.tree.order:
             try:
                 rb = pt.pos_from(n.body.masscenter).to_matrix(n.body.frame)
             except ValueError:
                 continue
             if not any(e.has(_T) for e in rb):
-                known_points[pt] = n.body
+                self.points[pt] = n.body
                 return n.body
         raise ModelError(
             f"{what} acts on point {_name(pt)!r}, which the joint tree does not know: "
             "not a body's mass centre, a joint's point, or a point fixed in a body")
 
-    def body_of_frame(fr, what):
-        if fr in known_frames:
-            return known_frames[fr]
-        if fr in ground_frames:
+    def body_of_frame(self, fr, what):
+        if fr in self.frames:
+            return self.frames[fr]
+        if fr in self.ground_frames:
             return None
-        for n in tree.order:
+        for n in self.tree.order:
             try:
                 d = fr.dcm(n.body.frame)
             except ValueError:
                 continue
             if not any(e.has(_T) for e in d):
-                known_frames[fr] = n.body
+                self.frames[fr] = n.body
                 return n.body
         raise ModelError(
             f"{what} acts on frame {_name(fr)!r}, which the joint tree does not know: "
             "not a body's frame, a joint's frame, or a frame fixed in a body")
 
-    # ---- each body's axes in the inertial frame's: R = A Rot(k, theta) B, the
-    # angles of consecutive joints about one axis summed (a chain of parallel
-    # pins keeps cos(q1 + ... + qn), not a product of n rotations)
-    for n in tree.order:
-        _orientation(n, tree)
-
-    def in_world(vec):
-        out = sm.zeros(3, 1)
+    def in_world(self, vec):
+        """vec's components in the inertial axes (through the bodies' R)."""
+        N, out = self.tree.N, sm.zeros(3, 1)
         for comp, frame in vec.args:
             comp = sm.Matrix(comp)
             if frame == N:
                 out += comp
-            elif frame in known_frames and frame not in ground_frames:
-                b = tree.nodes[known_frames[frame]]
+            elif frame in self.frames and frame not in self.ground_frames:
+                b = self.tree.nodes[self.frames[frame]]
                 if frame != b.body.frame:
                     comp = me.Vector([(comp, frame)]).to_matrix(b.body.frame)
                 out += b.R * comp
@@ -590,6 +564,10 @@ def _walk(system):
                 out += me.Vector([(comp, frame)]).to_matrix(N)
         return out
 
+
+def _external_loads(tree, system, places):
+    """Per body, the external force F and torque N (about its mass centre),
+    in the inertial axes: the System's loads and its actuators' loads."""
     for n in tree.order:
         n.F, n.N = sm.zeros(3, 1), sm.zeros(3, 1)
     loads = list(system.loads)
@@ -597,30 +575,35 @@ def _walk(system):
         loads.extend(act.to_loads())
     for ld in loads:
         if isinstance(ld, me.Force):
-            b = body_of_point(ld.point, f"force {ld}")
+            b = places.body_of_point(ld.point, f"force {ld}")
             if b is None:
                 continue
             n = tree.nodes[b]
-            Fw = in_world(ld.vector)
+            Fw = places.in_world(ld.vector)
             n.F += Fw
             if ld.point != b.masscenter:
                 rb = ld.point.pos_from(b.masscenter).to_matrix(b.frame)
                 n.N += _cross(n.R * rb, Fw)
         elif isinstance(ld, me.Torque):
-            b = body_of_frame(ld.frame, f"torque {ld}")
+            b = places.body_of_frame(ld.frame, f"torque {ld}")
             if b is None:
                 continue
             n = tree.nodes[b]
-            n.N += in_world(ld.vector)
+            n.N += places.in_world(ld.vector)
         else:      # pragma: no cover - sympy's loads are Force or Torque
             raise ModelError(f"load {ld!r} is neither a Force nor a Torque")
 
-    # ---- RNEA with u' = 0, in the inertial frame's axes, at the mass centres:
-    # velocities and velocity-product accelerations out
+
+def _velocities(tree):
+    """RNEA with u' = 0, in the inertial frame's axes, at the mass centres:
+    per body, S in those axes (Sw), the joint vector (rw), the angular
+    velocity (w), the joint's share of the velocity-product accelerations
+    (cw, cv) and the central inertia (Iw), outwards."""
+    ik = tree.ik
     zero = sm.zeros(3, 1)
     for n in tree.order:
         R = n.R
-        n.Sw = _kept(sm.Matrix.vstack(R * n.S[:3, :], R * n.S[3:, :])) if n.S.shape[1] \
+        n.Sw = ik.kept(sm.Matrix.vstack(R * n.S[:3, :], R * n.S[3:, :])) if n.S.shape[1] \
             else sm.zeros(6, 0)
         rel = n.Sw * _col(n.joint.speeds)
         w_rel, v_rel = rel[:3, :], rel[3:, :]
@@ -628,9 +611,9 @@ def _walk(system):
             w_p, Rp = zero, sm.eye(3)
         else:
             w_p, Rp = n.parent.w, n.parent.R
-        r = _kept(Rp * n.r_pp + R * n.r_cc)
+        r = ik.kept(Rp * n.r_pp + R * n.r_cc)
         n.rw = r
-        n.w = _kept(w_p + w_rel)
+        n.w = ik.kept(w_p + w_rel)
         # the joint's share of the velocity-product accelerations: the
         # body's (al, a) = the parent's carried to it + (cw, cv) at u' = 0
         cw = _cross(w_p, w_rel)
@@ -640,8 +623,7 @@ def _walk(system):
             cv += R * n.rel_bias[3:, :]
         n.cw, n.cv = cw, cv
         b = n.body
-        n.Iw = _kept(R * _inertia_matrix(b) * R.T)
-    return tree
+        n.Iw = ik.kept(R * _inertia_matrix(b) * R.T)
 
 
 def _inertia_matrix(body):
@@ -734,9 +716,10 @@ def _orientation(n, tree):
         Rp = A * (_rot(k, th) if k is not None else sm.eye(3)) * B
         rep = (Rp * ET, None, sm.S.Zero, sm.eye(3))
     A, k, th, B = rep
-    n.rep = rep = (_kept(A), k, _keep(th), B)
+    ik = tree.ik
+    n.rep = rep = (ik.kept(A), k, ik.keep(th), B)
     A, k, th, B = rep
-    n.R = _kept(A * (_rot(k, th) if k is not None else sm.eye(3)) * B)
+    n.R = ik.kept(A * (_rot(k, th) if k is not None else sm.eye(3)) * B)
 
 
 def _same(X, Y, q):

@@ -115,8 +115,9 @@ def make_kernel(name, args, outputs, cse=True, jvps=()):
 
 
 def _cse(exprs, symbols):
-    """sympy's cse, with gen.recursive's opaque nodes (UnevaluatedExpr,
-    shared subexpressions kept whole) unwrapped in what it returns: the
+    """sympy's cse, with the recursive formulation's opaque nodes
+    (UnevaluatedExpr, shared subexpressions kept whole: gen.sym.intern)
+    unwrapped in what it returns: the
     repeated ones are temporaries by then. Models without them come back
     unchanged (the same objects)."""
     if _has_kept(exprs):
@@ -140,8 +141,8 @@ def _has_kept(exprs):
 
 
 def _kept_program(exprs, symbols):
-    """gen.recursive's graphs: each opaque node (UnevaluatedExpr, a body's
-    quantity, shared) is one temporary over the temporaries of the nodes it
+    """The recursive formulation's graphs: each opaque node (UnevaluatedExpr,
+    a body's quantity, shared) is one temporary over the temporaries of the nodes it
     holds, in an order where each is written before it is read: the
     graph is already the straight-line program, its size linear in the
     bodies (sympy's cse over it sorts nested sums, superlinear in the

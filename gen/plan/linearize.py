@@ -96,8 +96,47 @@ def linearize_symbolic(model: Model, op_point=None, r_op=None, constants=None, t
     if not isinstance(model, Model):
         raise ModelError(f"linearize_symbolic needs a gen.Model, got {type(model).__name__}")
     m = model
-    nq, nu = m.nq, m.nu
-    # ---- constants ----------------------------------------------------
+    csub = _constants_map(m, constants)
+    pt = _Point(m, _operating_point(m, op_point, r_op, csub, t))
+    Q, U = sm.Matrix(m.q), sm.Matrix(m.u)
+    niq, niu = m.nq - m.mc, m.nu - m.mv
+    # the Linearizer's f_0..f_4, f_c, f_v, f_a at the point
+    Kq = pt.jac(m.Kqd * pt.Qd + m.Ku * U + m.kf, Q)
+    R = m.M * pt.Ud - m.f - (m.A.T * pt.Lam if m.mv else sm.zeros(m.nu, 1))
+    if pt.coupled:
+        R = R - m.aux_G * pt.Lam
+    Rq, Ru = pt.jac(R, Q), pt.jac(R, U)
+    Rr = pt.jac(R, sm.Matrix(m.r)) if m.nr else sm.zeros(m.nu, 0)
+    Qm = _coordinate_map(m, pt)                                 # 1. dq = Qm dq_ind
+    Uq, Uu = _speed_map(m, pt, Qm)                              # 2. du = Uq dq_ind + Uu du_ind
+    # 3. kinematics: Kqd dq' = -[Kq Qm + Ku Uq | Ku Uu]
+    Dq = _solve(pt.Kqd0, -(Kq * Qm + pt.Ku0 * Uq).row_join(pt.Ku0 * Uu),
+                "the kinematic matrix Kqd")
+    # 4. dynamics
+    G = -(Rq * Qm + Ru * Uq).row_join(Ru * Uu).row_join(Rr)
+    G = _constraint_rows(m, pt, G, Qm, Uq, Uu, Dq)
+    Z = _solve(pt.K, G, "the constrained dynamics [M, -A^T; A, 0]")
+    # 5. independent rows
+    ns = niq + niu
+    A_lin, B_lin = sm.zeros(ns, ns), sm.zeros(ns, m.nr)
+    for k, i in enumerate(m.q_ind):
+        A_lin[k, :] = Dq[i, :]
+    for k, i in enumerate(m.u_ind):
+        A_lin[niq + k, :] = Z[i, :ns]
+        B_lin[niq + k, :] = Z[i, ns:]
+    if simplify:
+        A_lin = A_lin.applyfunc(sm.simplify)
+        B_lin = B_lin.applyfunc(sm.simplify)
+    if any(e.has(sm.nan, sm.zoo, sm.oo, -sm.oo) for e in list(A_lin) + list(B_lin)):
+        raise SingularError("the linearization is not finite at this operating point",
+                            status=status_value("ERR_SINGULAR"), status_name="ERR_SINGULAR")
+    return A_lin, B_lin
+
+
+def _constants_map(m, constants):
+    """{constant: value} for linearize_symbolic's constants argument: None
+    keeps them symbols, "values" the model's values, a dict those given (by
+    symbol or name)."""
     csub = {}
     if constants is None:
         pass
@@ -113,7 +152,14 @@ def linearize_symbolic(model: Model, op_point=None, r_op=None, constants=None, t
             csub[hit[0]] = sm.sympify(v)
     else:
         raise ModelError("constants must be None, 'values' or a dict {symbol: value}")
-    # ---- operating point ----------------------------------------------
+    return csub
+
+
+def _operating_point(m, op_point, r_op, csub, t):
+    """{internal symbol: value} of the operating point: the states and
+    inputs given (unset states stay symbolic, unset inputs are 0), the
+    constants (csub, else symbols) and t."""
+    nq = m.nq
     xv = list(m.q_orig) + list(m.u_orig)
     rv = [sm.S.Zero] * m.nr
     items = list((op_point or {}).items()) + list((r_op or {}).items())
@@ -129,118 +175,114 @@ def linearize_symbolic(model: Model, op_point=None, r_op=None, constants=None, t
     sub.update(zip(m.r, rv))
     sub.update({P: csub.get(po, po) for P, po in zip(m.p, m.p_orig)})
     sub[m.t] = sm.sympify(t)
+    return sub
 
-    def at(expr):
-        return sm.Matrix(expr).xreplace(sub)
 
-    Q, U = sm.Matrix(m.q), sm.Matrix(m.u)
-    mc, mv, nr = m.mc, m.mv, m.nr
-    niq, niu = nq - mc, nu - mv
-    ns = niq + niu
+class _Point:
+    """The model at the operating point: its rates q', accelerations u' and
+    multipliers (or reactions) there, solved from the model, the KKT matrix
+    K, and Jacobians evaluated at the point (jac)."""
 
-    # ---- the operating point's rates, accelerations and multipliers ---
-    Kqd0, Ku0, kf0 = at(m.Kqd), at(m.Ku), at(m.kf)
-    qd0 = _solve(Kqd0, -(Ku0 * at(U) + kf0), "the kinematic matrix Kqd")
-    M0, f0 = at(m.M), at(m.f)
-    A0 = at(m.A) if mv else sm.zeros(0, nu)
-    K = sm.zeros(nu + mv, nu + mv)
-    K[:nu, :nu] = M0
-    rhs = sm.zeros(nu + mv, 1)
-    rhs[:nu, 0] = f0
-    if mv:
-        K[:nu, nu:] = -A0.T
-        K[nu:, :nu] = A0
-        rhs[nu:, 0] = -at(m.a).xreplace(dict(zip(m.qd, qd0)))
-    coupled = getattr(m, "aux_G", None) is not None
-    if coupled:
-        # reactions inside the motion (mv == 0): [M, -G; C, H] [u'; R] = [f; -g0]
-        na = m.na
-        zero_ud = {s_: 0 for s_ in m.ud}
-        K = sm.zeros(nu + na, nu + na)
+    def __init__(self, m, sub):
+        self.m, self.sub = m, sub
+        nu, mv = m.nu, m.mv
+        U = sm.Matrix(m.u)
+        self.Kqd0, self.Ku0, kf0 = self.at(m.Kqd), self.at(m.Ku), self.at(m.kf)
+        qd0 = _solve(self.Kqd0, -(self.Ku0 * self.at(U) + kf0), "the kinematic matrix Kqd")
+        M0, f0 = self.at(m.M), self.at(m.f)
+        self.A0 = self.at(m.A) if mv else sm.zeros(0, nu)
+        K = sm.zeros(nu + mv, nu + mv)
         K[:nu, :nu] = M0
-        K[:nu, nu:] = -at(m.aux_G)
-        K[nu:, :nu] = at(m.aux_g.jacobian(list(m.ud)))
-        K[nu:, nu:] = at(m.aux_F)
-        rhs = f0.col_join(-at(m.aux_g.xreplace(zero_ud)))
-    sol = _solve(K, rhs, "the constrained dynamics [M, -A^T; A, 0]" if not coupled else
-                 "the coupled dynamics and reactions [M, -G; C, F]")
-    ud0, lam0 = sol[:nu, 0], sol[nu:, 0]
+        rhs = sm.zeros(nu + mv, 1)
+        rhs[:nu, 0] = f0
+        if mv:
+            K[:nu, nu:] = -self.A0.T
+            K[nu:, :nu] = self.A0
+            rhs[nu:, 0] = -self.at(m.a).xreplace(dict(zip(m.qd, qd0)))
+        self.coupled = getattr(m, "aux_G", None) is not None
+        if self.coupled:
+            # reactions inside the motion (mv == 0): [M, -G; C, H] [u'; R] = [f; -g0]
+            na = m.na
+            zero_ud = {s_: 0 for s_ in m.ud}
+            K = sm.zeros(nu + na, nu + na)
+            K[:nu, :nu] = M0
+            K[:nu, nu:] = -self.at(m.aux_G)
+            K[nu:, :nu] = self.at(m.aux_g.jacobian(list(m.ud)))
+            K[nu:, nu:] = self.at(m.aux_F)
+            rhs = f0.col_join(-self.at(m.aux_g.xreplace(zero_ud)))
+        self.K = K
+        sol = _solve(K, rhs, "the constrained dynamics [M, -A^T; A, 0]" if not self.coupled
+                     else "the coupled dynamics and reactions [M, -G; C, F]")
+        ud0, lam0 = sol[:nu, 0], sol[nu:, 0]
+        self.Qd = sm.Matrix([sm.Dummy(f"qd{i}") for i in range(m.nq)])
+        self.Ud = sm.Matrix([sm.Dummy(f"ud{i}") for i in range(nu)])
+        self.Lam = sm.Matrix([sm.Dummy(f"lam{i}")
+                              for i in range(mv if not self.coupled else m.na)])
+        self.rates = dict(zip(self.Qd, qd0))
+        self.rates.update(zip(self.Ud, ud0))
+        self.rates.update(zip(self.Lam, lam0))
 
-    # ---- Jacobians at the point (the Linearizer's f_0..f_4, f_c, f_v, f_a)
-    Qd = sm.Matrix([sm.Dummy(f"qd{i}") for i in range(nq)])
-    Ud = sm.Matrix([sm.Dummy(f"ud{i}") for i in range(nu)])
-    Lam = sm.Matrix([sm.Dummy(f"lam{i}") for i in range(mv if not coupled else m.na)])
-    rates = dict(zip(Qd, qd0))
-    rates.update(zip(Ud, ud0))
-    rates.update(zip(Lam, lam0))
+    def at(self, expr):
+        return sm.Matrix(expr).xreplace(self.sub)
 
-    def jac(expr, wrt):
-        return at(expr.jacobian(wrt)).xreplace(rates)
+    def jac(self, expr, wrt):
+        return self.at(expr.jacobian(wrt)).xreplace(self.rates)
 
-    Kq = jac(m.Kqd * Qd + m.Ku * U + m.kf, Q)
-    R = m.M * Ud - m.f - (m.A.T * Lam if mv else sm.zeros(nu, 1))
-    if coupled:
-        R = R - m.aux_G * Lam
-    Rq, Ru = jac(R, Q), jac(R, U)
-    Rr = jac(R, sm.Matrix(m.r)) if nr else sm.zeros(nu, 0)
 
-    # ---- 1. coordinates: dq = Qm dq_ind
-    Qm = sm.zeros(nq, niq)
+def _coordinate_map(m, pt):
+    """Qm with dq = Qm dq_ind: the dependent coordinates' share through the
+    configuration constraints' Jacobian at the point."""
+    Q = sm.Matrix(m.q)
+    niq = m.nq - m.mc
+    Qm = sm.zeros(m.nq, niq)
     for k, i in enumerate(m.q_ind):
         Qm[i, k] = 1
-    if mc:
-        Jc = jac(m.fc, Q)
-        Jd = Jc.extract(list(range(mc)), m.q_dep)
-        Ji = Jc.extract(list(range(mc)), m.q_ind)
+    if m.mc:
+        Jc = pt.jac(m.fc, Q)
+        Jd = Jc.extract(list(range(m.mc)), m.q_dep)
+        Ji = Jc.extract(list(range(m.mc)), m.q_ind)
         X = _solve(Jd, Ji, "the configuration-constraint Jacobian w.r.t. the dependent coordinates")
         for j, i in enumerate(m.q_dep):
             Qm[i, :] = -X[j, :]
-    # ---- 2. speeds: du = Uq dq_ind + Uu du_ind
-    Uu = sm.zeros(nu, niu)
-    Uq = sm.zeros(nu, niq)
+    return Qm
+
+
+def _speed_map(m, pt, Qm):
+    """(Uq, Uu) with du = Uq dq_ind + Uu du_ind: the dependent speeds' share
+    through the velocity constraints at the point."""
+    niq, niu, mv = m.nq - m.mc, m.nu - m.mv, m.mv
+    Uu, Uq = sm.zeros(m.nu, niu), sm.zeros(m.nu, niq)
     for k, i in enumerate(m.u_ind):
         Uu[i, k] = 1
     if mv:
-        Vq = jac(m.A * U + m.b, Q)
-        Ad = A0.extract(list(range(mv)), m.u_dep)
-        Ai = A0.extract(list(range(mv)), m.u_ind)
+        Vq = pt.jac(m.A * sm.Matrix(m.u) + m.b, sm.Matrix(m.q))
+        Ad = pt.A0.extract(list(range(mv)), m.u_dep)
+        Ai = pt.A0.extract(list(range(mv)), m.u_ind)
         Y = _solve(Ad, Ai.row_join(Vq * Qm), "the velocity-constraint matrix w.r.t. the "
                    "dependent speeds")
         for j, i in enumerate(m.u_dep):
             Uu[i, :] = -Y[j, :niu]
             Uq[i, :] = -Y[j, niu:]
-    # ---- 3. kinematics: Kqd dq' = -[Kq Qm + Ku Uq | Ku Uu]
-    Dq = _solve(Kqd0, -(Kq * Qm + Ku0 * Uq).row_join(Ku0 * Uu), "the kinematic matrix Kqd")
-    # ---- 4. dynamics
-    G = -(Rq * Qm + Ru * Uq).row_join(Ru * Uu).row_join(Rr)
-    if mv:
+    return Uq, Uu
+
+
+def _constraint_rows(m, pt, G, Qm, Uq, Uu, Dq):
+    """G with the rows of the acceleration constraints (with velocity
+    constraints) or of the auxiliary residual (reactions inside the motion:
+    the implicit function theorem on the coupled system) below the
+    dynamics' rows."""
+    Q, U, nr = sm.Matrix(m.q), sm.Matrix(m.u), m.nr
+    if m.mv:
         # a may hold q' (m.qd, implicit kinematics): its share through q'(q, u)
-        S = m.A * Ud + m.a.xreplace(dict(zip(m.qd, Qd)))
-        Sq, Su = jac(S, Q), jac(S, U)
+        S = m.A * pt.Ud + m.a.xreplace(dict(zip(m.qd, pt.Qd)))
+        Sq, Su = pt.jac(S, Q), pt.jac(S, U)
         GS = (-(Sq * Qm + Su * Uq)).row_join(-Su * Uu)
         if m.qd:
-            GS = GS - jac(S, Qd) * Dq
-        G = G.col_join(GS.row_join(sm.zeros(mv, nr)))
-    if coupled:
-        # the auxiliary residual F R + g(u'): the implicit function theorem
-        # on the coupled system
-        S = m.aux_F * Lam + m.aux_g.xreplace(dict(zip(m.ud, Ud)))
-        Sq, Su = jac(S, Q), jac(S, U)
-        Sr = jac(S, sm.Matrix(m.r)) if nr else sm.zeros(m.na, 0)
+            GS = GS - pt.jac(S, pt.Qd) * Dq
+        G = G.col_join(GS.row_join(sm.zeros(m.mv, nr)))
+    if pt.coupled:
+        S = m.aux_F * pt.Lam + m.aux_g.xreplace(dict(zip(m.ud, pt.Ud)))
+        Sq, Su = pt.jac(S, Q), pt.jac(S, U)
+        Sr = pt.jac(S, sm.Matrix(m.r)) if nr else sm.zeros(m.na, 0)
         G = G.col_join((-(Sq * Qm + Su * Uq)).row_join(-Su * Uu).row_join(-Sr))
-    Z = _solve(K, G, "the constrained dynamics [M, -A^T; A, 0]")
-    # ---- 5. independent rows
-    A_lin = sm.zeros(ns, ns)
-    B_lin = sm.zeros(ns, nr)
-    for k, i in enumerate(m.q_ind):
-        A_lin[k, :] = Dq[i, :]
-    for k, i in enumerate(m.u_ind):
-        A_lin[niq + k, :] = Z[i, :ns]
-        B_lin[niq + k, :] = Z[i, ns:]
-    if simplify:
-        A_lin = A_lin.applyfunc(sm.simplify)
-        B_lin = B_lin.applyfunc(sm.simplify)
-    if any(e.has(sm.nan, sm.zoo, sm.oo, -sm.oo) for e in list(A_lin) + list(B_lin)):
-        raise SingularError("the linearization is not finite at this operating point",
-                            status=status_value("ERR_SINGULAR"), status_name="ERR_SINGULAR")
-    return A_lin, B_lin
+    return G

@@ -338,7 +338,7 @@ def float_values(exprs, values):
                 v *= ev(a)
         elif e.is_Pow:
             v = ev(e.args[0]) ** ev(e.args[1])
-        elif isinstance(e, sm.UnevaluatedExpr):     # gen.recursive's opaque nodes
+        elif isinstance(e, sm.UnevaluatedExpr):     # opaque nodes (gen.sym.intern)
             v = ev(e.args[0])
         else:
             fn = funcs.get(type(e))

@@ -35,6 +35,8 @@ naming the user's expression, when the model is created.
 """
 from __future__ import annotations
 
+import functools
+
 import sympy as sm
 from sympy.codegen.ast import float32, float64, real
 from sympy.core.function import AppliedUndef
@@ -233,8 +235,7 @@ class ModelCxxPrinter(ModelCPrinter):
 # nodes printed by the printers' own structure (operators, ternaries)
 _STRUCTURAL = (sm.Add, sm.Mul, sm.Pow, sm.Piecewise, sm.core.relational.Relational,
                sm.And, sm.Or, sm.Not, BooleanAtom, sm.Symbol, sm.NumberSymbol,
-               sm.UnevaluatedExpr)     # gen.recursive's opaque nodes, unwrapped after CSE
-_node_cache = {}
+               sm.UnevaluatedExpr)     # opaque nodes (gen.sym.intern), unwrapped after CSE
 
 
 def _printers():
@@ -257,10 +258,7 @@ def _function_problem(e):
     """Why the function node e cannot be printed or differentiated for the
     linearization, or None. Checked once per function and number of
     arguments, on fresh symbols (then shown with e's arguments)."""
-    key = (e.func, len(e.args))
-    if key not in _node_cache:
-        _node_cache[key] = _shell_problem(e.func, len(e.args))
-    hit = _node_cache[key]
+    hit = _shell_problem(e.func, len(e.args))
     if hit is None:
         return None
     kind, detail, syms = hit
@@ -269,7 +267,12 @@ def _function_problem(e):
     return kind, detail
 
 
+@functools.lru_cache(maxsize=1024)
 def _shell_problem(func, nargs):
+    """_function_problem's answer for func over nargs fresh symbols: a
+    bounded cache (lru_cache: thread-safe, least recently used dropped
+    first) shared by every build, since a function class prints (or not)
+    the same way in all of them."""
     from .graph import partial
     name = getattr(func, "__name__", str(func))
     syms = [sm.Dummy(f"a{i}") for i in range(nargs)]

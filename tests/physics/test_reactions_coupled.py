@@ -17,7 +17,6 @@ import sympy as sm
 from sympy.physics import mechanics as me
 
 import gen
-from gen.intake import model as gen_model
 from helpers import rel_err
 
 t = me.dynamicsymbols._t
@@ -195,17 +194,20 @@ def test_system_model_matches_the_kane_model(bead, ref):
         assert abs(sim.auxiliary_forces(0.0, x, r=[Fv])[0] - n_val) <= 1e-12 * max(1.0, abs(n_val))
 
 
-def test_normal_auxiliary_direction_is_eliminated_and_equals_the_coupled_solve(ref, monkeypatch):
+def test_normal_auxiliary_direction_is_eliminated_and_equals_the_coupled_solve(ref):
     # ua along the normal: N = m (g cos(theta) + R_c omega^2) exactly (its
     # coefficient is 1, no omega' in it), eliminated symbolically; the
-    # coupled solve (forced) gives the same numbers
+    # coupled solve (forced: eliminate_reactions=False) gives the same numbers
     km, consts, F, _ = bead_kane("normal")
     m, g, Rc, mu = (CONSTS[k] for k in ("m", "g", "R_c", "mu"))
     elim = gen.Model.from_kanes(km, constants=consts, inputs=[F], name="bead_n")
     assert elim.aux_G is None
-    monkeypatch.setattr(gen_model, "_ELIMINATE_CONSTANT", False)
-    coupled = gen.Model.from_kanes(km, constants=consts, inputs=[F], name="bead_nc")
+    coupled = gen.Model.from_kanes(km, constants=consts, inputs=[F], name="bead_nc",
+                                   eliminate_reactions=False)
     assert coupled.aux_G is not None
+    # the same keyword through Model.from_system (a Kane builder's own)
+    assert gen.Model.from_system(km, constants=consts, inputs=[F], name="bead_nc",
+                                 eliminate_reactions=False).fingerprint() == coupled.fingerprint()
     s1, s2 = gen.compile(elim), gen.compile(coupled)
     for x, Fv in zip(*states(15, 9)):
         n_val = m * (g * np.cos(x[0]) + Rc * x[1]**2)

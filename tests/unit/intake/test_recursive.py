@@ -7,6 +7,8 @@ separately, its mass_matrix_full / forcing_full lambdified and solved with
 numpy at random states; the linearization from lambdified symbolic Jacobians
 of the same (A = M^-1 (dF/dx - dM/dx x')). Every comparison is to 1e-12."""
 import os
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -479,3 +481,107 @@ def test_recursive_needs_a_system():
         gen.Model.from_system(system.eom_method, formulation="recursive")
     with pytest.raises(gen.ModelError, match="q_ind.*formulation='recursive'"):
         gen.Model.from_system(system, formulation="recursive", q_ind=[])
+
+
+# ------------------------------------------------------- builds in threads
+def _limbs(n_limbs, depth):
+    """A sliding torso with n_limbs limbs of depth pins, axes turning (the
+    humanoid's shape, smaller)."""
+    axes = ["z", "x", "y", "xz", "y", "x"]
+    spec = [(-1, "prismatic", "y")]
+    for limb in range(n_limbs):
+        par = 0
+        for k in range(depth):
+            spec.append((par, "pin", axes[(k + limb) % 6]))
+            par = len(spec) - 1
+    return spec
+
+
+# three different trees: two open trees by ABA, one sharing the other's
+# first limb (the same symbols: a build that saw the other's opaque nodes as
+# its own would compare the two graphs down their depth), and the shorter
+# one by CRBA + RNEA (a physical mass matrix)
+THREADED = {"thr_a": (_limbs(2, 5), "recursive"), "thr_b": (_limbs(1, 5), "recursive"),
+            "thr_c": (_limbs(1, 5), "crba")}
+
+
+def _threaded_build(name):
+    spec, formulation = THREADED[name]
+    system, consts, inputs = _tree(spec)
+    return gen.Model.from_system(system, constants=consts, inputs=inputs, name=name,
+                                 formulation=formulation)
+
+
+def _numbers(model, rng):
+    sim = gen.compile(model)
+    n = model.nq
+    out = []
+    for _ in range(4):
+        x = rng.uniform(-1.5, 1.5, 2 * n)
+        out += [sim.rhs(0.0, x, r=[0.4]), sim.mass_matrix(x[:n])]
+    return out
+
+
+@pytest.mark.slow      # about 10 s: six builds of 6 to 11 bodies
+def test_builds_in_threads_equal_builds_in_sequence():
+    """Each recursive build keeps its opaque nodes in its own interner, and
+    nodes of different builds never compare equal: three builds of different
+    trees in three threads of one process give the same models (fingerprints,
+    the expression graphs) and the same numbers, to the bit, as the same
+    builds one after the other. With the interner shared by the process (and
+    cleared by each build at its start and end, with sympy's cache), the two
+    ABA builds compared each other's nodes down their graphs: on the code
+    before issue 42 the threaded builds of these trees did not finish in 25
+    minutes (the sequence takes a few seconds; with limbs of 4 pins they took
+    150 s)."""
+    seq = {name: _threaded_build(name) for name in THREADED}
+    got, errors = {}, []
+    start = threading.Barrier(len(THREADED))
+
+    def run(name):
+        try:
+            start.wait()
+            model = _threaded_build(name)
+            got[name] = (model, model.fingerprint())    # a walk of the whole graph
+        except BaseException as e:      # noqa: BLE001 - reported below
+            errors.append((name, e))
+
+    threads = [threading.Thread(target=run, args=(n,), daemon=True) for n in THREADED]
+    for th in threads:
+        th.start()
+    deadline = time.monotonic() + 300    # a guard against a hang, not a timing: ~5 s here
+    for th in threads:
+        th.join(max(0.0, deadline - time.monotonic()))
+    # (names and strings only in what an assertion shows: the repr of a model
+    # prints its graph as a tree)
+    assert not errors, [(name, repr(e)) for name, e in errors]
+    missing = sorted(set(THREADED) - set(got))
+    assert missing == [], ("builds (and their fingerprints) not finished in 300 s: the "
+                           "threads interfere")
+    for name in THREADED:
+        fp, want_fp = got[name][1], seq[name].fingerprint()
+        assert fp == want_fp, name
+        want = _numbers(seq[name], np.random.default_rng(11))
+        have = _numbers(got[name][0], np.random.default_rng(11))
+        assert all(np.array_equal(a, b) for a, b in zip(have, want)), name
+    # and the numbers are the tree's (ABA against CRBA + RNEA on the same tree)
+    rng = np.random.default_rng(2)
+    aba, crba = gen.compile(got["thr_b"][0]), gen.compile(got["thr_c"][0])
+    for _ in range(3):
+        x = rng.uniform(-1.5, 1.5, 2 * got["thr_b"][0].nq)
+        want = crba.rhs(0.0, x, r=[0.4])
+        assert np.max(np.abs(aba.rhs(0.0, x, r=[0.4]) - want)) <= TOL * max(
+            1.0, np.max(np.abs(want)))
+
+
+def test_a_build_leaves_sympys_cache_alone(monkeypatch):
+    """The recursive build does not wipe sympy's process-wide cache (other
+    threads' and the user's work live in it)."""
+    import sympy.core.cache as cache
+
+    def boom():
+        raise AssertionError("sympy's cache cleared")
+    monkeypatch.setattr(cache, "clear_cache", boom)
+    for _ in range(2):      # the same tree twice in one process: its nodes left in the cache
+        model = _threaded_build("thr_b")
+    assert model.nu == 6

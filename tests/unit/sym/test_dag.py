@@ -1,5 +1,5 @@
-"""gen.model's conversion of a method's matrices to internal symbols
-(_xreplace_shared) builds exactly the objects sympy's xreplace builds: the
+"""The model's conversion of a method's matrices to internal symbols
+(gen.sym.dag.xreplace_shared) builds exactly the objects sympy's xreplace builds: the
 same arguments in the same canonical order (== compares them in order), on
 models whose expressions hold functions of time, derivatives, non-smooth
 functions and numbers, and the same when the rule maps onto expressions
@@ -8,7 +8,7 @@ import pytest
 import sympy as sm
 import sympy.physics.mechanics as me
 
-from gen.intake.model import _xreplace_shared
+from gen.sym.dag import xreplace_shared
 
 import cart_pole
 import n_link_cart
@@ -21,7 +21,7 @@ T = me.dynamicsymbols._t
 
 def _rule(exprs):
     """Functions of time and their derivatives -> fresh Dummies, t -> a
-    Dummy (what Model._finish does), in a fixed order."""
+    Dummy (what gen.intake.canonical.convert does), in a fixed order."""
     fns = set()
     for e in exprs:
         fns |= e.atoms(sm.Derivative) | e.atoms(sm.core.function.AppliedUndef)
@@ -56,7 +56,7 @@ def test_conversion_builds_sympys_objects(name):
     rule = _rule([e for m in mats for e in m])
     memo = {}
     for mat in mats:
-        fast = _xreplace_shared(sm.Matrix(mat), rule, memo)
+        fast = xreplace_shared(sm.Matrix(mat), rule, memo)
         slow = sm.Matrix(mat).xreplace(rule)
         for a, b in zip(fast, slow):
             assert a == b and hash(a) == hash(b), (name, a, b)
@@ -67,6 +67,6 @@ def test_non_atomic_rule_re_evaluates():
     f = me.dynamicsymbols("f")
     mat = sm.Matrix([f * x + f**2 - x * f, sm.sin(f) * f])
     rule = {f: x + y}
-    fast = _xreplace_shared(mat, rule, {})
+    fast = xreplace_shared(mat, rule, {})
     assert fast == mat.xreplace(rule)
     assert fast[0] == (x + y)**2          # f*x - x*f cancelled by evaluation
