@@ -16,6 +16,7 @@ from ... import pipeline
 from ...core.errors import InputError, ModelError
 from ...intake.model import require_model
 from .ipopt import cyipopt, run_ipopt, status_message
+from .events import read_events, solution_phases
 from .guess import start_point
 from .layout import assemble, index_tables
 from .names import Names, read_instance
@@ -61,6 +62,14 @@ class OptimalControl:
     fit : dict, optional
         {state or output: (t_data, values)}: adds sum (y(t_i) - values_i)^2
         to the objective, y linearly interpolated between nodes.
+    events : list of str, optional
+        The model's hybrid declarations (``gen.Reset``) that end the
+        trajectory, in order; one so far: the last node lies on its guard,
+        crossing in its direction (gen/design/ocp/events.py).
+    periodic : bool, optional
+        The state after the event's map (without an event: the final state)
+        equals the initial state: a limit cycle. ``sol.phases`` gives each
+        phase's times, states and the state after its event.
 
     ``bounds``, ``initial``, ``final``, ``constants``, ``duration`` (within
     fixed or free), ``path_bounds`` and ``fit`` are attributes that can be
@@ -83,7 +92,8 @@ class OptimalControl:
 
     def __init__(self, model, nodes, duration, objective=None, terminal_cost=None,
                  method="hermite-simpson", bounds=None, initial=None, final=None,
-                 constraints=None, path=None, parameters=None, fit=None):
+                 constraints=None, path=None, parameters=None, fit=None, events=None,
+                 periodic=False):
         require_model(model, "gen.OptimalControl")
         t0 = time.perf_counter()
         m = self.model = model
@@ -107,6 +117,8 @@ class OptimalControl:
         if not isinstance(nodes, (int, np.integer)) or nodes < 2:
             raise InputError(f"nodes must be an integer >= 2, got {nodes!r}")
         self.nodes = int(nodes)
+        self._event, self.periodic = read_events(self, events, periodic)
+        self.events = list(events or [])
         self._names = nm = Names(m)
         self.duration = duration
         self._check_duration(duration)
@@ -481,6 +493,7 @@ class OptimalControl:
         sol = OptimalSolution._make(self, np.asarray(z, float), float(info["obj_val"]), status,
                                     msg, iterations, solve_seconds)
         sol.first_iterate = info["first_iterate"]
+        sol.phases = solution_phases(self, sol)
         return sol
 
     # --------------------------------------------------------- helpers

@@ -59,6 +59,7 @@ class OptimalSolution:
         s.message = message
         s.iterations = iterations
         s.first_iterate = (float("nan"), float("nan"))
+        s.phases = []
         s.build_seconds = ocp.build_seconds
         s.solve_seconds = solve_seconds
         s.success = status in (0, 1)
