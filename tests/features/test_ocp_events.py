@@ -98,3 +98,47 @@ def test_passive_walker_gait_found_by_optimisation(walker):
     strike = [e for e in rep.events if e.name == "heelstrike"][0]
     assert abs(strike.t - T) < 1e-6
     assert np.abs(strike.x_after - sol.x[0]).max() < 1e-6
+
+
+@pytest.mark.slow
+def test_event_rows_derivatives_against_finite_differences(walker):
+    """The guard, its rate and the periodicity across the heel strike's map
+    (generated kernels scattered by the C loop): Jacobian and the exact
+    Hessian of the Lagrangian against central differences of the C's own
+    values, at a random point."""
+    sw, model = walker
+    o = gen.OptimalControl(model, 4, (2.0, 6.0), terminal_cost=sm.Symbol("t"),
+                           method="trapezoidal", events=["heelstrike"], periodic=True)
+    o._assemble()
+    o._p = o._pvec()
+    rows = {name: b for name, b in o._rows0.items()}
+    assert {"guard", "guard_rate", "periodic"} <= set(rows)
+    rng = np.random.default_rng(3)
+    n, m = o._lay.n, o._m_rows
+    z = rng.uniform(-0.8, 0.8, n)
+    z[o._lay.T] = 3.0
+
+    def dense(vals, r, c, shape):
+        out = np.zeros(shape)
+        np.add.at(out, (r, c), vals)
+        return out
+    J = dense(o.evaluate(z, "jacobian"), o._jrows, o._jcols, (m, n))
+    lam = rng.normal(size=m)
+    H = dense(o._call(o._what["hessian"], z, len(o._hrows), lam, 0.0), o._hrows, o._hcols,
+              (n, n))
+    H = H + np.tril(H, -1).T
+    eps = 1e-6
+
+    def lagrangian_gradient(zz):
+        return dense(o.evaluate(zz, "jacobian"), o._jrows, o._jcols, (m, n)).T @ lam
+    Jfd, Hfd = np.zeros((m, n)), np.zeros((n, n))
+    for j in range(n):
+        e = np.zeros(n)
+        e[j] = eps
+        Jfd[:, j] = (o.evaluate(z + e, "constraints") - o.evaluate(z - e, "constraints")) / (2 * eps)
+        Hfd[:, j] = (lagrangian_gradient(z + e) - lagrangian_gradient(z - e)) / (2 * eps)
+    assert np.abs(J - Jfd).max() < 1e-7 * max(1, np.abs(Jfd).max())
+    assert np.abs(H - Hfd).max() < 1e-6 * max(1, np.abs(Hfd).max())
+    ev = [r for name in ("guard", "guard_rate", "periodic") for r0 in rows[name]
+          for r in range(r0, r0 + {"guard": 1, "guard_rate": 1, "periodic": 4}[name])]
+    assert np.abs(Jfd[ev]).max() > 0.1          # rows that are there
