@@ -99,12 +99,15 @@ def run_ipopt(ocp, z0, lb, ub, hessian, ipopt_options):
     # matrices it pairs pivots that are then delayed, and a factorization
     # of a few thousand unknowns took up to 0.8 s instead of a millisecond
     # (the brachistochrone of issue 47: 2.4 s -> 0.3 s for 44 iterations).
-    # The initial and final values (variables fixed by equal bounds) are
-    # equality constraints, as a transcription written by hand has them:
-    # removed instead (IPOPT's default), the brachistochrone took 46
-    # iterations against 25
+    # With a free final time, the initial and final values (variables fixed
+    # by equal bounds) are equality constraints, as a transcription written
+    # by hand has them: removed instead (IPOPT's default), the
+    # brachistochrone took 46 iterations against 25. With a fixed duration
+    # they are removed: kept, the fixed T would stay a variable coupled to
+    # every slope (a dense row and column of the KKT matrix)
     opts = {"print_level": 0, "sb": "yes", "nlp_scaling_method": "user-scaling",
-            "mumps_permuting_scaling": 0, "fixed_variable_treatment": "make_constraint"}
+            "mumps_permuting_scaling": 0,
+            "fixed_variable_treatment": "make_constraint" if ocp.free_time else "make_parameter"}
     if hessian == "limited-memory":
         opts["hessian_approximation"] = "limited-memory"
     opts.update(ipopt_options)
