@@ -57,9 +57,12 @@ def _read_dict(ocp, guess, X, R, z):
             R[:, i] = v
         elif kind == "p" and i in ocp._pf:
             z[lay.P[ocp._pf.index(i)]] = float(v[0])
-        else:
+        elif kind == "p":
             raise InputError(f"guess: {k} is a known constant, not one of the parameters to "
                              "identify (change ocp.constants instead)")
+        else:
+            raise InputError(f"guess: {k} is an output; a guess gives states, inputs, "
+                             "parameters to identify and 'duration'")
 
 
 def _short(v):
