@@ -59,6 +59,13 @@ def test_events_are_checked_before_building(walker, monkeypatch):
         with pytest.raises(gen.InputError) as e:
             gen.OptimalControl(model, 11, (2, 6), terminal_cost=t, **kw)
         assert str(e.value) == msg
+    # without events=, the declarations are named: not solved through silently
+    with pytest.warns(UserWarning) as w, pytest.raises(AssertionError, match="built despite"):
+        gen.OptimalControl(model, 11, (2, 6), terminal_cost=t)
+    assert str(w[0].message) == (
+        "model 'walker_ocp' has hybrid declarations (heelstrike) that events= does not name: "
+        "the trajectory is optimised as if they were not there, and may cross their guards "
+        "without their jumps")
 
 
 @pytest.mark.slow

@@ -18,6 +18,8 @@ models are refused with the reason.
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import sympy as sm
 
@@ -69,6 +71,11 @@ def read_events(ocp, events, periodic):
         raise InputError("events: the guard's crossing is checked through the last node's "
                          "slopes, which method='midpoint' has not; use 'hermite-simpson', "
                          "'trapezoidal' or 'backward-euler'")
+    if decls and not events:
+        warnings.warn(f"model {m.name!r} has hybrid declarations ({', '.join(decls)}) that "
+                      "events= does not name: the trajectory is optimised as if they were not "
+                      "there, and may cross their guards without their jumps",
+                      UserWarning, stacklevel=3)
     d = decls[events[0]] if events else None
     if d is not None and d.kind != KIND_RESET:
         raise InputError(f"events: {d.name!r} is a gen.Impact; ending a phase on an impact is "
