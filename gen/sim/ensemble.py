@@ -425,6 +425,13 @@ def run_chunk(sim, job, since=None):
                        run.input_period, run.input_hold)
     if plan is not None:
         e.input = plan.struct
+    hybrid = None
+    if getattr(sim, "nh", 0):
+        # hybrid={...}: every run through simulate_events with the engine's
+        # hybrid work (this chunk's own), as sim.simulate runs it
+        from .events import plan_events
+        hybrid = plan_events(sim, None, capacity=0)
+        e.events = hybrid.struct
     opts = library.new("sim_options")
     library.function("sim_options_default")(opts)
     fill_sim_options(opts, run, rows=False)   # every and final_only: the reducers'
