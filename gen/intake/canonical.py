@@ -303,6 +303,9 @@ def check_structure(name, eqs, syms, conv):
     speeds or inputs, f_c not on them, kf and b not on the inputs."""
     nu, U, R = len(eqs.u), syms.U, syms.R
     M, A = conv.M, conv.A
+    if nu == 0:
+        raise ModelError(f"model '{name}' has no speeds, so no state: nothing to simulate "
+                         "(an empty System or method?)")
     if M.shape != (nu, nu):
         raise ModelError(f"mass matrix has shape {M.shape}, expected ({nu}, {nu})")
     if conv.f.shape != (nu, 1):
