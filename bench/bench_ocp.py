@@ -28,6 +28,23 @@ difference against the standard error of p (Gauss-Newton on the simulated
 misfit, p and the initial state free), and the ratios.
 
     python bench/bench_ocp.py --problems ident [--ident-nodes 5000] [--seed 0]
+
+Issue 47's brachistochrone (a particle under gravity steered by Fn (-vy,
+vx), from rest at the origin to (2, -1) in minimum time, trapezoidal,
+N = 201, |Fn| <= 10) from its two guesses (positions moving with zero
+speeds in T = 1; the default guess), eomgen against the same trapezoidal
+transcription in CasADi's Opti (explicit f; with --lifted also eomgen's
+form, the slopes as unknowns, unscaled: it stalls as eomgen did): the
+iterations, process (CPU) and wall times, the optimum and IPOPT's
+infeasibilities at iteration 0.
+
+    python bench/bench_ocp.py --problems brach [--repeat 5] [--lifted]
+
+The large problem: a pendulum swing-up (Hermite-Simpson) at 1,001 and
+--big-nodes nodes (100,001: minutes, about 2.5 GB): status, iterations,
+times, peak memory, the objective against the coarse grid's.
+
+    python bench/bench_ocp.py --problems big [--big-nodes 100001]
 """
 import argparse
 import importlib.util
@@ -243,6 +260,182 @@ def run_ident(a):
                 lbfgs=lm)
 
 
+# ------------------------------------------------- the brachistochrone
+BRACH = dict(N=201, g=9.81, fmax=10.0, T=(0.1, 5.0), end=(2.0, -1.0))
+
+
+def brach_model():
+    """A particle under gravity steered by Fn (-vy, vx) (no work): Kane's
+    equations, unit mass."""
+    import gen
+    from sympy.physics import mechanics as me
+    x, y, vx, vy, Fn = me.dynamicsymbols("x y v_x v_y F_n")
+    g, m = sm.symbols("g m")
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x + y * N.y)
+    P.set_vel(N, vx * N.x + vy * N.y)
+    km = me.KanesMethod(N, [x, y], [vx, vy], kd_eqs=[x.diff() - vx, y.diff() - vy])
+    km.kanes_equations([me.Particle("p", P, m)],
+                       [(P, -m * g * N.y + Fn * (-vy * N.x + vx * N.y))])
+    model = gen.Model.from_kanes(km, constants={g: BRACH["g"], m: 1.0}, inputs=[Fn],
+                                 name="brachistochrone")
+    return model, (x, y, vx, vy, Fn)
+
+
+def brach_guess(which, N):
+    """The issue's two guesses as (positions, speeds, T): "positions" moves
+    the positions linearly with zero speeds in T = 1; "default" is
+    OptimalControl's (states linear between the boundary values, zero
+    speeds, T the middle of its bounds)."""
+    T = 1.0 if which == "positions" else 0.5 * sum(BRACH["T"])
+    return np.linspace(0, BRACH["end"][0], N), np.linspace(0, BRACH["end"][1], N), T
+
+
+def brach_ours(which, repeat):
+    import gen
+    model, (x, y, vx, vy, Fn) = brach_model()
+    N = BRACH["N"]
+    ocp = gen.OptimalControl(model, N, BRACH["T"], terminal_cost=sm.Symbol("t"),
+                             method="trapezoidal", bounds={Fn: (-BRACH["fmax"], BRACH["fmax"])},
+                             initial={x: 0, y: 0, vx: 0, vy: 0},
+                             final={x: BRACH["end"][0], y: BRACH["end"][1]})
+    X, Y, T = brach_guess(which, N)
+    guess = {x: X, y: Y, "duration": T} if which == "positions" else None
+    runs = []
+    for _ in range(repeat):
+        t0, c0 = time.perf_counter(), time.process_time()
+        sol = ocp.solve(guess, tol=1e-8)
+        runs.append(dict(wall=time.perf_counter() - t0, cpu=time.process_time() - c0,
+                         iterations=sol.iterations, objective=sol.objective, status=sol.status,
+                         inf_pr0=sol.first_iterate[0], inf_du0=sol.first_iterate[1]))
+    return median(runs)
+
+
+def brach_casadi(which, repeat, lifted=False):
+    """The same trapezoidal transcription in CasADi's Opti: the explicit
+    right-hand side f(x, u) in the defects, or (lifted) the slopes as
+    unknowns with the equations of motion as constraints at every node, as
+    eomgen transcribes them; the same guess, IPOPT's defaults, tol 1e-8."""
+    import casadi as ca
+    N, g = BRACH["N"], BRACH["g"]
+    opti = ca.Opti()
+    X, U, T = opti.variable(4, N), opti.variable(1, N), opti.variable()
+    h = T / (N - 1)
+
+    def f(x, u):
+        return ca.vertcat(x[2], x[3], -u * x[3], -g + u * x[2])
+    if lifted:
+        S = opti.variable(4, N)
+        for k in range(N):
+            opti.subject_to(S[:, k] - f(X[:, k], U[k]) == 0)
+        slope = [S[:, k] for k in range(N)]
+        opti.set_initial(S[3, :], -g)
+    else:
+        slope = [f(X[:, k], U[k]) for k in range(N)]
+    for k in range(N - 1):
+        opti.subject_to(X[:, k + 1] - X[:, k] - h / 2 * (slope[k] + slope[k + 1]) == 0)
+    opti.subject_to(X[:, 0] == 0)
+    opti.subject_to(X[0, -1] == BRACH["end"][0])
+    opti.subject_to(X[1, -1] == BRACH["end"][1])
+    opti.subject_to(opti.bounded(-BRACH["fmax"], U, BRACH["fmax"]))
+    opti.subject_to(opti.bounded(BRACH["T"][0], T, BRACH["T"][1]))
+    opti.minimize(T)
+    Xg, Yg, Tg = brach_guess(which, N)
+    opti.set_initial(T, Tg)
+    opti.set_initial(X[0, :], Xg)
+    opti.set_initial(X[1, :], Yg)
+    opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "sb": "yes", "tol": 1e-8,
+                                                 "max_iter": 3000})
+    runs = []
+    for _ in range(repeat):
+        t0, c0 = time.perf_counter(), time.process_time()
+        sol = opti.solve_limited()
+        st = sol.stats()
+        runs.append(dict(wall=time.perf_counter() - t0, cpu=time.process_time() - c0,
+                         iterations=st["iter_count"], objective=float(sol.value(T)),
+                         status=st["return_status"],
+                         inf_pr0=st["iterations"]["inf_pr"][0],
+                         inf_du0=st["iterations"]["inf_du"][0]))
+    return median(runs)
+
+
+def run_brach(a):
+    """eomgen and CasADi on the issue 47 brachistochrone, both guesses."""
+    print(f"\nbrachistochrone (trapezoidal, N = {BRACH['N']}, |Fn| <= {BRACH['fmax']}, min T; "
+          f"medians of {a.repeat}; CPU = process time, the peers single-threaded)")
+    print("| guess | solver | iterations | CPU | wall | T* | inf_pr, inf_du at iteration 0 |")
+    print("|---|---|---|---|---|---|---|")
+    out = {}
+    for which in ("positions", "default"):
+        rows = {"eomgen": brach_ours(which, a.repeat),
+                "CasADi (explicit f)": brach_casadi(which, a.repeat)}
+        if a.lifted:
+            rows["CasADi (lifted, eomgen's form, unscaled)"] = brach_casadi(which, 1, True)
+        for name, r in rows.items():
+            print(f"| {which} | {name} | {r['iterations']} | {r['cpu']:.3f} s | {r['wall']:.3f} s "
+                  f"| {r['objective']:.12f} | {r['inf_pr0']:.3g}, {r['inf_du0']:.3g} |", flush=True)
+        e, c = rows["eomgen"], rows["CasADi (explicit f)"]
+        print(f"| {which} | ratio eomgen / CasADi | {e['iterations'] / c['iterations']:.2f}x | "
+              f"{e['cpu'] / c['cpu']:.2f}x | {e['wall'] / c['wall']:.2f}x | "
+              f"{abs(e['objective'] - c['objective']):.1e} | "
+              f"{e['inf_pr0'] / c['inf_pr0']:.2f}x |")
+        out[which] = rows
+    return out
+
+
+# ------------------------------------------- the 100,000-node swing-up
+def pendulum_swing_up(nodes):
+    """A pendulum (unit mass and length) swung up from hanging to upright
+    in 4 s by a torque |tau| <= 6, minimum integral tau^2, Hermite-Simpson:
+    (its OptimalControl, build seconds)."""
+    import gen
+    from sympy.physics import mechanics as me
+    th, om, tau = me.dynamicsymbols("theta omega tau")
+    m, l, g = sm.symbols("m l g")
+    N = me.ReferenceFrame("N")
+    A = N.orientnew("A", "Axis", (th, N.z))
+    A.set_ang_vel(N, om * N.z)
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", -l * A.y)
+    P.v2pt_theory(O, N, A)
+    km = me.KanesMethod(N, [th], [om], kd_eqs=[th.diff() - om])
+    km.kanes_equations([me.Particle("p", P, m)], [(P, -m * g * N.y), (A, tau * N.z)])
+    model = gen.Model.from_kanes(km, constants={m: 1.0, l: 1.0, g: 9.81}, inputs=[tau],
+                                 name="pendulum_swing_up")
+    t0 = time.perf_counter()
+    ocp = gen.OptimalControl(model, nodes, 4.0, objective=tau**2, method="hermite-simpson",
+                             bounds={tau: (-6, 6)}, initial={th: 0, om: 0},
+                             final={th: sm.pi, om: 0})
+    return ocp, time.perf_counter() - t0
+
+
+def run_big(a):
+    """The pendulum swing-up at 1,001 nodes and at --big-nodes (100,001):
+    status, iterations, times, peak memory, the objective against the
+    coarse one (Hermite-Simpson converges to the same optimum)."""
+    import resource
+    print(f"\npendulum swing-up (Hermite-Simpson, 4 s, |tau| <= 6, min int tau^2)")
+    print("| nodes | unknowns | status | iterations | build | solve (CPU) | peak RSS | objective |")
+    print("|---|---|---|---|---|---|---|---|")
+    out = []
+    for nodes in (1001, a.big_nodes):
+        ocp, build = pendulum_swing_up(nodes)
+        t0, c0 = time.perf_counter(), time.process_time()
+        sol = ocp.solve()
+        r = dict(nodes=nodes, unknowns=ocp._lay.n, status=sol.status, message=sol.message,
+                 iterations=sol.iterations, build=build, solve=time.perf_counter() - t0,
+                 cpu=time.process_time() - c0, objective=sol.objective,
+                 rss_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+        print(f"| {nodes:,} | {r['unknowns']:,} | {r['status']} | {r['iterations']} | "
+              f"{build:.2f} s | {r['solve']:.1f} s ({r['cpu']:.1f} s) | {r['rss_mb']:.0f} MB | "
+              f"{r['objective']:.10f} |", flush=True)
+        out.append(r)
+    return out
+
+
 def median(runs):
     out = {}
     for k in runs[0]:
@@ -257,8 +450,12 @@ def main(argv=None):
     ap.add_argument("--methods", nargs="+", default=["backward-euler", "midpoint"])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--opty-repeat", type=int, default=1)
-    ap.add_argument("--problems", nargs="+", default=["swing-up", "ident"],
-                    choices=["swing-up", "ident"])
+    ap.add_argument("--problems", nargs="+", default=["swing-up", "ident", "brach"],
+                    choices=["swing-up", "ident", "brach", "big"])
+    ap.add_argument("--big-nodes", type=int, default=100001,
+                    help="big: the nodes of the large pendulum swing-up (minutes)")
+    ap.add_argument("--lifted", action="store_true",
+                    help="brach: also CasADi on eomgen's lifted form (stalls: minutes)")
     ap.add_argument("--ident-nodes", type=int, default=5000)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--json")
@@ -277,8 +474,11 @@ def main(argv=None):
     if rows:
         table(rows)
     ident = run_ident(a) if "ident" in a.problems else None
+    brach = run_brach(a) if "brach" in a.problems else None
+    big = run_big(a) if "big" in a.problems else None
     if a.json:
-        Path(a.json).write_text(json.dumps({"swing_up": rows, "ident": ident}, indent=1))
+        Path(a.json).write_text(json.dumps({"swing_up": rows, "ident": ident, "brach": brach,
+                                            "big": big}, indent=1))
 
 
 def table(rows):

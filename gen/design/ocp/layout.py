@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from ...core.errors import InputError
+from .events import assemble_events
 
 __all__ = ["Layout", "Block", "Assembly", "assemble", "cost_points", "index_tables"]
 
@@ -254,6 +255,7 @@ def assemble(ocp, meta):
     a = Assembly(meta, lay)
     _points(a, ocp)
     _defects(a, ocp)
+    assemble_events(a, ocp)
     _costs(a, ocp)
     _instance(a, ocp)
     _fits(a, ocp)

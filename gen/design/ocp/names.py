@@ -4,6 +4,8 @@ constraints, read into the internal symbols of the transcription, each
 unknown or non-differentiable one named in an InputError."""
 from __future__ import annotations
 
+import math
+
 import sympy as sm
 from sympy.physics import mechanics as me
 
@@ -69,8 +71,56 @@ class Names:
         raise InputError(f"{what}: {k} is not a state, input or constant of model "
                          f"{self.m.name!r}")
 
+    def user_symbols(self):
+        """{name: the user's own object} of every state, input, constant and
+        output, under its model name and its sympy name (a string is parsed
+        in these)."""
+        m, loc = self.m, {}
+        origs = (list(m.q_orig) + list(m.u_orig), list(m.r_orig), list(m.p_orig))
+        names = (m.state_names, m.input_names, m.constant_names)
+        for objs, labels in zip(origs, names):
+            for o, n in zip(objs, labels):
+                own = o.func.__name__ if isinstance(o, sm.core.function.AppliedUndef) else str(o)
+                loc.setdefault(own, o)
+                loc.setdefault(n, o)
+        for n in m.output_names:
+            loc.setdefault(n, sm.Symbol(n))
+        loc["t"] = me.dynamicsymbols._t
+        return loc
+
+    def parse(self, text, what):
+        """A string read as a sympy expression in the model's own symbols
+        (its states, inputs, constants and outputs by name, and t); refused
+        naming the argument when it does not parse."""
+        try:
+            return sm.sympify(text, locals=self.user_symbols())
+        except (sm.SympifyError, TypeError, SyntaxError) as err:
+            raise InputError(f"{what} = {text!r} cannot be read as an expression in model "
+                             f"{self.m.name!r}'s symbols ({type(err).__name__})") from None
+
+    def number(self, v, what):
+        """A user value as a float: a number, a sympy number or a string
+        that evaluates to one in the model's symbols (``"pi"``); a
+        non-finite one or one that holds symbols is refused naming what."""
+        e = self.parse(v, what) if isinstance(v, str) else v
+        try:
+            f = float(e)
+        except (TypeError, ValueError):
+            raise InputError(f"{what} = {v!r} is not a number") from None
+        if not math.isfinite(f):
+            raise InputError(f"{what} = {v!r}: not a finite number")
+        return f
+
     def expr(self, e, what, allow_y=False):
-        """A user expression in internal symbols; unknown symbols are named."""
+        """A user expression in internal symbols; unknown symbols are named,
+        a string is parsed in the model's own symbols, a matrix refused."""
+        if isinstance(e, str):
+            e = self.parse(e, what)
+        if isinstance(e, (sm.MatrixBase, sm.NDimArray, list, tuple)) \
+                or tuple(getattr(e, "shape", ())) != ():
+            shape = getattr(e, "shape", None) or (len(e),)
+            raise InputError(f"{what} must be a scalar expression, got "
+                             f"{type(e).__name__} of shape {tuple(shape)}")
         try:
             e = sm.sympify(e)
         except (sm.SympifyError, TypeError) as err:

@@ -16,12 +16,19 @@ from ... import pipeline
 from ...core.errors import InputError, ModelError
 from ...intake.model import require_model
 from .ipopt import cyipopt, run_ipopt, status_message
+from .events import read_events, solution_phases
+from .guess import start_point
 from .layout import assemble, index_tables
 from .names import Names, read_instance
 from .solution import OptimalSolution
 from .transcription import METHODS, ocp_plan
 
 __all__ = ["OptimalControl"]
+
+# measured on the cart-pole (Hermite-Simpson, 2,001 and 8,001 nodes): peak
+# bytes per unknown of a solve, and Jacobian nonzeros per unknown (about 4)
+BYTES_PER_UNKNOWN = 4096
+JAC_PER_UNKNOWN = 8
 
 
 class OptimalControl:
@@ -55,6 +62,14 @@ class OptimalControl:
     fit : dict, optional
         {state or output: (t_data, values)}: adds sum (y(t_i) - values_i)^2
         to the objective, y linearly interpolated between nodes.
+    events : list of str, optional
+        The model's hybrid declarations (``gen.Reset``) that end the
+        trajectory, in order; one so far: the last node lies on its guard,
+        crossing in its direction (gen/design/ocp/events.py).
+    periodic : bool, optional
+        The state after the event's map (without an event: the final state)
+        equals the initial state: a limit cycle. ``sol.phases`` gives each
+        phase's times, states and the state after its event.
 
     ``bounds``, ``initial``, ``final``, ``constants``, ``duration`` (within
     fixed or free), ``path_bounds`` and ``fit`` are attributes that can be
@@ -77,7 +92,8 @@ class OptimalControl:
 
     def __init__(self, model, nodes, duration, objective=None, terminal_cost=None,
                  method="hermite-simpson", bounds=None, initial=None, final=None,
-                 constraints=None, path=None, parameters=None, fit=None):
+                 constraints=None, path=None, parameters=None, fit=None, events=None,
+                 periodic=False):
         require_model(model, "gen.OptimalControl")
         t0 = time.perf_counter()
         m = self.model = model
@@ -101,6 +117,8 @@ class OptimalControl:
         if not isinstance(nodes, (int, np.integer)) or nodes < 2:
             raise InputError(f"nodes must be an integer >= 2, got {nodes!r}")
         self.nodes = int(nodes)
+        self._event, self.periodic = read_events(self, events, periodic)
+        self.events = list(events or [])
         self._names = nm = Names(m)
         self.duration = duration
         self._check_duration(duration)
@@ -113,6 +131,7 @@ class OptimalControl:
             if kind != "p":
                 raise InputError(f"parameters: {k} is not a constant of model {m.name!r}")
             self._pf.append(i)
+        self._check_size()
         # user expressions, in internal symbols
         self._L = nm.expr(objective, "objective", allow_y=True) if objective is not None else None
         self._phi = (nm.expr(terminal_cost, "terminal_cost", allow_y=True)
@@ -149,6 +168,33 @@ class OptimalControl:
         self._sim = None
 
     # --------------------------------------------------------- checks
+    def _unknowns(self):
+        """The number of unknowns of the transcription at self.nodes (the
+        Layout's count, without building it)."""
+        m, N = self.model, self.nodes
+        nx, nr, mv, mc = m.nq + m.nu, m.nr, m.mv, m.mc
+        node = nx + nr + (0 if self.method == "midpoint" else nx + mv)
+        mid = {"hermite-simpson": 2 * nx + nr + mv + mc, "midpoint": nx + mv}.get(self.method, 0)
+        return N * node + (N - 1) * mid + len(self._pf) + 1
+
+    def _check_size(self):
+        """Refuses, before anything is allocated, a problem past the memory
+        available (measured: about BYTES_PER_UNKNOWN per unknown, from the
+        assembly's tables to IPOPT's factors) or past the C index tables'
+        32-bit range, naming the nodes and the unknowns."""
+        from ...sim.options import memory_available
+        n = self._unknowns()
+        need = n * BYTES_PER_UNKNOWN
+        avail = memory_available()
+        if n * JAC_PER_UNKNOWN >= 2**31 or (avail is not None and need > avail):
+            where = ("more than the 2**31 nonzeros the C index tables can address"
+                     if n * JAC_PER_UNKNOWN >= 2**31 else
+                     f"more than the {avail / 2**30:.1f} GiB of memory available")
+            raise InputError(f"nodes={self.nodes}: the transcription ({self.method}) would have "
+                             f"{n:,} unknowns and need about {need / 2**30:.1f} GiB, {where}; "
+                             "use fewer nodes (a solution on a coarse grid is a good guess "
+                             "for a finer one)")
+
     def _check_duration(self, d):
         if np.isscalar(d):
             if not (isinstance(d, (int, float, np.number)) and math.isfinite(d) and d > 0):
@@ -175,23 +221,48 @@ class OptimalControl:
                     if kind == "p" and i not in self._pf:
                         raise InputError(f"bounds: {k} is a known constant, not one of the "
                                          "parameters to identify")
-                    try:
-                        lo, hi = (float(x) for x in v)
-                    except (TypeError, ValueError):
-                        raise InputError(f"bounds[{k}] must be (lo, hi), got {v!r}") from None
-                    if lo > hi or math.isnan(lo) or math.isnan(hi):
-                        raise InputError(f"bounds[{k}] = ({lo}, {hi}): lo must be <= hi")
+                    self._bound(k, v)
                 else:
                     if kind != "x":
                         raise InputError(f"{what}: {k} is not a state of model {self.model.name!r}")
-                    if not math.isfinite(float(v)):
-                        raise InputError(f"{what}[{k}] = {v}: not a finite number")
+                    nm.number(v, f"{what}[{k}]")
         for k, v in self.constants.items():
             kind, i = nm.key(k, "constants")
             if kind != "p":
                 raise InputError(f"constants: {k} is not a constant of model {self.model.name!r}")
+            nm.number(v, f"constants[{k}]")
         if len(self.path_bounds) != len(self._path):
             raise InputError("path_bounds must have one (lo, hi) per path constraint")
+
+    def _bound(self, k, v):
+        """(lo, hi) of bounds[k]: numbers (strings read in the model's
+        symbols), -inf/inf for none; NaN and lo > hi refused naming k."""
+        nm = self._names
+        try:
+            lo, hi = v
+        except (TypeError, ValueError):
+            raise InputError(f"bounds[{k}] must be (lo, hi), got {v!r}") from None
+        out = []
+        for side, b in (("lo", lo), ("hi", hi)):
+            e = nm.parse(b, f"bounds[{k}]") if isinstance(b, str) else b
+            try:
+                f = float(e)
+            except (TypeError, ValueError):
+                raise InputError(f"bounds[{k}] = {v!r}: {side} = {b!r} is not a number") from None
+            if math.isnan(f):
+                raise InputError(f"bounds[{k}] = ({lo}, {hi}): {side} is NaN, not a number; "
+                                 "give a number, or -inf/inf for no bound")
+            out.append(f)
+        if out[0] > out[1]:
+            raise InputError(f"bounds[{k}] = ({lo}, {hi}): lo must be <= hi")
+        return tuple(out)
+
+    def _values(self, what):
+        """{(kind, index): float} of initial or final, strings read in the
+        model's symbols."""
+        nm = self._names
+        return {nm.key(k, what): nm.number(v, f"{what}[{k}]")
+                for k, v in getattr(self, what).items()}
 
     # --------------------------------------------------------- build
     def _build(self):
@@ -214,9 +285,13 @@ class OptimalControl:
         """The layout, the gathers and scatters, bounds: everything a solve
         needs that is not compiled (gen/design/ocp/layout.py)."""
         self._check_runtime()
+        key = self._assembly_key()
+        if key == getattr(self, "_asm_key", None):
+            return                  # the same structure, rows and data: kept
         a = assemble(self, self._meta)
         self._lay = a.lay
         self._m_rows = a.rows
+        self._rows0 = {name: b.row0 for name, b in a.blocks.items()}
         self._cl, self._cu = np.array(a.row_lo, float), np.array(a.row_hi, float)
         blocks = list(a.blocks.values())
         self._arrays, (self._jrows, self._jcols), (self._hrows, self._hcols) = \
@@ -224,6 +299,19 @@ class OptimalControl:
         self._cblocks = self._c_blocks(blocks, self._arrays)
         self._nblocks = len(blocks)
         self._n = a.lay.n
+        self._asm_key = key
+
+    def _assembly_key(self):
+        """What the assembly depends on besides the compiled families: the
+        nodes and method, a fixed duration (the instance constraints' and
+        fit data's nodes), the path bounds, the fit data and the end nodes
+        whose manifold rows the boundary values fix. The bounds, boundary
+        values and constants are arguments of every solve, not in it."""
+        fit = tuple((np.asarray(td, float).tobytes(), np.asarray(v, float).tobytes())
+                    for td, v in (self.fit or {}).values())
+        skip = tuple(sorted((k, tuple(sorted(v))) for k, v in self._fixed_manifold_nodes().items()))
+        return (self.method, self.nodes, None if self.free_time else float(self.duration),
+                tuple(tuple(map(float, b)) for b in self.path_bounds), fit, skip)
 
     def _c_blocks(self, blocks, arrays):
         """The blocks as the library's gen_rt_ocp_block array over the
@@ -254,9 +342,7 @@ class OptimalControl:
             return skip
         pv = self._pvec()
         for what, k0 in (("initial", 0), ("final", N - 1)):
-            given = {}
-            for k, v in getattr(self, what).items():
-                given[nm.key(k, what)[1]] = float(v)
+            given = {i: v for (_, i), v in self._values(what).items()}
             q_all = all(i in given for i in range(m.nq))
             x_all = q_all and all(m.nq + i in given for i in range(m.nu))
             if not q_all:
@@ -321,7 +407,7 @@ class OptimalControl:
             if i in self._pf:
                 raise InputError(f"constants: {k} is a parameter to identify; give its guess "
                                  "or bounds instead")
-            p[i] = float(v)
+            p[i] = nm.number(v, f"constants[{k}]")
         return p
 
     def _var_bounds(self):
@@ -330,9 +416,10 @@ class OptimalControl:
         lb = np.full(lay.n, -BIG)
         ub = np.full(lay.n, BIG)
         nm = self._names
-        for k, (lo, hi) in self.bounds.items():
+        for k, v in self.bounds.items():
             kind, i = nm.key(k, "bounds")
-            lo, hi = max(float(lo), -BIG), min(float(hi), BIG)
+            lo, hi = self._bound(k, v)
+            lo, hi = max(lo, -BIG), min(hi, BIG)
             if kind == "x":
                 idx = [X[i] for X in lay.X + lay.XM]
             elif kind == "r":
@@ -343,7 +430,7 @@ class OptimalControl:
         for what, k0 in (("initial", 0), ("final", N - 1)):
             for k, v in getattr(self, what).items():
                 _, i = nm.key(k, what)
-                v = float(v)
+                v = nm.number(v, f"{what}[{k}]")
                 j = lay.X[k0][i]
                 if not lb[j] <= v <= ub[j]:
                     raise InputError(f"{what}[{k}] = {v} is outside its bounds "
@@ -354,66 +441,6 @@ class OptimalControl:
         else:
             lb[lay.T] = ub[lay.T] = float(self.duration)
         return lb, ub
-
-    def _guess(self, guess, lb, ub):
-        m, lay, N = self.model, self._lay, self.nodes
-        z = np.zeros(lay.n)
-        T = 0.5 * (lb[lay.T] + ub[lay.T])
-        z[lay.T] = T
-        nm = self._names
-        x0 = np.zeros(m.nx)
-        x1 = np.zeros(m.nx)
-        for k, v in self.initial.items():
-            x0[nm.key(k, "initial")[1]] = float(v)
-            x1[nm.key(k, "initial")[1]] = float(v)
-        for k, v in self.final.items():
-            x1[nm.key(k, "final")[1]] = float(v)
-        p = self._pvec()
-        for j, i in enumerate(self._pf):
-            z[lay.P[j]] = p[i]
-        if isinstance(guess, OptimalSolution) and guess._z is not None \
-                and guess._z.size == lay.n and guess._layout_key == self._layout_key():
-            z = guess._z.copy()
-        elif guess is None or isinstance(guess, dict) or isinstance(guess, OptimalSolution):
-            tau = np.linspace(0, 1, N)
-            X = x0[None, :] + tau[:, None] * (x1 - x0)[None, :]
-            R = np.zeros((N, m.nr))
-            if isinstance(guess, OptimalSolution):
-                ts = tau * T
-                X, R = guess(ts), guess.input(ts)
-                if self.free_time:
-                    z[lay.T] = guess.t[-1]
-            for k, v in (guess or {}).items() if isinstance(guess, dict) else []:
-                if isinstance(k, str) and k == "duration":
-                    z[lay.T] = float(v)
-                    continue
-                kind, i = nm.key(k, "guess")
-                v = np.broadcast_to(np.asarray(v, float), (N,))
-                if kind == "x":
-                    X[:, i] = v
-                elif kind == "r":
-                    R[:, i] = v
-                elif kind == "p":
-                    z[lay.P[self._pf.index(i)]] = float(v[0])
-            T = z[lay.T]
-            slope = np.gradient(X, T * tau, axis=0) if N > 2 else (X[1:] - X[:1]) / T
-            for k in range(N):
-                z[lay.X[k]] = X[k]
-                z[lay.R[k]] = R[k]
-                if k in lay.node_point:
-                    z[lay.node_point[k][0]] = slope[k]
-                if k in lay.mid_point:
-                    z[lay.mid_point[k][0]] = 0.5 * (slope[k] + slope[k + 1])
-            for k in range(len(lay.XM)):
-                z[lay.XM[k]] = 0.5 * (X[k] + X[k + 1])
-                z[lay.RM[k]] = 0.5 * (R[k] + R[k + 1])
-        else:
-            g = np.asarray(guess, float).ravel()
-            if g.size != lay.n:
-                raise InputError(f"guess: an array must have the problem's {lay.n} unknowns, "
-                                 f"got {g.size}")
-            z = g.copy()
-        return np.clip(z, lb, ub)
 
     def _layout_key(self):
         return (self.method, self.nodes, self.model.mv, self.model.mc, len(self._pf))
@@ -459,12 +486,15 @@ class OptimalControl:
         self._assemble()
         self._p = self._pvec()
         lb, ub = self._var_bounds()
-        z0 = self._guess(guess, lb, ub)
+        z0 = start_point(self, guess, lb, ub)
         z, info, iterations = run_ipopt(self, z0, lb, ub, hessian, ipopt_options)
         solve_seconds = time.perf_counter() - t0
         status, msg = status_message(info)
-        return OptimalSolution._make(self, np.asarray(z, float), float(info["obj_val"]), status,
-                                     msg, iterations, solve_seconds)
+        sol = OptimalSolution._make(self, np.asarray(z, float), float(info["obj_val"]), status,
+                                    msg, iterations, solve_seconds)
+        sol.first_iterate = info["first_iterate"]
+        sol.phases = solution_phases(self, sol)
+        return sol
 
     # --------------------------------------------------------- helpers
     @property

@@ -17,10 +17,15 @@ class OptimalSolution:
     x : ndarray (N, nx)    states at the nodes
     r : ndarray (N, nr)    inputs at the nodes
     p : ndarray            the identified parameters (in ``parameters``' order)
+    constants : ndarray    every constant of the model as solved (the model's order):
+                           :meth:`replay` and :meth:`tracker` use these, whatever
+                           ``ocp.constants`` holds later
     objective : float
     status : int           IPOPT's status (0 solved, 1 acceptable, 2 infeasible, < 0 failed)
     message : str          the status in words
     iterations : int
+    first_iterate : (float, float)
+                           IPOPT's primal and dual infeasibility at iteration 0
     build_seconds, solve_seconds : float
     success : bool         status 0 or 1
 
@@ -44,10 +49,17 @@ class OptimalSolution:
         s.x = np.array([z[X] for X in lay.X])
         s.r = np.array([z[R] for R in lay.R]).reshape(N, ocp.model.nr)
         s.p = z[lay.P].copy()
+        # every constant as solved (the known ones then, the identified
+        # ones found): replay and tracker use these, not the problem's
+        # constants of a later moment
+        s.constants = np.array(ocp._p, float)
+        s.constants[list(ocp._pf)] = s.p
         s.objective = obj
         s.status = status
         s.message = message
         s.iterations = iterations
+        s.first_iterate = (float("nan"), float("nan"))
+        s.phases = []
         s.build_seconds = ocp.build_seconds
         s.solve_seconds = solve_seconds
         s.success = status in (0, 1)
@@ -137,13 +149,9 @@ class OptimalSolution:
             Its final state against ``x[-1]`` measures the transcription's error.
         """
         sim = self._ocp.simulator
-        x0 = self.x[0]
-        p = self._ocp._pvec()
-        for j, i in enumerate(self._ocp._pf):
-            p[i] = self.p[j]
         dt = dt or (self.t[1] - self.t[0])
-        return sim.simulate(x0, float(self.t[-1]), dt, r=lambda t, x: self.input(t),
-                            p=p, method=method, input_period=0, **options)
+        return sim.simulate(self.x[0], float(self.t[-1]), dt, r=lambda t, x: self.input(t),
+                            p=self.constants.copy(), method=method, input_period=0, **options)
 
     def tracker(self, Q, R, period):
         """A time-varying LQR along this trajectory (gen.tracking).
@@ -161,4 +169,4 @@ class OptimalSolution:
         """
         from ..tracking import TrajectoryTracker
         return TrajectoryTracker(self._ocp.simulator, self.t, self.x, self.r, Q, R, period,
-                                 p=self._ocp._pvec())
+                                 p=self.constants.copy())

@@ -16,6 +16,7 @@ from ...codegen.product_abi import ProductPlan
 from ...core.names import c_name
 from ...plan.ir import Arg, make_jacobian_kernel, make_kernel, prune
 from ...sym.graph import gradient
+from .events import event_families
 
 __all__ = ["METHODS", "Family", "families", "family_kernels", "describe_local", "ocp_plan"]
 
@@ -110,6 +111,8 @@ def families(ocp):
     N = ocp.nodes
     fams = _point_families(m, pf, ocp.method)
     fams.append(_defect_family(m, ocp.method, N, T))
+    for name, loc, exprs in event_families(m, pf, ocp._event, ocp.periodic):
+        fams.append(Family(name, loc, exprs))
     x = list(m.q) + list(m.u)
     if ocp._L is not None:
         w = sm.Dummy("w")
