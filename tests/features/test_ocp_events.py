@@ -119,15 +119,42 @@ def test_event_rows_derivatives_against_finite_differences(walker, phases):
     sw, model = walker
     o = gen.OptimalControl(model, 4, (2.0, 6.0), terminal_cost=sm.Symbol("t"),
                            method="trapezoidal", events=["heelstrike"] * phases, periodic=True)
+    _check_derivatives(o, phases, {"guard0": 1, "rate0": 1, "jump0": 4})
+
+
+@pytest.mark.slow
+def test_impulse_rows_derivatives_against_finite_differences():
+    """An impact's impulse equations (q+ = q, M (u+ - u) = W^T imp,
+    W u+ + w = -e (W u + w)) on a point mass in polar coordinates (its mass
+    matrix and the gap's W depend on r and theta) striking the ground
+    y = r sin(theta): derivatives against central differences."""
+    import sympy.physics.mechanics as me
+    r, th = me.dynamicsymbols("r theta")
+    m, g = sm.symbols("m g")
+    lm = me.LagrangesMethod(m * (r.diff()**2 + r**2 * th.diff()**2) / 2 - m * g * r * sm.sin(th),
+                            [r, th])
+    lm.form_lagranges_equations()
+    model = gen.Model.from_lagrange(lm, constants={m: 1.3, g: 9.81}, name="polar_ocp",
+                                    hybrid={"ground": gen.Impact(r * sm.sin(th), restitution=0.5)})
+    o = gen.OptimalControl(model, 3, (0.5, 2.0), terminal_cost=sm.Symbol("t"),
+                           method="trapezoidal", events=["ground", "ground"])
+    _check_derivatives(o, 2, {"guard0": 1, "rate0": 1, "jump0": 5}, jumps=1)
+
+
+def _check_derivatives(o, phases, nrows, jumps=None):
+    """The problem's Jacobian and exact Hessian of the Lagrangian (random
+    multipliers) against central differences of the C's values, at a random
+    point; the event rows are there and not zero."""
     o._assemble()
     o._p = o._pvec()
     rows = {name: b for name, b in o._rows0.items()}
-    assert {"guard0", "rate0", "jump0"} <= set(rows)
+    assert set(nrows) <= set(rows)
     rng = np.random.default_rng(3)
     n, m = o._lay.n, o._m_rows
     z = rng.uniform(-0.8, 0.8, n)
     z[o._lay.Ts] = np.linspace(3.0, 2.5, phases)
-    assert len(rows["jump0"]) == phases and len(rows["guard0"]) == phases
+    assert len(rows["jump0"]) == (phases if jumps is None else jumps)
+    assert len(rows["guard0"]) == phases
 
     def dense(vals, r, c, shape):
         out = np.zeros(shape)
@@ -150,8 +177,7 @@ def test_event_rows_derivatives_against_finite_differences(walker, phases):
         Hfd[:, j] = (lagrangian_gradient(z + e) - lagrangian_gradient(z - e)) / (2 * eps)
     assert np.abs(J - Jfd).max() < 1e-7 * max(1, np.abs(Jfd).max())
     assert np.abs(H - Hfd).max() < 1e-6 * max(1, np.abs(Hfd).max())
-    ev = [r for name in ("guard0", "rate0", "jump0") for r0 in rows[name]
-          for r in range(r0, r0 + {"guard0": 1, "rate0": 1, "jump0": 4}[name])]
+    ev = [r for name in nrows for r0 in rows[name] for r in range(r0, r0 + nrows[name])]
     assert np.abs(Jfd[ev]).max() > 0.1          # rows that are there
 
 
@@ -222,3 +248,49 @@ def test_rimless_wheel_two_phases_against_the_analytic_steady_state():
     assert len(strikes) == 2
     assert abs(strikes[0].t - p1.t[-1]) < 1e-6 and abs(strikes[1].t - p2.t[-1]) < 1e-6
     assert np.abs(strikes[1].x_after - sol.x[0]).max() < 1e-6
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(cyipopt is None and os.environ.get("CI") != "true",
+                    reason="cyipopt not installed (pip install eomgen[ocp])")
+def test_ball_two_phases_across_its_impact_against_the_analytic_bounce():
+    """A gen.Impact ending a phase: the ball dropped from rest at y = 1, two
+    phases each ending on the ground (the impact's impulse, an unknown of
+    the problem, carrying the first into the second). Against the analytic
+    fall (t1 = sqrt(2 y0 / g), v- = -sqrt(2 g y0), v+ = -e v-, the bounce
+    2 v+ / g) to 1e-9, and against the simulator's own two impacts (times
+    and the states after them) on replay."""
+    import sympy.physics.mechanics as me
+    y = me.dynamicsymbols("y")
+    m, g = sm.symbols("m g")
+    lm = me.LagrangesMethod(m * y.diff()**2 / 2 - m * g * y, [y])
+    lm.form_lagranges_equations()
+    e, g0 = 0.8, 9.81
+    ball = gen.Model.from_lagrange(lm, constants={m: 1.0, g: g0}, name="ball_ocp",
+                                   hybrid={"ground": gen.Impact(y, restitution=e)})
+    t1 = np.sqrt(2 / g0)
+    v_before = -np.sqrt(2 * g0)
+    v_after = -e * v_before
+    t2 = 2 * v_after / g0
+    N = 11
+    tau = np.linspace(0, 1, N)
+    yg = np.concatenate([1 - tau, 0.5 * np.sin(np.pi * tau)])
+    ocp = gen.OptimalControl(ball, N, (0.05, 5.0), terminal_cost=sm.Symbol("t"),
+                             events=["ground", "ground"], initial={"y": 1.0, "y_d": 0.0})
+    sol = ocp.solve({"y": yg, "duration": [0.5, 1.0]}, tol=1e-12)
+    assert sol.status == 0, sol.message
+    p1, p2 = sol.phases
+    assert abs(p1.t[-1] - t1) < 1e-9 and abs(p2.t[-1] - p2.t[0] - t2) < 1e-9, (p1.t, p2.t)
+    assert abs(p1.x[-1, 1] - v_before) < 1e-9 and abs(p2.x[0, 1] - v_after) < 1e-9
+    np.testing.assert_allclose(p1.x_after, p2.x[0], atol=1e-9)
+    assert abs(p2.x_after[1] - e * e * -v_before) < 1e-9      # the second bounce's speed
+    rep = sol.replay(rtol=1e-12, atol=1e-12)      # to the last phase's end: one impact inside
+    assert [ev.name for ev in rep.events] == ["ground"]
+    assert abs(rep.events[0].t - p1.t[-1]) < 1e-8
+    run = ocp.simulator.simulate(sol.x[0], 1.05 * sol.t[-1], 0.01, method="dopri5",
+                                 rtol=1e-12, atol=1e-12)
+    hits = [ev for ev in run.events if ev.name == "ground"]
+    assert len(hits) == 2
+    assert abs(hits[0].t - p1.t[-1]) < 1e-8 and abs(hits[1].t - p2.t[-1]) < 1e-8
+    np.testing.assert_allclose(hits[0].x_after, p2.x[0], atol=1e-8)
+    np.testing.assert_allclose(hits[1].x_after, p2.x_after, atol=1e-8)

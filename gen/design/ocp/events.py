@@ -14,8 +14,10 @@ the transcription (values, Jacobian, exact Hessian). The guard is held at
 the last node only: a crossing earlier in the phase is not excluded (the
 walker's swing foot scuffs through its guard at mid-stance, downwards).
 
-Events are ``gen.Reset`` declarations on an unconstrained model; impacts
-and constrained models are refused with the reason.
+An event is a ``gen.Reset`` (its map) or a ``gen.Impact`` (its impulse:
+the runtime's impact solve written as equations with the impulse an
+unknown, q+ = q, M (u+ - u) = W^T imp, W u+ + w = -e (W u + w)), on an
+unconstrained model; constrained models are refused with the reason.
 """
 from __future__ import annotations
 
@@ -27,7 +29,8 @@ import sympy as sm
 from ...core.errors import InputError
 from ...intake.hybrid import KIND_RESET
 
-__all__ = ["Phase", "read_events", "event_families", "assemble_events", "solution_phases"]
+__all__ = ["Phase", "read_events", "jump_phases", "event_families", "assemble_events",
+           "solution_phases"]
 
 BIG = 1e20
 
@@ -74,10 +77,6 @@ def read_events(ocp, events, periodic):
                       "events= does not name: the trajectory is optimised as if they were not "
                       "there, and may cross their guards without their jumps",
                       UserWarning, stacklevel=3)
-    for e in events:
-        if decls[e].kind != KIND_RESET:
-            raise InputError(f"events: {e!r} is a gen.Impact; ending a phase on an impact is "
-                             "not supported yet (declare its jump as a gen.Reset)")
     return [decls[e] for e in events], bool(periodic)
 
 
@@ -90,14 +89,44 @@ def _distinct(events):
     return out
 
 
+def jump_phases(events, periodic):
+    """The phases whose event carries the state into a next phase (or,
+    periodic, the first), and the impulse unknown of each that is an
+    impact: ([phase], {phase: impulse index})."""
+    js = list(range(len(events) - 1)) + ([len(events) - 1] if events and periodic else [])
+    imp = [j for j in js if events[j].kind != KIND_RESET]
+    return js, {j: i for i, j in enumerate(imp)}
+
+
+def _impact_jump(m, d, x, xa, t):
+    """The impulse's equations of an impact (the runtime's impact solve,
+    gen_rt_hybrid.c, on an unconstrained model) between the state x before
+    and xa after, with the impulse imp0 an unknown: q+ = q,
+    M (u+ - u) = W^T imp0, W u+ + w = -e (W u + w), where the gap's rate
+    is g' = W u + w through the kinematic equations."""
+    q, u = list(m.q), list(m.u)
+    qa, ua = xa[:m.nq], xa[m.nq:]
+    qdot = (sm.Matrix(m.qdot) if m.qdot is not None
+            else m.Kqd.LUsolve(-(m.Ku * sm.Matrix(u) + m.kf)))
+    g = d.expr
+    gdot = sum((g.diff(a) * b for a, b in zip(q, qdot)), sm.S.Zero) + g.diff(t)
+    W = sm.Matrix([[gdot.diff(b) for b in u]])
+    w = gdot.xreplace({b: 0 for b in u})
+    lam = sm.Dummy("imp0")
+    mom = m.M * (sm.Matrix(ua) - sm.Matrix(u)) - W.T * lam
+    vel = (W * sm.Matrix(ua))[0] + w + d.restitution * ((W * sm.Matrix(u))[0] + w)
+    return x + xa + [lam], [a - b for a, b in zip(qa, q)] + list(mom) + [vel]
+
+
 def event_families(m, pf, events, periodic):
     """The families (name, locals, expressions) of each distinct event's
     guard, its rate and its jump (the next phase's first state against the
-    map), and of the periodicity without an event."""
+    map, or an impact's impulse equations), and of the periodicity without
+    an event."""
     q, u, t = list(m.q), list(m.u), m.t
     x = q + u
     out = []
-    jumps = {d.name for d in events[:-1]} | ({events[-1].name} if events and periodic else set())
+    jumps = {events[j].name for j in jump_phases(events, periodic)[0]}
     for i, d in enumerate(_distinct(events)):
         g = d.expr
         out.append((f"guard{i}", x + pf + [t], [g]))
@@ -109,7 +138,12 @@ def event_families(m, pf, events, periodic):
             out.append((f"rate{i}", x + qd + ud + pf + [t], [rate]))
         if d.name in jumps:
             xa = [sm.Dummy(f"xa{i}") for i in range(len(x))]
-            out.append((f"jump{i}", x + xa + pf + [t], [a - b for a, b in zip(xa, d.xmap)]))
+            if d.kind == KIND_RESET:
+                out.append((f"jump{i}", x + xa + pf + [t],
+                            [a - b for a, b in zip(xa, d.xmap)]))
+            else:
+                loc, rows = _impact_jump(m, d, x, xa, t)
+                out.append((f"jump{i}", loc + pf + [t], rows))
     if periodic and not events:
         xa = [sm.Dummy(f"xa{i}") for i in range(len(x))]
         out.append(("periodic", x + xa + pf + [t], [a - b for a, b in zip(xa, x)]))
@@ -122,6 +156,7 @@ def assemble_events(a, ocp):
     periodic=True), and the periodicity without an event."""
     lay, N, events = a.lay, ocp.nodes, ocp._events
     index = {d.name: i for i, d in enumerate(_distinct(events))}
+    impulse = jump_phases(events, ocp.periodic)[1]
     for j, d in enumerate(events):
         i, k = index[d.name], j * N + N - 1
         last = [(lay.X[k], 1.0)]
@@ -136,6 +171,8 @@ def assemble_events(a, ocp):
             nxt = lay.X[k + 1] if j < len(events) - 1 else lay.X[0]
             f = a.fam(f"jump{i}")
             ex = {("xa", r): [(int(c), 1.0)] for r, c in enumerate(nxt)}
+            if j in impulse:
+                ex[("imp", 0)] = [(int(lay.L[impulse[j]]), 1.0)]
             a.block(f"jump{i}").add(a.gather(f, last, [], lay.tnode(k), extra=ex),
                                     row0=a.con_rows(f))
     if "periodic" in a.fams:
@@ -155,9 +192,23 @@ def solution_phases(ocp, sol):
         sl = slice(j * N, (j + 1) * N)
         d = ocp._events[j] if ocp._events else None
         x_after = None
-        if d is not None:
+        if d is not None and d.kind == KIND_RESET:
             f = sm.lambdify(args, list(d.xmap), modules="numpy")
             x_after = np.array(f(*sol.x[sl][-1], *sol.constants, sol.t[sl][-1]), float)
+        elif d is not None:
+            x_after = _impact_after(m, d, args, sol.x[sl][-1], sol.constants, sol.t[sl][-1])
         out.append(Phase(sol.t[sl], sol.x[sl], sol.r[sl], None if d is None else d.name,
                          x_after))
     return out
+
+
+def _impact_after(m, d, args, x, p, t):
+    """The state after an impact at x, solved numerically from its impulse's
+    equations (_impact_jump) with the model's mass matrix."""
+    xa = [sm.Dummy(f"xa{i}") for i in range(m.nx)]
+    loc, rows = _impact_jump(m, d, list(m.q) + list(m.u), xa, m.t)
+    unk = xa[m.nq:] + [loc[-1]]
+    A, b = sm.linear_eq_to_matrix(rows[m.nq:], unk)
+    fA, fb = (sm.lambdify(args, e, modules="numpy") for e in (A, b))
+    sol = np.linalg.solve(np.array(fA(*x, *p, t), float), np.array(fb(*x, *p, t), float).ravel())
+    return np.concatenate([x[:m.nq], sol[:m.nu]])

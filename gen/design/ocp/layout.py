@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ...core.errors import InputError
-from .events import assemble_events
+from .events import assemble_events, jump_phases
 
 __all__ = ["Layout", "Block", "Assembly", "assemble", "cost_points", "index_tables"]
 
@@ -20,7 +20,7 @@ class Layout:
     """Where every unknown lives in the decision vector z, and the
     collocation points."""
 
-    def __init__(self, method, N, nq, nu, nr, mv, mc, npf, phases=1):
+    def __init__(self, method, N, nq, nu, nr, mv, mc, npf, phases=1, impulses=0):
         nx = nq + nu
         self.N, self.nx, self.nr, self.phases = N, nx, nr, phases
         self.NN = NN = N * phases          # every phase's N nodes, in order
@@ -54,6 +54,7 @@ class Layout:
         self.P = take(npf)
         self.Ts = take(phases)             # each phase's duration
         self.T = int(self.Ts[0])
+        self.L = take(impulses)            # the impacts' impulses ending phases
         self.n = n
         for k in range(NN):
             if k in self.node_point:
@@ -274,7 +275,7 @@ def assemble(ocp, meta):
     and rows (meta: the families as data, transcription.ocp_plan)."""
     m = ocp.model
     lay = Layout(ocp.method, ocp.nodes, m.nq, m.nu, m.nr, m.mv, m.mc, len(ocp._pf),
-                 max(1, len(ocp._events)))
+                 max(1, len(ocp._events)), len(jump_phases(ocp._events, ocp.periodic)[1]))
     a = Assembly(meta, lay)
     _points(a, ocp)
     _defects(a, ocp)

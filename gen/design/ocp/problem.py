@@ -63,7 +63,8 @@ class OptimalControl:
         {state or output: (t_data, values)}: adds sum (y(t_i) - values_i)^2
         to the objective, y linearly interpolated between nodes.
     events : list of str, optional
-        The model's hybrid declarations (``gen.Reset``), in order: one
+        The model's hybrid declarations (``gen.Reset``, or ``gen.Impact``:
+        its impulse an unknown of the problem), in order: one
         phase each, of ``nodes`` nodes and its own duration (free within
         ``duration``'s (lo, hi), which bounds every phase's). A phase's last
         node lies on its event's guard, crossing in its direction, and the
