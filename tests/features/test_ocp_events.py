@@ -294,3 +294,8 @@ def test_ball_two_phases_across_its_impact_against_the_analytic_bounce():
     assert abs(hits[0].t - p1.t[-1]) < 1e-8 and abs(hits[1].t - p2.t[-1]) < 1e-8
     np.testing.assert_allclose(hits[0].x_after, p2.x[0], atol=1e-8)
     np.testing.assert_allclose(hits[1].x_after, p2.x_after, atol=1e-8)
+    with pytest.raises(gen.InputError) as err:
+        sol.tracker(np.eye(2), np.eye(0), 0.01)
+    assert str(err.value) == ("tracker: this solution has 2 phases (events ['ground', "
+                              "'ground']); a tracker follows one phase, not a trajectory "
+                              "across events")

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...core.errors import InputError
+
 __all__ = ["OptimalSolution"]
 
 
@@ -152,7 +154,10 @@ class OptimalSolution:
 
     def replay(self, dt=None, method="dopri5", **options):
         """The optimal inputs replayed through the model's simulator
-        (``sim.simulate``, the inputs from :meth:`input` at every stage).
+        (``sim.simulate``, the inputs from :meth:`input` at every stage),
+        from ``x[0]`` for the whole duration: across several phases the
+        simulator makes the model's events itself (compare its ``events``
+        with ``phases``).
 
         Parameters
         ----------
@@ -188,5 +193,9 @@ class OptimalSolution:
         gen.design.tracking.TrajectoryTracker
         """
         from ..tracking import TrajectoryTracker
+        if len(self.phases) > 1:
+            raise InputError(f"tracker: this solution has {len(self.phases)} phases (events "
+                             f"{[ph.event for ph in self.phases]}); a tracker follows one "
+                             "phase, not a trajectory across events")
         return TrajectoryTracker(self._ocp.simulator, self.t, self.x, self.r, Q, R, period,
                                  p=self.constants.copy())
