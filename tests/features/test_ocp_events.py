@@ -46,9 +46,9 @@ def test_events_are_checked_before_building(walker, monkeypatch):
                                "'walker_ocp' (its declarations: heelstrike)"),
         (dict(events="heelstrike"), "events must be a list of model 'walker_ocp''s hybrid "
                                     "names, got 'heelstrike'"),
-        (dict(events=["heelstrike", "heelstrike"]),
-         "events=['heelstrike', 'heelstrike']: one event (one phase) is supported so far; a "
-         "sequence of phases is not"),
+        (dict(events=["heelstrike", "heelstrike"], duration=3.0),
+         "events=['heelstrike', 'heelstrike']: each phase's duration is free; give duration "
+         "as (lo, hi), the bounds of every phase's, not 3.0"),
         (dict(events=["heelstrike"], method="midpoint"),
          "events: the guard's crossing is checked through the last node's slopes, which "
          "method='midpoint' has not; use 'hermite-simpson', 'trapezoidal' or "
@@ -56,8 +56,9 @@ def test_events_are_checked_before_building(walker, monkeypatch):
         (dict(periodic="yes"), "periodic must be True or False, got 'yes'"),
     ]
     for kw, msg in cases:
+        kw = {"duration": (2, 6), **kw}
         with pytest.raises(gen.InputError) as e:
-            gen.OptimalControl(model, 11, (2, 6), terminal_cost=t, **kw)
+            gen.OptimalControl(model, 11, terminal_cost=t, **kw)
         assert str(e.value) == msg
     # without events=, the declarations are named: not solved through silently
     with pytest.warns(UserWarning) as w, pytest.raises(AssertionError, match="built despite"):
@@ -108,22 +109,52 @@ def test_passive_walker_gait_found_by_optimisation(walker):
 
 
 @pytest.mark.slow
-def test_event_rows_derivatives_against_finite_differences(walker):
+@pytest.mark.parametrize("phases", [1, 2])
+def test_event_rows_derivatives_against_finite_differences(walker, phases):
     """The guard, its rate and the periodicity across the heel strike's map
-    (generated kernels scattered by the C loop): Jacobian and the exact
-    Hessian of the Lagrangian against central differences of the C's own
-    values, at a random point."""
+    (generated kernels scattered by the C loop), one phase or two (the map
+    joining them, each phase's own duration in its time and steps): Jacobian
+    and the exact Hessian of the Lagrangian against central differences of
+    the C's own values, at a random point."""
     sw, model = walker
     o = gen.OptimalControl(model, 4, (2.0, 6.0), terminal_cost=sm.Symbol("t"),
-                           method="trapezoidal", events=["heelstrike"], periodic=True)
+                           method="trapezoidal", events=["heelstrike"] * phases, periodic=True)
+    _check_derivatives(o, phases, {"guard0": 1, "rate0": 1, "jump0": 4})
+
+
+@pytest.mark.slow
+def test_impulse_rows_derivatives_against_finite_differences():
+    """An impact's impulse equations (q+ = q, M (u+ - u) = W^T imp,
+    W u+ + w = -e (W u + w)) on a point mass in polar coordinates (its mass
+    matrix and the gap's W depend on r and theta) striking the ground
+    y = r sin(theta): derivatives against central differences."""
+    import sympy.physics.mechanics as me
+    r, th = me.dynamicsymbols("r theta")
+    m, g = sm.symbols("m g")
+    lm = me.LagrangesMethod(m * (r.diff()**2 + r**2 * th.diff()**2) / 2 - m * g * r * sm.sin(th),
+                            [r, th])
+    lm.form_lagranges_equations()
+    model = gen.Model.from_lagrange(lm, constants={m: 1.3, g: 9.81}, name="polar_ocp",
+                                    hybrid={"ground": gen.Impact(r * sm.sin(th), restitution=0.5)})
+    o = gen.OptimalControl(model, 3, (0.5, 2.0), terminal_cost=sm.Symbol("t"),
+                           method="trapezoidal", events=["ground", "ground"])
+    _check_derivatives(o, 2, {"guard0": 1, "rate0": 1, "jump0": 5}, jumps=1)
+
+
+def _check_derivatives(o, phases, nrows, jumps=None):
+    """The problem's Jacobian and exact Hessian of the Lagrangian (random
+    multipliers) against central differences of the C's values, at a random
+    point; the event rows are there and not zero."""
     o._assemble()
     o._p = o._pvec()
     rows = {name: b for name, b in o._rows0.items()}
-    assert {"guard", "guard_rate", "periodic"} <= set(rows)
+    assert set(nrows) <= set(rows)
     rng = np.random.default_rng(3)
     n, m = o._lay.n, o._m_rows
     z = rng.uniform(-0.8, 0.8, n)
-    z[o._lay.T] = 3.0
+    z[o._lay.Ts] = np.linspace(3.0, 2.5, phases)
+    assert len(rows["jump0"]) == (phases if jumps is None else jumps)
+    assert len(rows["guard0"]) == phases
 
     def dense(vals, r, c, shape):
         out = np.zeros(shape)
@@ -146,6 +177,125 @@ def test_event_rows_derivatives_against_finite_differences(walker):
         Hfd[:, j] = (lagrangian_gradient(z + e) - lagrangian_gradient(z - e)) / (2 * eps)
     assert np.abs(J - Jfd).max() < 1e-7 * max(1, np.abs(Jfd).max())
     assert np.abs(H - Hfd).max() < 1e-6 * max(1, np.abs(Hfd).max())
-    ev = [r for name in ("guard", "guard_rate", "periodic") for r0 in rows[name]
-          for r in range(r0, r0 + {"guard": 1, "guard_rate": 1, "periodic": 4}[name])]
+    ev = [r for name in nrows for r0 in rows[name] for r in range(r0, r0 + nrows[name])]
     assert np.abs(Jfd[ev]).max() > 0.1          # rows that are there
+
+
+G, ALPHA, GAMMA = 9.81, np.pi / 6, 0.3
+
+
+def rimless_wheel(name):
+    """The rimless wheel (McGeer 1990): spokes of length 1, 2 alpha apart,
+    down a slope gamma; theta'' = g sin(theta) from the vertical, and when
+    theta reaches gamma + alpha the next spoke strikes: theta -> theta -
+    2 alpha, theta' -> cos(2 alpha) theta' (angular momentum about the new
+    foot)."""
+    import sympy.physics.mechanics as me
+    th = me.dynamicsymbols("theta")
+    m, g, a, gam = sm.symbols("m g alpha gamma")
+    lm = me.LagrangesMethod(m * th.diff()**2 / 2 - m * g * sm.cos(th), [th])
+    lm.form_lagranges_equations()
+    strike = gen.Reset(th - (gam + a), {th: th - 2 * a, th.diff(): sm.cos(2 * a) * th.diff()},
+                       direction=1)
+    return gen.Model.from_lagrange(lm, constants={m: 1.0, g: G, a: ALPHA, gam: GAMMA},
+                                   name=name, hybrid={"strike": strike})
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(cyipopt is None and os.environ.get("CI") != "true",
+                    reason="cyipopt not installed (pip install eomgen[ocp])")
+def test_rimless_wheel_two_phases_against_the_analytic_steady_state():
+    """Two phases (two steps), each ending on the strike with its own free
+    duration, the strike's map carrying the first into the second and the
+    second back to the start (periodic). The speed after each strike is the
+    analytic cot(2 alpha) sqrt(4 g sin(alpha) sin(gamma)) (energy over a
+    step: w-^2 = w+^2 + 4 g sin(alpha) sin(gamma); the strike: w+ = cos(2
+    alpha) w-) to 1e-6; each phase's duration is the simulator's strike
+    time from the analytic state to 1e-6; sol.replay() makes the simulator's
+    own two strikes at the phases' ends."""
+    model = rimless_wheel("rimless_ocp")
+    sim = gen.compile(model)
+    after = np.sqrt(4 * G * np.sin(ALPHA) * np.sin(GAMMA)) / np.tan(2 * ALPHA)
+    before = after / np.cos(2 * ALPHA)
+    ref = sim.simulate([GAMMA - ALPHA, after], 1.0, 1.0, method="dopri5", rtol=1e-12,
+                       atol=1e-12)
+    T_ref = ref.events[0].t
+    # the guess: the first step from a speed off the cycle, for both phases
+    run = sim.simulate([GAMMA - ALPHA, 1.5], 3.0, 0.01, method="dopri5", rtol=1e-10,
+                       atol=1e-12)
+    T0 = run.events[0].t
+    N = 21
+    Xg = run.sol(np.linspace(0, T0 * (1 - 1e-9), N))
+    guess = {n: np.concatenate([Xg[:, i]] * 2) for i, n in enumerate(model.state_names)}
+    guess["duration"] = [T0, T0]
+    ocp = gen.OptimalControl(model, N, (0.05, 5.0), terminal_cost=sm.Symbol("t"),
+                             events=["strike", "strike"], periodic=True)
+    sol = ocp.solve(guess, tol=1e-12)
+    assert sol.status == 0, sol.message
+    p1, p2 = sol.phases
+    assert (p1.event, p2.event) == ("strike", "strike") and len(p1.t) == len(p2.t) == N
+    for ph in (p1, p2):
+        assert abs(ph.x[0, 0] - (GAMMA - ALPHA)) < 1e-9 and abs(ph.x[-1, 0] - (GAMMA + ALPHA)) < 1e-9
+        assert abs(ph.x[0, 1] - after) < 1e-6 and abs(ph.x[-1, 1] - before) < 1e-6, ph.x
+        assert abs((ph.t[-1] - ph.t[0]) - T_ref) < 1e-6, (ph.t, T_ref)
+    np.testing.assert_allclose(p1.x_after, p2.x[0], atol=1e-10)       # the map joins them
+    np.testing.assert_allclose(p2.x_after, p1.x[0], atol=1e-10)       # periodic
+    assert p2.t[0] == p1.t[-1] and sol.t[-1] == p2.t[-1]
+    # the interpolant stays within its phase: at the first strike, the state after it
+    np.testing.assert_allclose(sol(p1.t[-1]), p2.x[0], atol=1e-12)
+    rep = sol.replay(rtol=1e-12, atol=1e-12)
+    strikes = [e for e in rep.events if e.name == "strike"]
+    assert len(strikes) == 2
+    assert abs(strikes[0].t - p1.t[-1]) < 1e-6 and abs(strikes[1].t - p2.t[-1]) < 1e-6
+    assert np.abs(strikes[1].x_after - sol.x[0]).max() < 1e-6
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(cyipopt is None and os.environ.get("CI") != "true",
+                    reason="cyipopt not installed (pip install eomgen[ocp])")
+def test_ball_two_phases_across_its_impact_against_the_analytic_bounce():
+    """A gen.Impact ending a phase: the ball dropped from rest at y = 1, two
+    phases each ending on the ground (the impact's impulse, an unknown of
+    the problem, carrying the first into the second). Against the analytic
+    fall (t1 = sqrt(2 y0 / g), v- = -sqrt(2 g y0), v+ = -e v-, the bounce
+    2 v+ / g) to 1e-9, and against the simulator's own two impacts (times
+    and the states after them) on replay."""
+    import sympy.physics.mechanics as me
+    y = me.dynamicsymbols("y")
+    m, g = sm.symbols("m g")
+    lm = me.LagrangesMethod(m * y.diff()**2 / 2 - m * g * y, [y])
+    lm.form_lagranges_equations()
+    e, g0 = 0.8, 9.81
+    ball = gen.Model.from_lagrange(lm, constants={m: 1.0, g: g0}, name="ball_ocp",
+                                   hybrid={"ground": gen.Impact(y, restitution=e)})
+    t1 = np.sqrt(2 / g0)
+    v_before = -np.sqrt(2 * g0)
+    v_after = -e * v_before
+    t2 = 2 * v_after / g0
+    N = 11
+    tau = np.linspace(0, 1, N)
+    yg = np.concatenate([1 - tau, 0.5 * np.sin(np.pi * tau)])
+    ocp = gen.OptimalControl(ball, N, (0.05, 5.0), terminal_cost=sm.Symbol("t"),
+                             events=["ground", "ground"], initial={"y": 1.0, "y_d": 0.0})
+    sol = ocp.solve({"y": yg, "duration": [0.5, 1.0]}, tol=1e-12)
+    assert sol.status == 0, sol.message
+    p1, p2 = sol.phases
+    assert abs(p1.t[-1] - t1) < 1e-9 and abs(p2.t[-1] - p2.t[0] - t2) < 1e-9, (p1.t, p2.t)
+    assert abs(p1.x[-1, 1] - v_before) < 1e-9 and abs(p2.x[0, 1] - v_after) < 1e-9
+    np.testing.assert_allclose(p1.x_after, p2.x[0], atol=1e-9)
+    assert abs(p2.x_after[1] - e * e * -v_before) < 1e-9      # the second bounce's speed
+    rep = sol.replay(rtol=1e-12, atol=1e-12)      # to the last phase's end: one impact inside
+    assert [ev.name for ev in rep.events] == ["ground"]
+    assert abs(rep.events[0].t - p1.t[-1]) < 1e-8
+    run = ocp.simulator.simulate(sol.x[0], 1.05 * sol.t[-1], 0.01, method="dopri5",
+                                 rtol=1e-12, atol=1e-12)
+    hits = [ev for ev in run.events if ev.name == "ground"]
+    assert len(hits) == 2
+    assert abs(hits[0].t - p1.t[-1]) < 1e-8 and abs(hits[1].t - p2.t[-1]) < 1e-8
+    np.testing.assert_allclose(hits[0].x_after, p2.x[0], atol=1e-8)
+    np.testing.assert_allclose(hits[1].x_after, p2.x_after, atol=1e-8)
+    with pytest.raises(gen.InputError) as err:
+        sol.tracker(np.eye(2), np.eye(0), 0.01)
+    assert str(err.value) == ("tracker: this solution has 2 phases (events ['ground', "
+                              "'ground']); a tracker follows one phase, not a trajectory "
+                              "across events")

@@ -35,12 +35,17 @@ def _boundary_states(ocp):
 
 
 def _read_dict(ocp, guess, X, R, z):
-    """A dict guess {state or input: value or array over the nodes,
-    parameter: value, "duration": T} into X, R and z's parameters and T."""
-    nm, lay, N = ocp._names, ocp._lay, ocp.nodes
+    """A dict guess {state or input: value or array over the nodes (every
+    phase's, in order), parameter: value, "duration": T (or one per
+    phase)} into X, R and z's parameters and durations."""
+    nm, lay, N = ocp._names, ocp._lay, ocp._lay.NN
     for k, v in guess.items():
         if isinstance(k, str) and k == "duration":
-            z[lay.T] = _finite(v, "guess['duration']")
+            d = np.atleast_1d(np.asarray(v, dtype=object))
+            if d.size not in (1, lay.phases):
+                raise InputError(f"guess['duration'] must be a number or one per phase "
+                                 f"({lay.phases}), got {_short(v)}")
+            z[lay.Ts] = [_finite(e, "guess['duration']") for e in np.broadcast_to(d, (lay.phases,))]
             continue
         kind, i = nm.key(k, "guess")
         try:
@@ -84,9 +89,9 @@ def start_point(ocp, guess, lb, ub):
     """The first iterate z0 of ocp's assembled problem from the user's guess
     (None, a dict, an OptimalSolution or the whole vector), within the
     bounds lb, ub, the added unknowns consistent with it."""
-    m, lay, N = ocp.model, ocp._lay, ocp.nodes
+    m, lay, N = ocp.model, ocp._lay, ocp._lay.NN
     z = np.zeros(lay.n)
-    z[lay.T] = 0.5 * (lb[lay.T] + ub[lay.T])
+    z[lay.Ts] = 0.5 * (lb[lay.Ts] + ub[lay.Ts])
     p = ocp._pvec()
     for j, i in enumerate(ocp._pf):
         z[lay.P[j]] = p[i]
@@ -107,6 +112,9 @@ def start_point(ocp, guess, lb, ub):
     X = x0[None, :] + tau[:, None] * (x1 - x0)[None, :]
     R = np.zeros((N, m.nr))
     RM = None
+    if isinstance(guess, OptimalSolution) and lay.phases > 1:
+        raise InputError("guess: a solution of another problem is a guess of a one-phase "
+                         "problem only; give a dict (its phases' nodes in order)")
     if isinstance(guess, OptimalSolution):
         Tg = guess.t[-1]
         X, R = guess(tau * Tg), guess.input(tau * Tg).reshape(N, m.nr)
@@ -123,7 +131,7 @@ def start_point(ocp, guess, lb, ub):
         z[lay.R[k]] = R[k]
     z = np.clip(z, lb, ub)
     if RM is None:
-        RM = 0.5 * (R[:-1] + R[1:])
+        RM = np.array([0.5 * (R[k] + R[k + 1]) for k in lay.mid_index])
     for k in range(len(lay.RM)):
         z[lay.RM[k]] = RM[k]
     consistent(ocp, z, lb, ub)
@@ -207,12 +215,12 @@ def consistent(ocp, z, lb, ub):
                 z[pt[2]] = 0.0
     _solve_points(ocp, z, "node")
     if lay.XM:
-        h = z[lay.T] / (N - 1)
-        X = np.array([z[x] for x in lay.X])
-        S = np.array([z[lay.node_point[k][0]] for k in range(N)])
-        XM = 0.5 * (X[:-1] + X[1:]) + h / 8 * (S[:-1] - S[1:])
-        for k in range(N - 1):
-            z[lay.XM[k]] = np.clip(XM[k], lb[lay.XM[k]], ub[lay.XM[k]])
+        for k, i in lay.mid_index.items():
+            h = z[lay.Ts[k // N]] / (N - 1)
+            x0, x1 = z[lay.X[k]], z[lay.X[k + 1]]
+            s0, s1 = z[lay.node_point[k][0]], z[lay.node_point[k + 1][0]]
+            xm = 0.5 * (x0 + x1) + h / 8 * (s0 - s1)
+            z[lay.XM[i]] = np.clip(xm, lb[lay.XM[i]], ub[lay.XM[i]])
     _solve_points(ocp, z, "mid")
 
 
@@ -227,7 +235,7 @@ def row_scaling(ocp, z):
     iterates stall (the brachistochrone of issue 47)."""
     lay, N = ocp._lay, ocp.nodes
     g = np.ones(ocp._m_rows)
-    h = z[lay.T] / (N - 1)
+    h = np.mean(z[lay.Ts]) / (N - 1)      # the phases' mean step: a scale
     jr, jc = ocp._jrows.astype(np.int64), ocp._jcols.astype(np.int64)
     J = np.abs(ocp.evaluate(z, "jacobian"))
     slope = np.zeros(lay.n, bool)

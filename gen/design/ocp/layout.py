@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ...core.errors import InputError
-from .events import assemble_events
+from .events import assemble_events, jump_phases
 
 __all__ = ["Layout", "Block", "Assembly", "assemble", "cost_points", "index_tables"]
 
@@ -20,9 +20,10 @@ class Layout:
     """Where every unknown lives in the decision vector z, and the
     collocation points."""
 
-    def __init__(self, method, N, nq, nu, nr, mv, mc, npf):
+    def __init__(self, method, N, nq, nu, nr, mv, mc, npf, phases=1, impulses=0):
         nx = nq + nu
-        self.N, self.nx, self.nr = N, nx, nr
+        self.N, self.nx, self.nr, self.phases = N, nx, nr, phases
+        self.NN = NN = N * phases          # every phase's N nodes, in order
         n = 0
 
         def take(k):
@@ -34,14 +35,16 @@ class Layout:
                    "trapezoidal": lambda k: True, "hermite-simpson": lambda k: True}[method]
         mid_pt = method in ("midpoint", "hermite-simpson")
         self.X, self.R, self.XM, self.RM = [], [], [], []
-        self.points = []        # (x terms, r terms, s, lam, mu, time fraction, own state)
-        self.node_point, self.mid_point = {}, {}
-        for k in range(N):
+        self.points = []        # (x terms, r terms, s, lam, mu, time terms, own state)
+        self.node_point, self.mid_point, self.mid_index = {}, {}, {}
+        for k in range(NN):
+            kl = k % N
             self.X.append(take(nx))
             self.R.append(take(nr))
-            if node_pt(k):
+            if node_pt(kl):
                 self.node_point[k] = (take(nx), take(mv), take(0))
-            if k < N - 1 and mid_pt:
+            if kl < N - 1 and mid_pt:
+                self.mid_index[k] = len(self.mid_index)
                 if method == "hermite-simpson":
                     self.XM.append(take(nx))
                     self.RM.append(take(nr))
@@ -49,21 +52,36 @@ class Layout:
                 self.mid_point[k] = (take(nx), take(mv),
                                      take(mc if method == "hermite-simpson" else 0))
         self.P = take(npf)
-        self.T = int(take(1)[0])
+        self.Ts = take(phases)             # each phase's duration
+        self.T = int(self.Ts[0])
+        self.L = take(impulses)            # the impacts' impulses ending phases
         self.n = n
-        for k in range(N):
+        for k in range(NN):
             if k in self.node_point:
                 s, lam, mu = self.node_point[k]
                 self.points.append(([(self.X[k], 1.0)], [(self.R[k], 1.0)], s, lam, mu,
-                                    k / (N - 1), ("node", k)))
+                                    self.tnode(k), ("node", k)))
             if k in self.mid_point:
                 s, lam, mu = self.mid_point[k]
                 if method == "hermite-simpson":
-                    xs, rs = [(self.XM[k], 1.0)], [(self.RM[k], 1.0)]
+                    i = self.mid_index[k]
+                    xs, rs = [(self.XM[i], 1.0)], [(self.RM[i], 1.0)]
                 else:
                     xs = [(self.X[k], 0.5), (self.X[k + 1], 0.5)]
                     rs = [(self.R[k], 0.5), (self.R[k + 1], 0.5)]
-                self.points.append((xs, rs, s, lam, mu, (k + 0.5) / (N - 1), ("mid", k)))
+                self.points.append((xs, rs, s, lam, mu, self.tnode(k, 0.5), ("mid", k)))
+
+    def tnode(self, k, frac=0.0):
+        """The time at node k (plus frac intervals) as terms of z: the
+        durations of the phases before k's and the fraction of its own."""
+        ph, kl = divmod(k, self.N)
+        return ([(int(self.Ts[i]), 1.0) for i in range(ph)]
+                + [(int(self.Ts[ph]), (kl + frac) / (self.N - 1))])
+
+    def h(self, k):
+        """The terms of the step h of the interval at node k (its phase's
+        duration)."""
+        return [(int(self.Ts[k // self.N]), 1.0)]
 
 
 class Block:
@@ -109,10 +127,11 @@ class Assembly:
         self.row_hi.extend(hi if hi is not None else [0.0] * f["nrow"])
         return r0
 
-    def gather(self, f, xs, rs, c, s=None, lam=None, extra=None):
+    def gather(self, f, xs, rs, c, s=None, lam=None, extra=None, T=None):
         """Each local of f as terms (z index, coefficient): the states and
         inputs from xs and rs (sums of (index array, coefficient)), the
-        slopes s, the multipliers lam, the time as c T, the rest from
+        slopes s, the multipliers lam, the time as terms c (a number: c T),
+        the duration T as terms (default the first phase's), the rest from
         extra {(role, i): terms}."""
         lay = self.lay
         g = []
@@ -128,9 +147,9 @@ class Assembly:
             elif role == "pf":
                 g.append([(int(lay.P[i]), 1.0)])
             elif role == "t":
-                g.append([(lay.T, c)])
+                g.append(list(c) if isinstance(c, list) else [(lay.T, c)])
             elif role == "T":
-                g.append([(lay.T, 1.0)])
+                g.append(list(T) if T is not None else [(lay.T, 1.0)])
             else:
                 g.append(extra[(role, i)])
         return g
@@ -140,7 +159,7 @@ def _points(a, ocp):
     """The point equations at every collocation point, the manifold at the
     nodes (but those the boundary values fix) and the acceleration
     constraints at the nodes."""
-    lay, N = a.lay, ocp.nodes
+    lay, NN = a.lay, a.lay.NN
     pt = a.fam("point")
     for xs, rs, s, lam, mu, c, own in lay.points:
         a.block("point").add(a.gather(pt, xs, rs, c, s, lam), row0=a.con_rows(pt))
@@ -149,22 +168,24 @@ def _points(a, ocp):
         if name not in a.fams:
             continue
         mf = a.fam(name)
-        for k in range(N):
+        for k in range(NN):
             if k not in skip[name]:
-                a.block(name).add(a.gather(mf, [(lay.X[k], 1.0)], [], k / (N - 1)),
+                a.block(name).add(a.gather(mf, [(lay.X[k], 1.0)], [], lay.tnode(k)),
                                   row0=a.con_rows(mf))
     if "acceleration" in a.fams:
         af = a.fam("acceleration")
-        for k in range(N):
+        for k in range(NN):
             a.block("acceleration").add(
-                a.gather(af, [(lay.X[k], 1.0)], [], k / (N - 1), lay.node_point[k][0]),
+                a.gather(af, [(lay.X[k], 1.0)], [], lay.tnode(k), lay.node_point[k][0]),
                 row0=a.con_rows(af))
 
 
 def _defects(a, ocp):
     lay, nx = a.lay, ocp.model.nx
     df = a.fam("defect")
-    for k in range(ocp.nodes - 1):
+    for k in range(lay.NN - 1):
+        if (k + 1) % lay.N == 0:
+            continue                # a phase's last node: the events join the next
         ex = {}
         for i in range(nx):
             ex[("xa", i)] = [(int(lay.X[k][i]), 1.0)]
@@ -176,30 +197,32 @@ def _defects(a, ocp):
             if k in lay.mid_point:
                 ex[("sm", i)] = [(int(lay.mid_point[k][0][i]), 1.0)]
             if lay.XM:
-                ex[("xm", i)] = [(int(lay.XM[k][i]), 1.0)]
+                ex[("xm", i)] = [(int(lay.XM[lay.mid_index[k]][i]), 1.0)]
         if k in lay.mid_point:
             for i, g in enumerate(lay.mid_point[k][2]):
                 ex[("mu", i)] = [(int(g), 1.0)]
-        a.block("defect").add(a.gather(df, [], [], 0.0, extra=ex), row0=a.con_rows(df))
+        a.block("defect").add(a.gather(df, [], [], 0.0, extra=ex, T=lay.h(k)),
+                              row0=a.con_rows(df))
 
 
 def _costs(a, ocp):
     """The running cost (the method's quadrature weights, times h in the
     kernel), the terminal cost and the path constraints."""
-    lay, N = a.lay, ocp.nodes
+    lay, N = a.lay, a.lay.NN
     if "cost" in a.fams:
         cf = a.fam("cost")
-        for xs, rs, s, lam, mu, c, own in cost_points(ocp.method, N, lay):
-            a.block("cost").add(a.gather(cf, xs, rs, c), data=[s])
+        for xs, rs, s, lam, mu, c, k0 in cost_points(ocp.method, lay.N, lay):
+            a.block("cost").add(a.gather(cf, xs, rs, c, T=lay.h(k0)), data=[s])
     if "terminal" in a.fams:
         tf = a.fam("terminal")
-        a.block("terminal").add(a.gather(tf, [(lay.X[N - 1], 1.0)], [(lay.R[N - 1], 1.0)], 1.0))
+        a.block("terminal").add(a.gather(tf, [(lay.X[N - 1], 1.0)], [(lay.R[N - 1], 1.0)], 1.0,
+                                         T=lay.tnode(N - 1)))
     if "path" in a.fams:
         pf_ = a.fam("path")
         lo = [v for v, _ in ocp.path_bounds]
         hi = [v for _, v in ocp.path_bounds]
         for k in range(N):
-            a.block("path").add(a.gather(pf_, [(lay.X[k], 1.0)], [(lay.R[k], 1.0)], k / (N - 1)),
+            a.block("path").add(a.gather(pf_, [(lay.X[k], 1.0)], [(lay.R[k], 1.0)], lay.tnode(k)),
                                 row0=a.con_rows(pf_, lo, hi))
 
 
@@ -251,7 +274,8 @@ def assemble(ocp, meta):
     (bounds, boundary values, duration, fit data): its layout, its blocks
     and rows (meta: the families as data, transcription.ocp_plan)."""
     m = ocp.model
-    lay = Layout(ocp.method, ocp.nodes, m.nq, m.nu, m.nr, m.mv, m.mc, len(ocp._pf))
+    lay = Layout(ocp.method, ocp.nodes, m.nq, m.nu, m.nr, m.mv, m.mc, len(ocp._pf),
+                 max(1, len(ocp._events)), len(jump_phases(ocp._events, ocp.periodic)[1]))
     a = Assembly(meta, lay)
     _points(a, ocp)
     _defects(a, ocp)
@@ -263,26 +287,29 @@ def assemble(ocp, meta):
 
 
 def cost_points(method, N, lay):
-    """(x terms, r terms, weight, -, -, time fraction, -) of the
-    running cost's quadrature (weights in units of h)."""
+    """(x terms, r terms, weight, -, -, time terms, a node of its phase) of
+    the running cost's quadrature, phase by phase of N nodes (weights in
+    units of h)."""
     out = []
-    if method == "backward-euler":
-        for k in range(1, N):
-            out.append(([(lay.X[k], 1.0)], [(lay.R[k], 1.0)], 1.0, 0, 0, k / (N - 1), 0))
-    elif method == "midpoint":
-        for k in range(N - 1):
-            out.append(([(lay.X[k], .5), (lay.X[k + 1], .5)],
-                        [(lay.R[k], .5), (lay.R[k + 1], .5)], 1.0, 0, 0,
-                        (k + .5) / (N - 1), 0))
-    else:
-        node_w = 0.5 if method == "trapezoidal" else 1 / 6
-        for k in range(N):
-            w = node_w * (1 if k in (0, N - 1) else 2)
-            out.append(([(lay.X[k], 1.0)], [(lay.R[k], 1.0)], w, 0, 0, k / (N - 1), 0))
-        if method == "hermite-simpson":
+    for p0 in range(0, lay.NN, N):
+        X, R = lay.X[p0:p0 + N], lay.R[p0:p0 + N]
+        if method == "backward-euler":
+            for k in range(1, N):
+                out.append(([(X[k], 1.0)], [(R[k], 1.0)], 1.0, 0, 0, lay.tnode(p0 + k), p0))
+        elif method == "midpoint":
             for k in range(N - 1):
-                out.append(([(lay.XM[k], 1.0)], [(lay.RM[k], 1.0)], 4 / 6, 0, 0,
-                            (k + .5) / (N - 1), 0))
+                out.append(([(X[k], .5), (X[k + 1], .5)], [(R[k], .5), (R[k + 1], .5)], 1.0,
+                            0, 0, lay.tnode(p0 + k, .5), p0))
+        else:
+            node_w = 0.5 if method == "trapezoidal" else 1 / 6
+            for k in range(N):
+                w = node_w * (1 if k in (0, N - 1) else 2)
+                out.append(([(X[k], 1.0)], [(R[k], 1.0)], w, 0, 0, lay.tnode(p0 + k), p0))
+            if method == "hermite-simpson":
+                for k in range(N - 1):
+                    i = lay.mid_index[p0 + k]
+                    out.append(([(lay.XM[i], 1.0)], [(lay.RM[i], 1.0)], 4 / 6, 0, 0,
+                                lay.tnode(p0 + k, .5), p0))
     return out
 
 

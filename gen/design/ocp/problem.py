@@ -63,13 +63,20 @@ class OptimalControl:
         {state or output: (t_data, values)}: adds sum (y(t_i) - values_i)^2
         to the objective, y linearly interpolated between nodes.
     events : list of str, optional
-        The model's hybrid declarations (``gen.Reset``) that end the
-        trajectory, in order; one so far: the last node lies on its guard,
-        crossing in its direction (gen/design/ocp/events.py).
+        The model's hybrid declarations (``gen.Reset``, or ``gen.Impact``:
+        its impulse an unknown of the problem), in order: one
+        phase each, of ``nodes`` nodes and its own duration (free within
+        ``duration``'s (lo, hi), which bounds every phase's). A phase's last
+        node lies on its event's guard, crossing in its direction, and the
+        event's map carries it into the next phase's first node
+        (gen/design/ocp/events.py). ``initial`` is the first phase's first
+        node, ``final`` and ``terminal_cost`` the last phase's last node (t:
+        the total duration); a dict guess gives arrays over all the phases'
+        nodes in order and ``"duration"`` a number or one per phase.
     periodic : bool, optional
-        The state after the event's map (without an event: the final state)
-        equals the initial state: a limit cycle. ``sol.phases`` gives each
-        phase's times, states and the state after its event.
+        The state after the last event's map (without an event: the final
+        state) equals the initial state: a limit cycle. ``sol.phases``
+        gives each phase's times, states and the state after its event.
 
     ``bounds``, ``initial``, ``final``, ``constants``, ``duration`` (within
     fixed or free), ``path_bounds`` and ``fit`` are attributes that can be
@@ -117,12 +124,16 @@ class OptimalControl:
         if not isinstance(nodes, (int, np.integer)) or nodes < 2:
             raise InputError(f"nodes must be an integer >= 2, got {nodes!r}")
         self.nodes = int(nodes)
-        self._event, self.periodic = read_events(self, events, periodic)
+        self._events, self.periodic = read_events(self, events, periodic)
         self.events = list(events or [])
+        self.phases = max(1, len(self.events))
         self._names = nm = Names(m)
         self.duration = duration
         self._check_duration(duration)
         self.free_time = not np.isscalar(duration)
+        if self.phases > 1 and not self.free_time:
+            raise InputError(f"events={self.events!r}: each phase's duration is free; give "
+                             f"duration as (lo, hi), the bounds of every phase's, not {duration!r}")
         # parameters to identify
         self.parameters = list(parameters or [])
         self._pf = []
@@ -175,7 +186,8 @@ class OptimalControl:
         nx, nr, mv, mc = m.nq + m.nu, m.nr, m.mv, m.mc
         node = nx + nr + (0 if self.method == "midpoint" else nx + mv)
         mid = {"hermite-simpson": 2 * nx + nr + mv + mc, "midpoint": nx + mv}.get(self.method, 0)
-        return N * node + (N - 1) * mid + len(self._pf) + 1
+        P = max(1, len(self.events))
+        return P * (N * node + (N - 1) * mid + 1) + len(self._pf)
 
     def _check_size(self):
         """Refuses, before anything is allocated, a problem past the memory
@@ -310,7 +322,8 @@ class OptimalControl:
         fit = tuple((np.asarray(td, float).tobytes(), np.asarray(v, float).tobytes())
                     for td, v in (self.fit or {}).values())
         skip = tuple(sorted((k, tuple(sorted(v))) for k, v in self._fixed_manifold_nodes().items()))
-        return (self.method, self.nodes, None if self.free_time else float(self.duration),
+        return (self.method, self.nodes, self.phases,
+                None if self.free_time else float(self.duration),
                 tuple(tuple(map(float, b)) for b in self.path_bounds), fit, skip)
 
     def _c_blocks(self, blocks, arrays):
@@ -427,7 +440,7 @@ class OptimalControl:
             else:
                 idx = [lay.P[self._pf.index(i)]]
             lb[idx], ub[idx] = lo, hi
-        for what, k0 in (("initial", 0), ("final", N - 1)):
+        for what, k0 in (("initial", 0), ("final", lay.NN - 1)):
             for k, v in getattr(self, what).items():
                 _, i = nm.key(k, what)
                 v = nm.number(v, f"{what}[{k}]")
@@ -437,13 +450,14 @@ class OptimalControl:
                                      f"({lb[j]}, {ub[j]})")
                 lb[j] = ub[j] = v
         if self.free_time:
-            lb[lay.T], ub[lay.T] = (float(v) for v in self.duration)
+            lb[lay.Ts], ub[lay.Ts] = (float(v) for v in self.duration)
         else:
             lb[lay.T] = ub[lay.T] = float(self.duration)
         return lb, ub
 
     def _layout_key(self):
-        return (self.method, self.nodes, self.model.mv, self.model.mc, len(self._pf))
+        return (self.method, self.nodes, self.model.mv, self.model.mc, len(self._pf),
+                self.phases)
 
     # --------------------------------------------------------- solve
     def solve(self, guess=None, *, hessian="exact", **ipopt_options):

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...core.errors import InputError
+
 __all__ = ["OptimalSolution"]
 
 
@@ -13,7 +15,8 @@ class OptimalSolution:
 
     Attributes
     ----------
-    t : ndarray (N,)       node times
+    t : ndarray (N,)       node times (every phase's nodes in order: across events,
+                           a phase's last time repeats as the next's first)
     x : ndarray (N, nx)    states at the nodes
     r : ndarray (N, nr)    inputs at the nodes
     p : ndarray            the identified parameters (in ``parameters``' order)
@@ -28,6 +31,8 @@ class OptimalSolution:
                            IPOPT's primal and dual infeasibility at iteration 0
     build_seconds, solve_seconds : float
     success : bool         status 0 or 1
+    phases : list          each phase's times ``t``, states ``x``, inputs ``r``, the
+                           ``event`` that ends it and ``x_after``, the state after its map
 
     ``sol(t)`` is the state of the transcription's interpolant at t (linear
     for backward Euler and midpoint, quadratic for trapezoidal, cubic for
@@ -43,9 +48,13 @@ class OptimalSolution:
         s._z = z
         s._layout_key = ocp._layout_key()
         s.method = ocp.method
-        T = z[lay.T]
-        N = ocp.nodes
-        s.t = np.linspace(0.0, T, N)
+        n1, Ts = lay.N, z[lay.Ts]
+        N = lay.NN
+        # every phase's nodes, in order (a phase's last time is the next's first)
+        s._t0 = np.concatenate([[0.0], np.cumsum(Ts)])
+        s.t = np.concatenate([s._t0[j] + np.linspace(0.0, Ts[j], n1) for j in range(len(Ts))])
+        s._n1 = n1
+        T = float(s._t0[-1])
         s.x = np.array([z[X] for X in lay.X])
         s.r = np.array([z[R] for R in lay.R]).reshape(N, ocp.model.nr)
         s.p = z[lay.P].copy()
@@ -69,10 +78,16 @@ class OptimalSolution:
         for k, (si, _, _) in lay.node_point.items():
             S[k] = z[si]
         s._S = S
-        s._SM = np.array([z[lay.mid_point[k][0]] for k in range(N - 1)]) if lay.mid_point else None
-        s._XM = np.array([z[X] for X in lay.XM]) if lay.XM else None
-        s._RM = (np.array([z[R] for R in lay.RM]).reshape(len(lay.RM), ocp.model.nr)
-                  if lay.RM else None)
+        # the midpoints' slopes, states, inputs by their interval's first node
+        s._SM = s._XM = s._RM = None
+        if lay.mid_point:
+            s._SM = np.full((N - 1, nx), np.nan)
+            for k, (si, _, _) in lay.mid_point.items():
+                s._SM[k] = z[si]
+        if lay.XM:
+            s._XM, s._RM = np.full((N - 1, nx), np.nan), np.full((N - 1, ocp.model.nr), np.nan)
+            for k, i in lay.mid_index.items():
+                s._XM[k], s._RM[k] = z[lay.XM[i]], z[lay.RM[i]]
         return s
 
     def __iter__(self):
@@ -83,10 +98,16 @@ class OptimalSolution:
                 f"iterations={self.iterations}, nodes={len(self.t)}, method={self.method!r})")
 
     def _locate(self, t):
+        """(t, the first node k of t's interval, t - t_k, the interval's
+        length h as an array like t): within t's phase (at an event's time,
+        the next phase's first interval)."""
         t = np.asarray(t, float)
-        h = self.t[1] - self.t[0]
-        k = np.clip(np.floor(t / h).astype(int), 0, len(self.t) - 2)
-        tau = t - k * h
+        n1, t0 = self._n1, self._t0
+        ph = np.clip(np.searchsorted(t0, t, side="right") - 1, 0, len(t0) - 2)
+        h = (t0[ph + 1] - t0[ph]) / (n1 - 1)
+        kl = np.clip(np.floor((t - t0[ph]) / h).astype(int), 0, n1 - 2)
+        k = ph * n1 + kl
+        tau = t - (t0[ph] + kl * h)
         return t, k, tau, h
 
     def __call__(self, t):
@@ -96,10 +117,11 @@ class OptimalSolution:
         if self.method in ("backward-euler", "midpoint"):
             a = (tau / h)[..., None]
             return X[k] * (1 - a) + X[k + 1] * a
+        hh = h[..., None]
         if self.method == "trapezoidal":
             s0, s1 = self._S[k], self._S[k + 1]
             tt = tau[..., None]
-            return X[k] + s0 * tt + (s1 - s0) * tt ** 2 / (2 * h)
+            return X[k] + s0 * tt + (s1 - s0) * tt ** 2 / (2 * hh)
         # Hermite-Simpson: the slope is quadratic through s_k, s_m, s_k+1;
         # integrate from x_k
         s0, sm_, s1 = self._S[k], self._SM[k], self._S[k + 1]
@@ -108,7 +130,7 @@ class OptimalSolution:
         i0 = u - 3 * u ** 2 / 2 + 2 * u ** 3 / 3
         im = 2 * u ** 2 - 4 * u ** 3 / 3
         i1 = -u ** 2 / 2 + 2 * u ** 3 / 3
-        return X[k] + h * (s0 * i0 + sm_ * im + s1 * i1)
+        return X[k] + hh * (s0 * i0 + sm_ * im + s1 * i1)
 
     def input(self, t):
         """The inputs at times t: linear between nodes; quadratic through
@@ -132,7 +154,10 @@ class OptimalSolution:
 
     def replay(self, dt=None, method="dopri5", **options):
         """The optimal inputs replayed through the model's simulator
-        (``sim.simulate``, the inputs from :meth:`input` at every stage).
+        (``sim.simulate``, the inputs from :meth:`input` at every stage),
+        from ``x[0]`` for the whole duration: across several phases the
+        simulator makes the model's events itself (compare its ``events``
+        with ``phases``).
 
         Parameters
         ----------
@@ -149,7 +174,7 @@ class OptimalSolution:
             Its final state against ``x[-1]`` measures the transcription's error.
         """
         sim = self._ocp.simulator
-        dt = dt or (self.t[1] - self.t[0])
+        dt = dt or float(self.t[1] - self.t[0])
         return sim.simulate(self.x[0], float(self.t[-1]), dt, r=lambda t, x: self.input(t),
                             p=self.constants.copy(), method=method, input_period=0, **options)
 
@@ -168,5 +193,9 @@ class OptimalSolution:
         gen.design.tracking.TrajectoryTracker
         """
         from ..tracking import TrajectoryTracker
+        if len(self.phases) > 1:
+            raise InputError(f"tracker: this solution has {len(self.phases)} phases (events "
+                             f"{[ph.event for ph in self.phases]}); a tracker follows one "
+                             "phase, not a trajectory across events")
         return TrajectoryTracker(self._ocp.simulator, self.t, self.x, self.r, Q, R, period,
                                  p=self.constants.copy())

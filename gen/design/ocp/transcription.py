@@ -111,7 +111,7 @@ def families(ocp):
     N = ocp.nodes
     fams = _point_families(m, pf, ocp.method)
     fams.append(_defect_family(m, ocp.method, N, T))
-    for name, loc, exprs in event_families(m, pf, ocp._event, ocp.periodic):
+    for name, loc, exprs in event_families(m, pf, ocp._events, ocp.periodic):
         fams.append(Family(name, loc, exprs))
     x = list(m.q) + list(m.u)
     if ocp._L is not None:
