@@ -35,13 +35,15 @@ from .export.fmu import export_fmu  # noqa: E402
 from .sim.ensemble import At, EnsembleResult, Final, Max, Mean, Min, Sampler  # noqa: E402
 from .intake.hybrid import Impact, Reset  # noqa: E402
 from .design.ocp import OptimalControl, OptimalSolution  # noqa: E402
+from .intake.robots import Robot, load_mjcf, load_urdf  # noqa: E402
 
 __all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "RunOptions",
            "EomgenError",
            "ModelError", "BuildError", "InputError", "MissingDependencyError",
            "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "UnusedInputWarning", "MasslessSpeedWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
            "TrajectoryTracker", "export_fmu", "Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult",
-           "Impact", "Reset", "OptimalControl", "OptimalSolution", "__version__"]
+           "Impact", "Reset", "OptimalControl", "OptimalSolution", "Robot", "load_urdf",
+           "load_mjcf", "__version__"]
 
 
 # gen.casadi and gen.pydy (the products users name as modules: CasADi external

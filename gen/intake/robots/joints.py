@@ -36,7 +36,7 @@ from __future__ import annotations
 import sympy as sm
 from sympy.physics.mechanics.joint import Joint
 
-from ..sympy_compat import time_symbol
+from ..sympy_compat import orient_explicit_without_rates, time_symbol
 
 __all__ = ["FreeJoint", "BallJoint", "quaternion_matrix", "quaternion_rates"]
 
@@ -107,7 +107,10 @@ class _QuaternionJoint(Joint):
         return sm.Matrix(rows)
 
     def _orient_frames(self):
-        self.child_interframe.orient_explicit(self.parent_interframe, self.rotation())
+        # the angular velocity is the speeds' (_set_angular_velocity): sympy's
+        # own, from the rotation's derivative, would take seconds
+        orient_explicit_without_rates(self.child_interframe, self.parent_interframe,
+                                      self.rotation())
 
     def _set_angular_velocity(self):
         C = self.child_interframe

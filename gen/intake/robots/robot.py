@@ -68,6 +68,15 @@ def _vec(frame, v):
         if not isinstance(v[0], sm.Basic) else v[0] * frame.x + v[1] * frame.y + v[2] * frame.z
 
 
+def _dyadic(frame, Ic):
+    """The inertia dyadic of a 3 x 3 matrix in frame's axes, built at once
+    (me.inertia adds nine outer products, each addition comparing printed
+    vectors)."""
+    axes = (frame.x, frame.y, frame.z)
+    return me.Dyadic([(Ic[i, j], axes[i], axes[j]) for i in range(3) for j in range(3)
+                      if Ic[i, j] != 0])
+
+
 def _fn(name):
     return sm.Function(name)(_T)
 
@@ -242,9 +251,7 @@ def build_robot(desc, base="fixed", constants="numeric", mimic="constraints", gr
         m, c, Ic = _body_inertia(b, symbolic, params)
         frame = me.ReferenceFrame(b.name)
         mc = me.Point(f"{b.name}_com")
-        body = me.RigidBody(b.name, mc, frame, m,
-                            (me.inertia(frame, Ic[0, 0], Ic[1, 1], Ic[2, 2], Ic[0, 1],
-                                        Ic[1, 2], Ic[0, 2]), mc))
+        body = me.RigidBody(b.name, mc, frame, m, (_dyadic(frame, Ic), mc))
         com_of[body] = c                 # the mass centre from the link origin (frame axes)
         rb.append(body)
         parent = ground if b.parent is None else rb[b.parent]
