@@ -83,6 +83,7 @@ class RobotDescription:
     joints: list
     source: str = "<string>"
     gravity: tuple = (0.0, 0.0, -9.81)
+    keep_order: bool = False        # a link's child joints in the file's order (MJCF)
 
     def where(self, obj):
         """' (line N of source)' for a link or joint with a line, else ' (source)'."""
@@ -142,7 +143,7 @@ class RobotDescription:
         # every link reached from the root (a cycle apart from the root is
         # a loop: its links are children but unreachable)
         seen, stack = {roots[0]}, [roots[0]]
-        children = _children(self.joints)
+        children = _children(self.joints, self.keep_order)
         while stack:
             for j in children.get(stack.pop(), ()):
                 seen.add(j.child)
@@ -152,17 +153,14 @@ class RobotDescription:
             raise ModelError(f"kinematic loop: {self.joint_label(lost[0])} is on a cycle of "
                              "joints not connected to the root link "
                              f"{self.link_label(roots[0])}")
-        for j in self.joints:
-            if j.mimic is not None and j.mimic[0] not in names:
-                raise ModelError(f"{self.joint_label(j)} mimics joint {j.mimic[0]!r}, which "
-                                 "the file does not define")
         return roots[0]
 
 
-def _children(joints):
-    """{link: its child joints, by name} (urdfdom's order)."""
+def _children(joints, keep_order=False):
+    """{link: its child joints, by name} (urdfdom's order), or in the
+    file's order (``keep_order``: MuJoCo's)."""
     out = {}
-    for j in sorted(joints, key=lambda j: j.name):
+    for j in (joints if keep_order else sorted(joints, key=lambda j: j.name)):
         out.setdefault(j.parent, []).append(j)
     return out
 
@@ -190,7 +188,7 @@ def bodies_of(desc, floating):
     welded to it are the ground. Refuses a moving joint over a massless
     subtree."""
     root = desc.check()
-    children = _children(desc.joints)
+    children = _children(desc.joints, desc.keep_order)
     out = []
     eye, zero = np.eye(3), np.zeros(3)
     if floating:

@@ -349,6 +349,9 @@ def _mimic_constraints(desc, system, bodies, coord):
                 raise ModelError(f"{desc.joint_label(j)}: its mimic tags close a cycle "
                                  f"through joint {name!r}")
             seen.add(name)
+            if name not in by_name:
+                raise ModelError(f"{desc.joint_label(src)} mimics joint {name!r}, which the "
+                                 "file does not define (mimic='ignore' leaves the tag out)")
             src = by_name[name]
         if src.name not in spec or DOF[src.kind] != 1:
             raise ModelError(f"{desc.joint_label(j)} mimics {desc.joint_label(src)}, which "
