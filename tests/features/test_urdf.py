@@ -221,3 +221,21 @@ def test_bad_files_are_refused_naming_the_link_or_joint():
     assert robot.limits == {"j1": (-1.0, 1.0), "j3": (-0.1, 0.2)}
     with pytest.raises(gen.ModelError, match=r"base='wobbly'"):
         gen.load_urdf(ARM, base="wobbly")
+
+
+@pytest.mark.slow
+def test_joint_limits_as_impacts():
+    """hybrid="limits": each limit a plastic impact (gen.Impact): the joint
+    driven into its stop stays inside its range, where the same robot
+    without the impacts goes past it."""
+    model = gen.Model.from_urdf(ARM, hybrid="limits", mimic="ignore", name="arm_limits")
+    sim = gen.compile(model)
+    assert sim.hybrid_names == ["j1_lower", "j1_upper", "j3_lower", "j3_upper"]
+    x0 = np.array([0.9, 0.0, 0.0, 2.0, 0.0, 0.0])
+    sol = sim.simulate(x0, 1.0, 1e-3)
+    assert sol.success
+    assert -1 - 1e-9 <= sol.x[:, 0].min() and sol.x[:, 0].max() <= 1 + 1e-9
+    assert sol.x[:, 0].max() > 1 - 1e-6                          # it reached the stop
+    assert -0.1 - 1e-9 <= sol.x[:, 2].min() and sol.x[:, 2].max() <= 0.2 + 1e-9
+    free = gen.compile(gen.Model.from_urdf(ARM, mimic="ignore", name="arm_free"))
+    assert free.simulate(x0, 1.0, 1e-3).x[:, 0].max() > 1.05
