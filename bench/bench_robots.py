@@ -30,14 +30,11 @@ at zero torque) against ``crba`` and ``rnea(q, v, 0)``, relative to
 ``1 + max|reference|``. A file Pinocchio refuses is listed with
 Pinocchio's reason and ours. ``--no-crba`` leaves the CRBA builds out.
 
-``mjcf``: MuJoCo's models (the ``mujoco`` wheel's test model, and the
-example-robot-data URDFs MuJoCo's compiler turns into MJCF) against
-``mj_forward`` with contacts, limits, damping, armature, springs, actuators
-and equality constraints off.
+MJCF against MuJoCo's ``mj_forward`` is tests/features/test_mjcf.py (the
+mujoco wheel holds one model; ``mujoco-menagerie`` is not installable here).
 
     python bench/bench_robots.py speed [--robots ur5 panda solo12 talos] [--rounds 3]
     python bench/bench_robots.py sweep [--only NAME ...] [--no-crba]
-    python bench/bench_robots.py mjcf
 """
 from __future__ import annotations
 
@@ -349,15 +346,11 @@ def main(argv=None):
     sw.add_argument("--only", nargs="*")
     sw.add_argument("--no-crba", action="store_true")
     sw.add_argument("--json")
-    sub.add_parser("mjcf")
     args = ap.parse_args(argv)
     if args.cmd == "speed":
         speed(args)
-    elif args.cmd == "sweep":
-        sweep(args)
     else:
-        from bench_robots_mjcf import mjcf_sweep
-        mjcf_sweep()
+        sweep(args)
 
 
 if __name__ == "__main__":
