@@ -83,8 +83,8 @@ def _names(m, obj, n, prefix):
 
 def read_mjcf(source):
     """The RobotDescription of an MJCF file or string (module docstring)."""
+    m, label = compile_mjcf(source)           # MissingDependencyError without mujoco
     import mujoco
-    m, label = compile_mjcf(source)
     bodies = _names(m, mujoco.mjtObj.mjOBJ_BODY, m.nbody, "body")
     jnames = _names(m, mujoco.mjtObj.mjOBJ_JOINT, m.njnt, "joint")
     links, joints = {bodies[0]: Link(bodies[0])}, []
