@@ -54,7 +54,7 @@ def ldlt_solve_c(prefix, n, nonzero, real, rtol_macro="GEN_RT_PIVOT_RTOL"):
     (also for NaN); x is written only on success. Rendered from the
     template the generated models use (templates/c/mass_solve.j2), for the
     tests of the solve on its own."""
-    from gen.codegen.render import template_env
+    from gen.codegen.templating import template_env
     from gen.plan.ldlt import ldlt_program, ldlt_statements
     macro = template_env().get_template("c/mass_solve.j2").module.mass_solve
     plan = ldlt_program(n, nonzero)

@@ -23,6 +23,10 @@
  * is an input of zeros, a NULL res[i] an output not wanted. The step
  * functions' inputs are (x, r, p, t, h): v = (z, h) of gen_rt_deriv_rk4.
  *
+ * gen_rt_cs_eval_inline (gen_rt_casadi_inline.h) is the same function,
+ * static inline, for a library that compiles it with its model as a
+ * constant (templates/casadi: the same bits, faster).
+ *
  * No heap, no globals, no stdio. work: GEN_RT_CS_WORK reals, iwork:
  * GEN_RT_CS_IWORK ints, one size for every function of a model. Returns 0
  * or the status of the model's function or of the derivative algorithm

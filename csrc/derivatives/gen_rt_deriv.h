@@ -24,6 +24,10 @@
  *                          tableau of gen_rt_rodas4.h) with Jf and df/dt
  *                          from dw/dz.
  *
+ * gen_rt_deriv_inline.h has each as a static inline function,
+ * gen_rt_deriv_<f>_inline (the same bits), for a translation unit that
+ * calls them with its model as a constant (the CasADi library).
+ *
  * Matrices are row-major; derivatives over v have nv = nz + 1 columns (h
  * last). No heap, no globals, no stdio; work arrays are the caller's, sized
  * by the macros below. Statuses: those of the factorizations

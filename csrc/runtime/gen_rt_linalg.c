@@ -1,89 +1,21 @@
-/* gen_rt_linalg.c - small dense LU (partial pivoting) and Cholesky. */
+/* gen_rt_linalg.c - small dense LU (partial pivoting: the algorithms in
+ * gen_rt_private.h) and Cholesky. */
 #include "gen_rt_private.h"
 
 gen_rt_real gen_rt_max_abs(int n, const gen_rt_real *v)
 {
-    gen_rt_real m = 0;
-    int i;
-    for (i = 0; i < n; ++i) {
-        gen_rt_real a = rt_abs(v[i]);
-        if (a > m) m = a;
-    }
-    return m;
+    return rt_max_abs(n, v);
 }
 
 int gen_rt_lu_factor(int n, gen_rt_real *a, int *piv, gen_rt_real scale)
 {
-    int i, j, k;
-    gen_rt_real tol;
-    if (n < 0) return GEN_RT_ERR_BAD_ARG;
-    if (n == 0) return GEN_RT_OK;
-    if (!a || !piv) return GEN_RT_ERR_NULL;
-    if (!(scale > 0)) scale = gen_rt_max_abs(n * n, a);
-    if (!(scale > 0)) return GEN_RT_ERR_SINGULAR;
-    tol = GEN_RT_PIVOT_RTOL * scale;
-    for (k = 0; k < n; ++k) {
-        int p = k;
-        gen_rt_real best = rt_abs(a[k * n + k]);
-        for (i = k + 1; i < n; ++i) {
-            gen_rt_real v = rt_abs(a[i * n + k]);
-            if (v > best) { best = v; p = i; }
-        }
-        piv[k] = p;
-        if (!(best > tol)) return GEN_RT_ERR_SINGULAR; /* also catches NaN */
-        if (p != k) {
-            for (j = 0; j < n; ++j) {
-                gen_rt_real tmp = a[k * n + j];
-                a[k * n + j] = a[p * n + j];
-                a[p * n + j] = tmp;
-            }
-        }
-        for (i = k + 1; i < n; ++i) {
-            gen_rt_real l = a[i * n + k] / a[k * n + k];
-            a[i * n + k] = l;
-            if (l != 0) {
-                for (j = k + 1; j < n; ++j) a[i * n + j] -= l * a[k * n + j];
-            }
-        }
-    }
-    return GEN_RT_OK;
+    return rt_lu_factor(n, a, piv, scale);
 }
 
 int gen_rt_lu_solve(int n, const gen_rt_real *lu, const int *piv, int nrhs,
                     gen_rt_real *b)
 {
-    int i, j, k;
-    if (n < 0 || nrhs < 0) return GEN_RT_ERR_BAD_ARG;
-    if (n == 0 || nrhs == 0) return GEN_RT_OK;
-    if (!lu || !piv || !b) return GEN_RT_ERR_NULL;
-    for (k = 0; k < n; ++k) {
-        int p = piv[k];
-        if (p != k) {
-            for (j = 0; j < nrhs; ++j) {
-                gen_rt_real tmp = b[k * nrhs + j];
-                b[k * nrhs + j] = b[p * nrhs + j];
-                b[p * nrhs + j] = tmp;
-            }
-        }
-    }
-    for (i = 0; i < n; ++i) {           /* forward: unit lower */
-        for (k = 0; k < i; ++k) {
-            gen_rt_real l = lu[i * n + k];
-            if (l != 0) {
-                for (j = 0; j < nrhs; ++j) b[i * nrhs + j] -= l * b[k * nrhs + j];
-            }
-        }
-    }
-    for (i = n - 1; i >= 0; --i) {      /* backward: upper */
-        for (k = i + 1; k < n; ++k) {
-            gen_rt_real uik = lu[i * n + k];
-            if (uik != 0) {
-                for (j = 0; j < nrhs; ++j) b[i * nrhs + j] -= uik * b[k * nrhs + j];
-            }
-        }
-        for (j = 0; j < nrhs; ++j) b[i * nrhs + j] /= lu[i * n + i];
-    }
-    return GEN_RT_OK;
+    return rt_lu_solve(n, lu, piv, nrhs, b);
 }
 
 static gen_rt_real rt_sqrt(gen_rt_real x)
@@ -167,31 +99,9 @@ void gen_rt_matmul(int m, int k, int n, const gen_rt_real *a,
     }
 }
 
-/* a^T x = b from P a = L U: U^T y = b, L^T c = y (unit diagonal), x = P^T c */
+/* a^T x = b from P a = L U (rt_lu_solve_t, gen_rt_private.h) */
 int gen_rt_lu_solve_t(int n, const gen_rt_real *lu, const int *piv, int nrhs,
                       gen_rt_real *b)
 {
-    int i, j, k;
-    if (n < 0 || nrhs < 0) return GEN_RT_ERR_BAD_ARG;
-    if (n == 0 || nrhs == 0) return GEN_RT_OK;
-    if (!lu || !piv || !b) return GEN_RT_ERR_NULL;
-    for (j = 0; j < nrhs; ++j) {
-        for (i = 0; i < n; ++i) {
-            gen_rt_real s = b[i * nrhs + j];
-            for (k = 0; k < i; ++k) s -= lu[k * n + i] * b[k * nrhs + j];
-            b[i * nrhs + j] = s / lu[i * n + i];
-        }
-        for (i = n - 1; i >= 0; --i) {
-            gen_rt_real s = b[i * nrhs + j];
-            for (k = i + 1; k < n; ++k) s -= lu[k * n + i] * b[k * nrhs + j];
-            b[i * nrhs + j] = s;
-        }
-        for (k = n - 1; k >= 0; --k)
-            if (piv[k] != k) {
-                gen_rt_real tmp = b[k * nrhs + j];
-                b[k * nrhs + j] = b[piv[k] * nrhs + j];
-                b[piv[k] * nrhs + j] = tmp;
-            }
-    }
-    return GEN_RT_OK;
+    return rt_lu_solve_t(n, lu, piv, nrhs, b);
 }

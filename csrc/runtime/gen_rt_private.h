@@ -22,7 +22,7 @@ extern "C" {
 #endif
 
 /* ---- small helpers ----------------------------------------------------
- * (the largest magnitude is gen_rt_max_abs, gen_rt_linalg.c) */
+ * (the largest magnitude: rt_max_abs, with the LU below) */
 
 /* 1 if the n values are finite (n <= 0: 1): gen_rt_finite_n of gen_rt.h,
  * inline and branch-free (gen_rt_all_finite is the same test out of line) */
@@ -72,6 +72,133 @@ static inline gen_rt_real rt_min(gen_rt_real a, gen_rt_real b) { return a < b ? 
 
 /* a model's state length nx = nq + nu */
 #define RT_NX(m) ((m)->nq + (m)->nu)
+
+/* ---- dense LU (gen_rt_linalg.c) --------------------------------------
+ * The algorithms of gen_rt_max_abs, gen_rt_lu_factor, gen_rt_lu_solve and
+ * gen_rt_lu_solve_t, written once here: gen_rt_linalg.c defines those
+ * over them, and the CasADi library's derivatives
+ * (csrc/derivatives/gen_rt_deriv_inline.h) compile them into its own
+ * functions, with the model's sizes as constants. The same operations in
+ * the same order: the same bits either way. */
+#if defined(__GNUC__)
+#define RT_ALWAYS_INLINE static inline __attribute__((always_inline))
+#else
+#define RT_ALWAYS_INLINE static inline
+#endif
+
+RT_ALWAYS_INLINE gen_rt_real rt_max_abs(int n, const gen_rt_real *v)
+{
+    gen_rt_real m = 0;
+    int i;
+    for (i = 0; i < n; ++i) {
+        gen_rt_real a = rt_abs(v[i]);
+        if (a > m) m = a;
+    }
+    return m;
+}
+
+RT_ALWAYS_INLINE int rt_lu_factor(int n, gen_rt_real *a, int *piv, gen_rt_real scale)
+{
+    int i, j, k;
+    gen_rt_real tol;
+    if (n < 0) return GEN_RT_ERR_BAD_ARG;
+    if (n == 0) return GEN_RT_OK;
+    if (!a || !piv) return GEN_RT_ERR_NULL;
+    if (!(scale > 0)) scale = rt_max_abs(n * n, a);
+    if (!(scale > 0)) return GEN_RT_ERR_SINGULAR;
+    tol = GEN_RT_PIVOT_RTOL * scale;
+    for (k = 0; k < n; ++k) {
+        int p = k;
+        gen_rt_real best = rt_abs(a[k * n + k]);
+        for (i = k + 1; i < n; ++i) {
+            gen_rt_real v = rt_abs(a[i * n + k]);
+            if (v > best) { best = v; p = i; }
+        }
+        piv[k] = p;
+        if (!(best > tol)) return GEN_RT_ERR_SINGULAR; /* also catches NaN */
+        if (p != k) {
+            for (j = 0; j < n; ++j) {
+                gen_rt_real tmp = a[k * n + j];
+                a[k * n + j] = a[p * n + j];
+                a[p * n + j] = tmp;
+            }
+        }
+        for (i = k + 1; i < n; ++i) {
+            gen_rt_real l = a[i * n + k] / a[k * n + k];
+            a[i * n + k] = l;
+            if (l != 0) {
+                for (j = k + 1; j < n; ++j) a[i * n + j] -= l * a[k * n + j];
+            }
+        }
+    }
+    return GEN_RT_OK;
+}
+
+RT_ALWAYS_INLINE int rt_lu_solve(int n, const gen_rt_real *lu, const int *piv, int nrhs,
+                                gen_rt_real *b)
+{
+    int i, j, k;
+    if (n < 0 || nrhs < 0) return GEN_RT_ERR_BAD_ARG;
+    if (n == 0 || nrhs == 0) return GEN_RT_OK;
+    if (!lu || !piv || !b) return GEN_RT_ERR_NULL;
+    for (k = 0; k < n; ++k) {
+        int p = piv[k];
+        if (p != k) {
+            for (j = 0; j < nrhs; ++j) {
+                gen_rt_real tmp = b[k * nrhs + j];
+                b[k * nrhs + j] = b[p * nrhs + j];
+                b[p * nrhs + j] = tmp;
+            }
+        }
+    }
+    for (i = 0; i < n; ++i) {           /* forward: unit lower */
+        for (k = 0; k < i; ++k) {
+            gen_rt_real l = lu[i * n + k];
+            if (l != 0) {
+                for (j = 0; j < nrhs; ++j) b[i * nrhs + j] -= l * b[k * nrhs + j];
+            }
+        }
+    }
+    for (i = n - 1; i >= 0; --i) {      /* backward: upper */
+        for (k = i + 1; k < n; ++k) {
+            gen_rt_real uik = lu[i * n + k];
+            if (uik != 0) {
+                for (j = 0; j < nrhs; ++j) b[i * nrhs + j] -= uik * b[k * nrhs + j];
+            }
+        }
+        for (j = 0; j < nrhs; ++j) b[i * nrhs + j] /= lu[i * n + i];
+    }
+    return GEN_RT_OK;
+}
+
+/* a^T x = b from P a = L U: U^T y = b, L^T c = y (unit diagonal), x = P^T c */
+RT_ALWAYS_INLINE int rt_lu_solve_t(int n, const gen_rt_real *lu, const int *piv, int nrhs,
+                                  gen_rt_real *b)
+{
+    int i, j, k;
+    if (n < 0 || nrhs < 0) return GEN_RT_ERR_BAD_ARG;
+    if (n == 0 || nrhs == 0) return GEN_RT_OK;
+    if (!lu || !piv || !b) return GEN_RT_ERR_NULL;
+    for (j = 0; j < nrhs; ++j) {
+        for (i = 0; i < n; ++i) {
+            gen_rt_real s = b[i * nrhs + j];
+            for (k = 0; k < i; ++k) s -= lu[k * n + i] * b[k * nrhs + j];
+            b[i * nrhs + j] = s / lu[i * n + i];
+        }
+        for (i = n - 1; i >= 0; --i) {
+            gen_rt_real s = b[i * nrhs + j];
+            for (k = i + 1; k < n; ++k) s -= lu[k * n + i] * b[k * nrhs + j];
+            b[i * nrhs + j] = s;
+        }
+        for (k = n - 1; k >= 0; --k)
+            if (piv[k] != k) {
+                gen_rt_real tmp = b[k * nrhs + j];
+                b[k * nrhs + j] = b[piv[k] * nrhs + j];
+                b[piv[k] * nrhs + j] = tmp;
+            }
+    }
+    return GEN_RT_OK;
+}
 
 /* ---- the KKT matrix (gen_rt_dynamics.c) -------------------------------
  * K ((n + m) x (n + m), row-major) = [M, -A^T; A, 0], M n x n, A m x n:

@@ -8,6 +8,8 @@ and the cffi cdef of the functions. Read by the casadi backend
 it; it imports no later stage of the pipeline."""
 from __future__ import annotations
 
+from .templating import template_env
+
 __all__ = ["NAMES", "STEP_METHODS", "MODES", "function_specs", "derivative_kernels",
            "kernel_context", "library_context", "cdef"]
 
@@ -298,5 +300,4 @@ def cdef(specs):
     their declarations as <name>_casadi.h has them (the same macro,
     templates/casadi/casadi_decl.j2), with casadi_real = double and
     casadi_int = long long."""
-    from .render import template_env
     return template_env().get_template("casadi/casadi.cdef.j2").render(cs_functions=specs)

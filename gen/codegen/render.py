@@ -18,7 +18,6 @@ A product's library renders through the same call: its face's ProductPlan
 """
 from __future__ import annotations
 
-import functools
 import os
 import shutil
 import tempfile
@@ -26,17 +25,16 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import jinja2
 
 from .._version import __version__
 from .abi import interface
+from .templating import fmt_real, template_env
 from .backends import C_TEMPLATES, RUNTIME_SOURCES, get_backend
-from ..core.cache import cache_dir
 from ..core.errors import ModelError
 from ..plan.ir import DERIVATIVE_KERNELS, plan as make_plan
 from ..intake.model import require_model
 from ..sym.printers import kernel_statements, print_kernel_body
-from ..core.resources import csrc_file, templates_dir
+from ..core.resources import csrc_file
 from ..plan.ldlt import demand_order, ldlt_statements, ldlt_work_index, ldlt_program
 
 __all__ = ["Rendered", "render", "render_files", "generate", "write_atomic", "template_env",
@@ -92,53 +90,6 @@ class Rendered:
     derivatives: bool = True
     timings: dict = field(default_factory=dict)
     includes: tuple = ()
-
-
-class _BytecodeCache(jinja2.FileSystemBytecodeCache):
-    """Jinja's compiled templates in the build cache (parsing and compiling
-    them is most of the first render in a process); a cache that cannot be
-    written is skipped, never an error."""
-
-    def load_bytecode(self, bucket):
-        try:
-            super().load_bytecode(bucket)
-        except (OSError, ValueError, EOFError):
-            bucket.reset()
-
-    def dump_bytecode(self, bucket):
-        try:
-            os.makedirs(self.directory, exist_ok=True)
-            super().dump_bytecode(bucket)
-        except OSError:
-            pass
-
-
-def _bytecode_cache():
-    import hashlib
-    import sys
-    key = hashlib.sha256(f"{__version__}\0{jinja2.__version__}\0{sys.version}\0xml-escaped"
-                         .encode())
-    return _BytecodeCache(str(cache_dir() / f"templates_{key.hexdigest()[:16]}"))
-
-
-@functools.lru_cache(maxsize=None)
-def _env(root):
-    return jinja2.Environment(
-        loader=jinja2.FileSystemLoader(root),
-        trim_blocks=True, lstrip_blocks=True, keep_trailing_newline=True,
-        undefined=jinja2.StrictUndefined, autoescape=_xml,
-        bytecode_cache=_bytecode_cache())
-
-
-def _xml(name):
-    """XML templates (the FMU's) escape every value (& < > " '); C does not."""
-    return bool(name) and name.endswith(".xml.j2")
-
-
-def template_env():
-    """The Jinja2 environment of templates/ (SymForce's settings: strict
-    undefined, trailing newlines kept; no autoescape but in *.xml.j2)."""
-    return _env(str(templates_dir()))
 
 
 # a right-hand-side kernel of at least this many statements is compiled
@@ -218,13 +169,6 @@ def _symbol_map(model, kernels):
         for s, _ in k.assignments:
             sm_[s] = s.name
     return sm_
-
-
-def fmt_real(v, real):
-    s = repr(float(v))
-    if "e" not in s and "." not in s and "inf" not in s and "nan" not in s:
-        s += ".0"
-    return s + ("F" if real == "float" else "")
 
 
 def _field_default(f, real):

@@ -24,10 +24,11 @@ The derivatives, found by CasADi by name in the same library: jac_<f>,
 fwd1_<f>, adj1_<f> (every input: x, xdot, r, p, t, h) and their Jacobians
 jac_jac_<f>, jac_fwd1_<f>, jac_adj1_<f> (the second derivatives CasADi
 forms exact Hessians from), computed by the runtime
-(csrc/derivatives/gen_rt_deriv.c: the second-order adjoint of the
+(csrc/derivatives/gen_rt_deriv_inline.h: the second-order adjoint of the
 equations x' solves; the runtime's RK4 differentiated stage by stage for
-step, its RODAS4 step for step_rodas4) over kernels generated from the
-model's expressions (gen/codegen/casadi_kernels.py derivative_kernels).
+step, its RODAS4 step for step_rodas4; compiled into the library with the
+model's sizes as constants) over kernels generated from the model's
+expressions (gen/codegen/casadi_kernels.py derivative_kernels).
 step of a constrained model has no derivatives (its projection has none).
 The externals are loaded with enable_forward=False: forward products
 through jac_<f> (one Jacobian, not one per seed column). functions(model,

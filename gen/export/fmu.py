@@ -50,7 +50,8 @@ from ..core.errors import BuildError, MissingDependencyError, ModelError
 from ..core.optional import require
 from ..plan.ir import plan as make_plan
 from ..intake.model import require_model
-from ..codegen.render import Rendered, mode_for_umask, render, template_env
+from ..codegen.render import Rendered, mode_for_umask, render
+from ..codegen.templating import template_env
 from ..core.resources import csrc_dir
 
 __all__ = ["export_fmu", "describe", "fmi_headers", "platform_folder", "FmuDescription",

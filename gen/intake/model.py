@@ -37,6 +37,7 @@ validated Model.
 from __future__ import annotations
 
 import hashlib
+import re
 from dataclasses import dataclass, field
 
 import sympy as sm
@@ -52,6 +53,60 @@ from .lagrange import lagrange_equations
 from .matrices import matrices_equations
 from .system import (CONSTRUCTORS, builder_of, is_pydy_system, kane_of, lagrange_of,
                      recursive_model)
+
+
+def _size(fget, doc):
+    """A size of the model (nq, nu, ...) as a property with its doc."""
+    fget.__doc__ = doc
+    return property(fget, doc=doc)
+
+
+# the builders' shared parameters and result, written once: a docstring line
+# ".. shared:: name energy" stands for those blocks (shared_doc)
+SHARED_DOC = {
+    "name": """\
+name : str, optional
+    The model's name: the prefix of every C symbol (``[a-z][a-z0-9_]*``,
+    not a C keyword or a C library name).
+""",
+    "energy": """\
+energy : sympy expression, optional
+    The total energy, for diagnostics (``sim.energy``, the CSV).
+""",
+    "outputs": """\
+outputs : dict, optional
+    ``{name: expression}`` of quantities to measure (sensor readings,
+    point positions) in the coordinates, speeds, inputs, constants and t
+    (``sim.outputs``; ``linearize_outputs`` gives C and D).
+""",
+    "hybrid": """\
+hybrid : dict, optional
+    ``{name: gen.Impact(gap, ...) or gen.Reset(guard, map, ...)}``:
+    impacts and resets, run in C with the rest of the model; every jump
+    is logged in ``sol.events`` (``docs/guides/hybrid.md``).
+""",
+    "returns": """\
+Returns
+-------
+Model
+    The canonical model, validated.
+""",
+}
+
+
+def shared_doc(fn):
+    """fn with each ".. shared:: key ..." line of its docstring replaced by
+    the SHARED_DOC blocks of those keys, at the line's indentation."""
+    out = []
+    for line in (fn.__doc__ or "").splitlines():
+        m = re.fullmatch(r"(\s*)\.\. shared:: ([a-z ]+)", line)
+        if m is None:
+            out.append(line)
+            continue
+        for key in m.group(2).split():
+            out += [m.group(1) + row if row else row for row in SHARED_DOC[key].splitlines()]
+    fn.__doc__ = "\n".join(out)
+    return fn
 
 __all__ = ["Model", "validate_name", "c_name", "c_names", "require_model", "user_stacklevel"]
 
@@ -152,55 +207,21 @@ class Model:
             self.__dict__["_a"] = a
         return a
 
-    @property
-    def nq(self):
-        """Number of generalized coordinates q."""
-        return len(self.q)
-
-    @property
-    def nu(self):
-        """Number of generalized speeds u."""
-        return len(self.u)
-
-    @property
-    def nx(self):
-        """Size of the state x = [q, u]."""
-        return self.nq + self.nu
-
-    @property
-    def ny(self):
-        """Number of outputs."""
-        return self.y.shape[0]
-
-    @property
-    def na(self):
-        """Number of auxiliary speeds (= reaction forces)."""
-        return 0 if self.aux_F is None else self.aux_F.shape[0]
-
-    @property
-    def nr(self):
-        """Number of inputs r."""
-        return len(self.r)
-
-    @property
-    def np(self):
-        """Number of constants p."""
-        return len(self.p)
-
-    @property
-    def mc(self):
-        """Number of configuration constraints f_c(q) = 0 (dependent coordinates)."""
-        return self.fc.shape[0]
-
-    @property
-    def mv(self):
-        """Number of velocity constraints A u + b = 0 (multipliers)."""
-        return self.A.shape[0]
-
-    @property
-    def ns(self):
-        """Size of the independent state [q_ind, u_ind] (linearization)."""
-        return self.nq - self.mc + self.nu - self.mv
+    # sizes (C: <P>_NQ, ...), each one expression of the model's fields
+    nq = _size(lambda m: len(m.q), doc="Number of generalized coordinates q.")
+    nu = _size(lambda m: len(m.u), doc="Number of generalized speeds u.")
+    nx = _size(lambda m: m.nq + m.nu, doc="Size of the state x = [q, u].")
+    ny = _size(lambda m: m.y.shape[0], doc="Number of outputs.")
+    na = _size(lambda m: 0 if m.aux_F is None else m.aux_F.shape[0],
+               doc="Number of auxiliary speeds (= reaction forces).")
+    nr = _size(lambda m: len(m.r), doc="Number of inputs r.")
+    np = _size(lambda m: len(m.p), doc="Number of constants p.")
+    mc = _size(lambda m: m.fc.shape[0],
+               doc="Number of configuration constraints f_c(q) = 0 (dependent coordinates).")
+    mv = _size(lambda m: m.A.shape[0],
+               doc="Number of velocity constraints A u + b = 0 (multipliers).")
+    ns = _size(lambda m: m.nq - m.mc + m.nu - m.mv,
+               doc="Size of the independent state [q_ind, u_ind] (linearization).")
 
     @property
     def independent_state_names(self):
@@ -250,6 +271,7 @@ class Model:
 
     # ------------------------------------------------------------ builders
     @classmethod
+    @shared_doc
     def from_kanes(cls, km, constants=None, inputs=None, name="model",
                    energy=None, reactions=None, outputs=None, hybrid=None,
                    eliminate_reactions=True):
@@ -269,11 +291,7 @@ class Model:
             :class:`gen.UnusedConstantWarning`).
         inputs : list, optional
             Symbols or functions of time that are the inputs r, in this order.
-        name : str, optional
-            The model's name: the prefix of every C symbol (``[a-z][a-z0-9_]*``,
-            not a C keyword or a C library name).
-        energy : sympy expression, optional
-            The total energy, for diagnostics (``sim.energy``, the CSV).
+        .. shared:: name energy
         reactions : list, optional
             With ``u_auxiliary``: the unknown reaction forces (functions of time),
             in the order wanted; by default found in ``km.auxiliary_eqs`` and
@@ -299,19 +317,9 @@ class Model:
             coupled solve, ``model.aux_G``), eliminable or not: the same
             numbers, by another route (``bench/bench_reactions.py`` compares
             the two).
-        outputs : dict, optional
-            ``{name: expression}`` of quantities to measure (sensor readings,
-            point positions) in the coordinates, speeds, inputs, constants and t
-            (``sim.outputs``; ``linearize_outputs`` gives C and D).
-        hybrid : dict, optional
-            ``{name: gen.Impact(gap, ...) or gen.Reset(guard, map, ...)}``:
-            impacts and resets, run in C with the rest of the model; every jump
-            is logged in ``sol.events`` (``docs/guides/hybrid.md``).
+        .. shared:: outputs hybrid
 
-        Returns
-        -------
-        Model
-            The canonical model, validated.
+        .. shared:: returns
 
         Raises
         ------
@@ -328,6 +336,7 @@ class Model:
                       outputs=outputs, hybrid=hybrid)
 
     @classmethod
+    @shared_doc
     def from_lagrange(cls, lm, q_ind=None, qd_ind=None, q_dep=None, qd_dep=None,
                       constants=None, inputs=None, name="model", energy=None, outputs=None,
                       hybrid=None):
@@ -353,24 +362,9 @@ class Model:
             :class:`gen.UnusedConstantWarning`).
         inputs : list, optional
             Symbols or functions of time that are the inputs r, in this order.
-        name : str, optional
-            The model's name: the prefix of every C symbol (``[a-z][a-z0-9_]*``,
-            not a C keyword or a C library name).
-        energy : sympy expression, optional
-            The total energy, for diagnostics (``sim.energy``, the CSV).
-        outputs : dict, optional
-            ``{name: expression}`` of quantities to measure (sensor readings,
-            point positions) in the coordinates, speeds, inputs, constants and t
-            (``sim.outputs``; ``linearize_outputs`` gives C and D).
-        hybrid : dict, optional
-            ``{name: gen.Impact(gap, ...) or gen.Reset(guard, map, ...)}``:
-            impacts and resets, run in C with the rest of the model; every jump
-            is logged in ``sol.events`` (``docs/guides/hybrid.md``).
+        .. shared:: name energy outputs hybrid
 
-        Returns
-        -------
-        Model
-            The canonical model, validated.
+        .. shared:: returns
 
         Raises
         ------
@@ -388,6 +382,7 @@ class Model:
                       outputs=outputs, hybrid=hybrid)
 
     @classmethod
+    @shared_doc
     def from_system(cls, obj, constants=None, inputs=None, name="model", energy=None,
                     outputs=None, formulation="kane", hybrid=None, **partition):
         """Build from whatever holds formed equations of motion.
@@ -407,19 +402,7 @@ class Model:
         inputs : list, optional
             As for :meth:`from_kanes`; for a PyDy System, None takes its specified
             quantities.
-        name : str, optional
-            The model's name: the prefix of every C symbol (``[a-z][a-z0-9_]*``,
-            not a C keyword or a C library name).
-        energy : sympy expression, optional
-            The total energy, for diagnostics (``sim.energy``, the CSV).
-        outputs : dict, optional
-            ``{name: expression}`` of quantities to measure (sensor readings,
-            point positions) in the coordinates, speeds, inputs, constants and t
-            (``sim.outputs``; ``linearize_outputs`` gives C and D).
-        hybrid : dict, optional
-            ``{name: gen.Impact(gap, ...) or gen.Reset(guard, map, ...)}``:
-            impacts and resets, run in C with the rest of the model; every jump
-            is logged in ``sol.events`` (``docs/guides/hybrid.md``).
+        .. shared:: name energy outputs hybrid
         formulation : {"kane", "recursive", "crba"}, optional
             ``"kane"``: the equations the method formed (``form_eoms()`` first).
             ``"recursive"``: a sympy System's joint tree, its equations formed
@@ -438,10 +421,7 @@ class Model:
             of :meth:`from_kanes` for Kane models (reactions,
             eliminate_reactions).
 
-        Returns
-        -------
-        Model
-            The canonical model, validated.
+        .. shared:: returns
 
         Raises
         ------
@@ -558,6 +538,7 @@ class Model:
 
     # ---- from matrices (gen.pydy: PyDy's forms; any M, f and kinematics) ----
     @classmethod
+    @shared_doc
     def from_matrices(cls, mass_matrix, forcing, coordinates, speeds, kinematics,
                       constants=None, inputs=None, name="model", energy=None, outputs=None,
                       hybrid=None, _constraints=None):
@@ -586,10 +567,7 @@ class Model:
             ``(fc, A, b, nq_dep, nu_dep)``, the dependent coordinates and speeds
             last; not for users.
 
-        Returns
-        -------
-        Model
-            The canonical model, validated.
+        .. shared:: returns
 
         Raises
         ------

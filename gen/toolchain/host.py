@@ -63,7 +63,7 @@ def host_sources(real="double", hand_written=True, python=True):
     hand_written=False) the hand-written parts (csrc/host: the ensemble
     loop, and unless python=False the fast path of Simulator.rhs, which
     needs Python's and numpy's headers)."""
-    from ..codegen.render import template_env
+    from ..codegen.templating import template_env
     from ..core.resources import csrc_dir
     env = template_env()
     iface = host_interface(real)

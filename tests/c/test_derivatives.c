@@ -1,5 +1,5 @@
 /*
- * test_derivatives.c - csrc/derivatives (gen_rt_deriv.c, gen_rt_casadi.c)
+ * test_derivatives.c - csrc/derivatives (gen_rt_deriv_extern.c, gen_rt_casadi_extern.c)
  * and gen_rt_lu_solve_t, on a hand-written model with analytic kernels:
  *
  *   z = (q1, q2, u1, u2, r1, p1, p2, t), w = (q1', q2', u1', u2'[, lam])

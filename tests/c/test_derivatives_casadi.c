@@ -1,6 +1,6 @@
 /*
  * test_derivatives_casadi.c - gen_rt_cs_eval (csrc/derivatives/
- * gen_rt_casadi.c): a model's functions in CasADi's calling convention, on
+ * gen_rt_casadi_extern.c): a model's functions in CasADi's calling convention, on
  * the hand-written model of test_derivatives_model.h with stand-ins for
  * the model's C API (the right-hand side and its Jacobian from the
  * kernels, the runtime's RK4 for step_rk4, the outputs and the velocity
@@ -16,9 +16,14 @@
  *            (the Hessian blocks; the seed's = J_i^T);
  * NULL inputs are zeros, NULL outputs are not written, RODAS4 has no
  * second derivatives (BAD_ARG), and neither has a function whose model
- * has no second-derivative kernel.
+ * has no second-derivative kernel. And gen_rt_cs_eval_inline over the
+ * models as a CasADi library holds them (static const, one function of
+ * their own each) gives every function's every output and status bit for
+ * bit as gen_rt_cs_eval.
  */
 #include "test_derivatives_model.h"
+
+#include "gen_rt_casadi_inline.h"
 
 #define NOUT 48
 #define OUTLEN 128
@@ -334,12 +339,70 @@ static void test_nulls(int mv)
     }
 }
 
+/* the models as a CasADi library holds them (templates/casadi): static
+ * const, evaluated through gen_rt_cs_eval_inline in a function of their
+ * own, where the compiler sees their sizes and kernels as constants */
+static const gen_rt_cs_model CONST_MODELS[2] = {
+    {2, 2, NR, NP, 0, 0, NY, 1, {NX, NZ, NX, r0_a, rz_a, rh_a}, y1, c1, yh, ch, api_rhs,
+     api_step, api_jacobian, api_outputs, 0, 0},
+    {2, 2, NR, NP, 0, 1, NY, 1, {NX, NZ, NX + 1, r0_b, rz_b, rh_b}, y1, c1, yh, ch, api_rhs,
+     api_step, api_jacobian, api_outputs, 0, api_vc}};
+static real WORK2[GEN_RT_CS_WORK(NX, NR, NP, 0, 1, NY) + 16];
+
+static int eval_const_a(const gen_rt_cs_fn *f, const real **arg, real **res)
+{
+    int iwork[GEN_RT_CS_IWORK(NX, NR, NP, 0)];
+    return gen_rt_cs_eval_inline(&CONST_MODELS[0], f, arg, res, WORK2, iwork);
+}
+
+static int eval_const_b(const gen_rt_cs_fn *f, const real **arg, real **res)
+{
+    int iwork[GEN_RT_CS_IWORK(NX, NR, NP, 1)];
+    return gen_rt_cs_eval_inline(&CONST_MODELS[1], f, arg, res, WORK2, iwork);
+}
+
+/* every mode of a function: the same status and outputs, bit for bit */
+static void test_inline(int mv, int base)
+{
+    static real out2[NOUT][OUTLEN];
+    const gen_rt_cs_model m = model_of(mv);
+    const fdesc d = describe(base, mv);
+    const real *arg[2 * GEN_RT_CS_MAX_IN + 2];
+    real *res2[NOUT], v[16], seed[16];
+    gen_rt_cs_fn f;
+    int k, mode, st;
+    test_lcg g = {(unsigned long)(300 + 10 * mv + base)};
+    for (k = 0; k < d.nv; ++k) v[k] = (real)test_lcg_uniform(&g);
+    for (k = 0; k < 16; ++k) seed[k] = (real)test_lcg_uniform(&g);
+    if (base == GEN_RT_CS_STEP || base == GEN_RT_CS_STEP_RODAS4) v[NZ] = GEN_RT_C(0.05);
+    CUR = &MODELS[mv];
+    f.base = base; f.nin = d.nin;
+    for (k = 0; k < d.nin; ++k) f.in[k] = d.in[k];
+    for (mode = GEN_RT_CS_VALUE; mode <= GEN_RT_CS_JAC_ADJ; ++mode) {
+        st = call(&m, &d, mode, v, seed);
+        for (k = 0; k < d.nin; ++k) {
+            arg[k] = v + d.off[k];
+            arg[d.nin + 1 + k] = seed + d.off[k];
+        }
+        arg[d.nin] = 0;
+        if (mode == GEN_RT_CS_ADJ || mode == GEN_RT_CS_JAC_ADJ) arg[d.nin + 1] = seed;
+        for (k = 0; k < NOUT; ++k) res2[k] = out2[k];
+        memcpy(out2, OUT, sizeof OUT);  /* what a call does not write stays equal */
+        f.mode = mode;
+        CHECK_INT((mv ? eval_const_b : eval_const_a)(&f, arg, res2), st);
+        CHECK(memcmp(out2, OUT, sizeof OUT) == 0);
+    }
+}
+
 int main(void)
 {
     int mv, base;
     for (mv = 0; mv <= 1; ++mv) {
         for (base = GEN_RT_CS_RHS; base <= GEN_RT_CS_CONSTRAINTS; ++base)
-            if (base != GEN_RT_CS_CONSTRAINTS || mv) test_function(mv, base);
+            if (base != GEN_RT_CS_CONSTRAINTS || mv) {
+                test_function(mv, base);
+                test_inline(mv, base);
+            }
         test_nulls(mv);
     }
     TEST_END();

@@ -178,6 +178,16 @@ static void write_file(const char *path, const char *text)
     fclose(f);
 }
 
+
+/* the first line of a CSV into header (hsize bytes), cut short when longer */
+static void copy_header(char *header, size_t hsize, const char *line)
+{
+    size_t k = strlen(line);
+    if (k >= hsize) k = hsize - 1;
+    memcpy(header, line, k);
+    header[k] = '\0';
+}
+
 /* a CSV written by the program: its header line and up to max_rows x 16 numbers */
 static int read_back(const char *path, char *header, size_t hsize, double *v, int max_rows,
                      int *cols)
@@ -188,8 +198,7 @@ static int read_back(const char *path, char *header, size_t hsize, double *v, in
     if (!f) return -1;
     if (!fgets(line, sizeof line, f)) { fclose(f); return -1; }
     line[strcspn(line, "\n")] = '\0';
-    strncpy(header, line, hsize - 1);
-    header[hsize - 1] = '\0';
+    copy_header(header, hsize, line);
     while (n < max_rows && fgets(line, sizeof line, f)) {
         char *s = line, *end;
         int c = 0;
@@ -216,8 +225,7 @@ static int read_events(const char *path, char *header, size_t hsize, double *v, 
     if (!f) return -1;
     if (!fgets(line, sizeof line, f)) { fclose(f); return -1; }
     line[strcspn(line, "\n")] = '\0';
-    strncpy(header, line, hsize - 1);
-    header[hsize - 1] = '\0';
+    copy_header(header, hsize, line);
     while (n < max_rows && fgets(line, sizeof line, f))
         if (sscanf(line, "q,%lf,%lf,%lf", &v[16 * n], &v[16 * n + 1], &v[16 * n + 2]) == 3) ++n;
     fclose(f);

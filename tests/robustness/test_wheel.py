@@ -74,7 +74,7 @@ def test_every_product_runs_from_the_installed_wheel(wheel, tmp_path):
     # the command line: a standalone binary from a model file
     exe = Path(_run([env_dir / "bin" / "eomgen", "build", str(HERE / "model_file.py"), "-o",
                      str(tmp_path / "spring")], cwd=work, env=env).split()[-1])
-    csv = _run([exe, "--t-end", "3.141592653589793", "--dt", "0.001", "--x0", "1,0"],
+    csv = _run([exe, "--t-end", "1.5707963267948966", "--dt", "0.001", "--x0", "1,0"],
                cwd=work)
     last = np.array(csv.strip().splitlines()[-1].split(","), dtype=float)
-    assert abs(last[1] + 1.0) < 1e-9, last        # half a period of q'' = -4 q: q = -1
+    assert abs(last[1] + 1.0) < 1e-9, last        # q'' = -4 q has period pi: q(pi/2) = -1

@@ -197,3 +197,34 @@ def test_no_module_level_state_changed_outside_a_lock():
         for line, name in _mutations(tree, _module_containers(tree)):
             bad.append(f"gen/{path.relative_to(GEN)}:{line} {name}")
     assert bad == []
+
+
+def test_no_import_circle_between_modules():
+    """No circle of imports between gen's modules, at any depth (an import
+    inside a function counts: it ties the modules as much as one at the
+    top); `from pkg import name` names pkg's module, or pkg.name where that
+    is a module."""
+    modules = _modules()
+    edges = {}
+    for module, path in modules.items():
+        targets = set()
+        for target, names in _imports(module, path):
+            for name in names:
+                sub = f"{target}.{name}" if target else name
+                targets.add(sub if sub in modules else target)
+        edges[module] = sorted(t for t in targets if t in modules and t != module)
+    circles, state = [], {}
+
+    def visit(m, trail):
+        state[m] = "open"
+        for t in edges[m]:
+            if state.get(t) == "open":
+                circles.append(" -> ".join(trail[trail.index(t):] + [t]))
+            elif t not in state:
+                visit(t, trail + [t])
+        state[m] = "done"
+
+    for m in sorted(modules):
+        if m not in state:
+            visit(m, [m])
+    assert circles == []

@@ -32,10 +32,9 @@ and one line in BACKENDS below.
 from __future__ import annotations
 
 from ...core.errors import ModelError
-from .base import (C_FLAGS, C_LIN_FLAGS, CXX_FLAGS, CXX_STRICT_FLAGS, DERIVATIVE_FLAGS,
-                   DERIVATIVE_HEADERS, DERIVATIVE_SOURCES, LIB_SUFFIX, RUNTIME_FLAGS,
-                   RUNTIME_HEADERS, RUNTIME_MAIN, RUNTIME_SOURCES, STRICT_FLAGS, Backend,
-                   ProductBackend, c_compiler, cxx_compiler)
+from .base import (C_FLAGS, C_LIN_FLAGS, CXX_FLAGS, CXX_STRICT_FLAGS, DERIVATIVE_HEADERS,
+                   LIB_SUFFIX, RUNTIME_FLAGS, RUNTIME_HEADERS, RUNTIME_MAIN, RUNTIME_SOURCES,
+                   STRICT_FLAGS, Backend, ProductBackend, c_compiler, cxx_compiler)
 from .c import C_TEMPLATES, CBackend
 from .casadi import CasadiBackend
 from .eigen import CXX_RESERVED, EIGEN_RUNTIME_HEADERS, EigenBackend, eigen_include_dir
@@ -48,8 +47,7 @@ __all__ = ["Backend", "CBackend", "EigenBackend", "FmuBackend", "CasadiBackend",
            "backend_names", "c_compiler", "cxx_compiler", "eigen_include_dir", "C_TEMPLATES",
            "RUNTIME_SOURCES", "RUNTIME_HEADERS", "RUNTIME_MAIN", "EIGEN_RUNTIME_HEADERS", "C_FLAGS",
            "C_LIN_FLAGS", "RUNTIME_FLAGS", "STRICT_FLAGS", "CXX_FLAGS", "CXX_STRICT_FLAGS",
-           "LIB_SUFFIX", "CXX_RESERVED", "DERIVATIVE_SOURCES", "DERIVATIVE_HEADERS",
-           "DERIVATIVE_FLAGS"]
+           "LIB_SUFFIX", "CXX_RESERVED", "DERIVATIVE_HEADERS"]
 
 
 #: the registry: every backend, by name

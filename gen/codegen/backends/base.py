@@ -13,8 +13,7 @@ from ...sym.printers import ModelCPrinter
 
 __all__ = ["Backend", "ProductBackend", "c_compiler", "cxx_compiler", "RUNTIME_SOURCES",
            "RUNTIME_HEADERS", "RUNTIME_MAIN", "C_FLAGS", "C_LIN_FLAGS", "RUNTIME_FLAGS",
-           "STRICT_FLAGS", "CXX_FLAGS", "CXX_STRICT_FLAGS", "LIB_SUFFIX", "DERIVATIVE_SOURCES",
-           "DERIVATIVE_HEADERS", "DERIVATIVE_FLAGS"]
+           "STRICT_FLAGS", "CXX_FLAGS", "CXX_STRICT_FLAGS", "LIB_SUFFIX", "DERIVATIVE_HEADERS"]
 
 # ------------------------------------------------------------ the runtime
 # the C runtime every C-backend model links (csrc/)
@@ -25,14 +24,14 @@ RUNTIME_SOURCES = ["gen_rt_status.c", "gen_rt_linalg.c", "gen_rt_dynamics.c",
 RUNTIME_HEADERS = ["gen_rt.h", "gen_rt_status.h", "gen_rt_dopri5.h", "gen_rt_rodas4.h", "gen_rt_expm.h",
                    "gen_rt_sens.h", "gen_rt_ldlt.h", "gen_rt_private.h"]
 # the derivative algorithms over a model's kernels and CasADi's calling
-# convention over them (csrc/derivatives): the CasADi library's
-DERIVATIVE_SOURCES = ["gen_rt_deriv.c", "gen_rt_casadi.c"]
-DERIVATIVE_HEADERS = ["gen_rt_deriv.h", "gen_rt_casadi.h"]
-# added for them (compiled with each library): clang's loop strength
-# reduction over gen_rt_deriv.c's unrolled loop nests took 1.2 s of CPU per
-# library, 0.5 s without unrolling, for the same per-call times (cart-pole
-# jac_ of step 1.1-1.2 us, jac_adj1_ 4.2-4.4 us, jac_jac_ 13.4-14.5 us)
-DERIVATIVE_FLAGS = ["-fno-unroll-loops"]
+# convention over them (csrc/derivatives), as the CasADi library holds them:
+# headers of static inline functions (*_inline.h) that its own file compiles
+# with its model as a constant (the sizes unrolled, the kernels called
+# directly); gen_rt_deriv_extern.c and gen_rt_casadi_extern.c, the same functions with the
+# model a run-time value, are the C runtime's (CMake, tests/c), not the
+# library's
+DERIVATIVE_HEADERS = ["gen_rt_deriv.h", "gen_rt_casadi.h", "gen_rt_deriv_inline.h",
+                      "gen_rt_casadi_inline.h"]
 # the standalone simulator's runtime (main.c's program: the project's binary
 # only, never a library's)
 RUNTIME_MAIN = ["gen_rt_main.c", "gen_rt_main.h"]

@@ -1,12 +1,13 @@
 """The CasADi backend: the C model as CasADi external functions, the
 derivative algorithms of csrc/derivatives and CasADi's calling convention
-over them (gen.casadi)."""
+over them, compiled into the library's own file for its model
+(gen.casadi)."""
 from __future__ import annotations
 
 import copy
 
-from .base import (C_FLAGS, C_LIN_FLAGS, DERIVATIVE_FLAGS, DERIVATIVE_HEADERS,
-                   DERIVATIVE_SOURCES, RUNTIME_FLAGS, RUNTIME_HEADERS, RUNTIME_SOURCES, c_compiler)
+from .base import (C_FLAGS, C_LIN_FLAGS, DERIVATIVE_HEADERS, RUNTIME_HEADERS, RUNTIME_SOURCES,
+                   c_compiler)
 from .c import C_TEMPLATES, CBackend
 
 __all__ = ["CASADI_TEMPLATES", "CasadiBackend"]
@@ -20,10 +21,11 @@ CASADI_TEMPLATES = [t for t in C_TEMPLATES if t[2] != "project" and t[0] != "{na
 
 class CasadiBackend(CBackend):
     """The C model as CasADi external functions (gen/export/casadi.py): the C
-    backend's model and runtime, the derivative algorithms and CasADi's
-    calling convention over them (csrc/derivatives: DERIVATIVE_SOURCES)
-    and {name}_casadi.c, the functions' metadata and the wiring of the
-    model's kernels and API to the runtime; one shared library for
+    backend's model and runtime, and {name}_casadi.c, the functions'
+    metadata and the wiring of the model's kernels and API to the runtime's
+    derivative algorithms and CasADi's calling convention over them
+    (csrc/derivatives: DERIVATIVE_HEADERS, static inline functions the file
+    compiles with its model as a constant); one shared library for
     casadi.external, always with the derivative kernels. variant() gives
     the backend of a library without the second-derivative functions
     (gen.casadi.functions(model, hessians=False)) or the RODAS4 step."""
@@ -33,8 +35,7 @@ class CasadiBackend(CBackend):
     #: step_rodas4 (unconstrained models), whose first derivatives need the rhs Hessians
     rodas4 = True
     templates = tuple(CASADI_TEMPLATES)
-    runtime_files = tuple(RUNTIME_SOURCES + RUNTIME_HEADERS + DERIVATIVE_SOURCES
-                          + DERIVATIVE_HEADERS)
+    runtime_files = tuple(RUNTIME_SOURCES + RUNTIME_HEADERS + DERIVATIVE_HEADERS)
     lazy_derivatives = False
     loadable = False
     project = False
@@ -55,18 +56,12 @@ class CasadiBackend(CBackend):
                                self.rodas4)
 
     def cache_parts(self):
-        return [*super().cache_parts(),
-                f"backend={self.name}\0{' '.join([*RUNTIME_FLAGS, *DERIVATIVE_FLAGS])}"]
+        return [*super().cache_parts(), f"backend={self.name}"]
 
     def units(self, name, files, derivatives, includes=()):
         cc = c_compiler()
         own = [(f"{name}_lin.c", C_LIN_FLAGS)] if derivatives else [(f"{name}_lin_stub.c", ())]
-        own += [(f"{name}_kernels.c", ()), (f"{name}.c", ()), (f"{name}_casadi.c", ())]
-        # the derivative runtime: compiled with the library (its objects are
-        # not among the shared runtime's), hidden like the runtime's
-        return [(f, cc, [*C_FLAGS, "-fPIC", *extra]) for f, extra in own] + \
-            [(f, cc, [*RUNTIME_FLAGS, *DERIVATIVE_FLAGS]) for f in DERIVATIVE_SOURCES]
-
-    def diagnose(self, name, units):
-        cc, flags, files = super().diagnose(name, units)
-        return cc, flags, [*files, *DERIVATIVE_SOURCES]
+        # {name}_casadi.c: the derivative algorithms compiled for the model
+        # (the runtime's gen_rt_*_inline.h), the largest unit
+        own = [(f"{name}_casadi.c", ())] + own + [(f"{name}_kernels.c", ()), (f"{name}.c", ())]
+        return [(f, cc, [*C_FLAGS, "-fPIC", *extra]) for f, extra in own]

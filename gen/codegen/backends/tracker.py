@@ -9,6 +9,7 @@ import numpy as np
 from ...core.errors import BuildError
 from .base import ProductBackend
 from ..product_abi import CConst, CFunction, ProductInterface
+from ..templating import fmt_real
 
 class TrackerBackend(ProductBackend):
     """A trajectory tracker's C (gen.TrajectoryTracker.to_c,
@@ -45,7 +46,6 @@ class TrackerBackend(ProductBackend):
         return [("{name}.h", "tracker/tracker.h.j2", "product"), *self.templates]
 
     def names(self, plan, real):
-        from ..render import fmt_real
         d = plan.data
         fp = d["footprint"]
         table = ", ".join(f"{k} {fp[k]}" for k in ("K", "x_ref", "r_ref", "bounds") if fp[k])
@@ -57,7 +57,6 @@ class TrackerBackend(ProductBackend):
 
     def context(self, plan, iface, real):
         """The tables as rows of C literals (an infinite bound as HUGE_VAL)."""
-        from ..render import fmt_real
         d = plan.data
         huge = "HUGE_VALF" if real == "float" else "HUGE_VAL"
 

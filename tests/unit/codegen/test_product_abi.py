@@ -6,7 +6,8 @@ import pytest
 
 from gen.codegen.backends import get_backend
 from gen.codegen.product_abi import CFunction, bind_text
-from gen.codegen.render import product_cdef, template_env
+from gen.codegen.render import product_cdef
+from gen.codegen.templating import template_env
 
 
 def test_bind_replaces_the_placeholders_only():
