@@ -496,7 +496,7 @@ class Model:
         from .robots import load_urdf
         robot = load_urdf(source, base=base, constants=constants, mimic=mimic,
                           gravity=gravity, inputs=inputs)
-        return robot.model(formulation=formulation, name=name, hybrid=hybrid)
+        return cls.from_system(robot.system, **robot.model_options(formulation, name, hybrid))
 
     @classmethod
     def from_mjcf(cls, source, formulation="recursive", constants="numeric", name=None,
@@ -534,7 +534,7 @@ class Model:
         """
         from .robots import load_mjcf
         robot = load_mjcf(source, constants=constants, gravity=gravity, inputs=inputs)
-        return robot.model(formulation=formulation, name=name, hybrid=hybrid)
+        return cls.from_system(robot.system, **robot.model_options(formulation, name, hybrid))
 
     # ---- from matrices (gen.pydy: PyDy's forms; any M, f and kinematics) ----
     @classmethod

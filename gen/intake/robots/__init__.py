@@ -3,7 +3,8 @@
 ``gen.Model`` (``gen.Model.from_urdf``, ``gen.Model.from_mjcf``).
 
     robot = gen.load_urdf("ur5.urdf")                 # a gen.Robot: robot.system, ...
-    model = robot.model()                             # = gen.Model.from_urdf("ur5.urdf")
+    model = gen.Model.from_system(robot.system, **robot.model_options())
+                                                      # = gen.Model.from_urdf("ur5.urdf")
 
 Modules: :mod:`.description` (the format-free description, its checks and
 bodies), :mod:`.urdf` (yourdfpy), :mod:`.mjcf` (MuJoCo's compiler),

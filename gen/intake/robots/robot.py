@@ -130,8 +130,11 @@ class Robot:
             out[f"{j}_upper"] = Impact(_num(hi) - q, restitution)
         return out
 
-    def model(self, formulation="recursive", name=None, hybrid=None, **options):
-        """The gen.Model of :attr:`system` (``Model.from_system``).
+    def model_options(self, formulation="recursive", name=None, hybrid=None):
+        """The keywords of ``gen.Model.from_system(robot.system, **options)``
+        that build this robot's model (what ``gen.Model.from_urdf`` and
+        ``from_mjcf`` do): its constants, inputs, name, formulation and
+        impacts.
 
         Parameters
         ----------
@@ -143,10 +146,7 @@ class Robot:
         hybrid : None, "limits" or dict
             ``"limits"``: :meth:`limit_impacts`; a dict of ``gen.Impact`` /
             ``gen.Reset`` as for any model.
-        **options
-            Further keywords of ``Model.from_system`` (outputs, energy).
         """
-        from ..model import Model
         if isinstance(hybrid, str):
             if hybrid != "limits":
                 raise ModelError(f"hybrid={hybrid!r}: accepted are None, 'limits' or a dict "
@@ -156,9 +156,8 @@ class Robot:
                 raise ModelError("hybrid='limits': the robot has no limited joint")
         if formulation == "kane" and self.system.eom_method is None:
             self.system.form_eoms()
-        return Model.from_system(self.system, constants=dict(self.constants),
-                                 inputs=list(self.inputs), name=name or self.name,
-                                 formulation=formulation, hybrid=hybrid, **options)
+        return {"constants": dict(self.constants), "inputs": list(self.inputs),
+                "name": name or self.name, "formulation": formulation, "hybrid": hybrid}
 
 
 def _model_name(name):
