@@ -80,6 +80,55 @@ def peak_rss_kb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 
 
+def kept_worker(model, what, n, rows):
+    """Issue 47, memory by what is kept: one fresh process, warmed with a
+    short run, then one simulate(final_only=True) of `rows` rows (what =
+    "simulate") or one ensemble(reduce="final") of n such runs on every
+    core ("ensemble"); its peak RSS growth (VmHWM) and the peak of its
+    Python allocations (tracemalloc: numpy's arrays included)."""
+    import tracemalloc
+    import numpy as np
+    import gen
+    sim, X0, P = setup(model, n)
+    t_end = (rows - 1) * DT
+    final = gen.RunOptions(final_only=True)
+    if what == "simulate":
+        def run():
+            return sim.simulate(X0[0], t_end, DT, p=P[0], options=final)
+    else:
+        def run():
+            return sim.ensemble(X0, t_end, DT, p=P, reduce="final", progress=False)
+    sim.simulate(X0[0], 10 * DT, DT, p=P[0], options=final)
+    sim.ensemble(X0[:2], 10 * DT, DT, p=P[:2], reduce="final", progress=False)
+    base = peak_rss_kb()
+    tracemalloc.start()
+    t0 = time.perf_counter()
+    run()
+    seconds = time.perf_counter() - t0
+    traced = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    return {"what": what, "n": n, "rows": rows, "rss_growth_kb": peak_rss_kb() - base,
+            "peak_rss_kb": peak_rss_kb(),
+            "traced_peak_bytes": traced, "seconds": seconds}
+
+
+def kept(model, n, rows):
+    """kept_worker's two cases in fresh processes, printed as a table row."""
+    res = {}
+    for what in ("simulate", "ensemble"):
+        cmd = [sys.executable, __file__, "--kept-worker", model, what, str(n), str(rows)]
+        p = subprocess.run(cmd, capture_output=True, text=True, check=True)
+        res[what] = json.loads(p.stdout.strip().splitlines()[-1])
+    s, e = res["simulate"], res["ensemble"]
+    print(f"memory by what is kept, {rows} rows a run: simulate(final_only=True) 1 run: "
+          f"+{s['rss_growth_kb']} kB RSS, {s['traced_peak_bytes']} B traced; "
+          f"ensemble(reduce='final') {n} runs on {os.cpu_count()} cores: "
+          f"+{e['rss_growth_kb']} kB RSS, {e['traced_peak_bytes']} B traced "
+          f"({e['traced_peak_bytes'] / s['traced_peak_bytes'] / os.cpu_count():.2f}x per "
+          f"worker), {e['seconds']:.0f} s", flush=True)
+    return res
+
+
 def fresh(model, n, save=None):
     """rss_worker in a fresh process."""
     cmd = [sys.executable, __file__, "--rss-worker", model, str(n)] + ([save] if save else [])
@@ -93,7 +142,20 @@ def main():
     ap.add_argument("--model", default="kane", choices=["kane", "lagrange"])
     ap.add_argument("--json", default=None)
     ap.add_argument("--rss-worker", nargs="+", help=argparse.SUPPRESS)
+    ap.add_argument("--kept", nargs=2, type=int, metavar=("N", "ROWS"),
+                    help="only the memory of ensemble(reduce='final') of N runs of ROWS rows "
+                    "against one simulate(final_only=True) (issue 47: 1000 100000)")
+    ap.add_argument("--kept-worker", nargs=4, help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.kept_worker:
+        w = args.kept_worker
+        print(json.dumps(kept_worker(w[0], w[1], int(w[2]), int(w[3]))))
+        return
+    if args.kept:
+        res = kept(args.model, *args.kept)
+        if args.json:
+            Path(args.json).write_text(json.dumps(res, indent=1))
+        return
     if args.rss_worker:
         w = args.rss_worker
         print(json.dumps(rss_worker(w[0], int(w[1]), w[2] if len(w) > 2 else None)))

@@ -35,6 +35,7 @@ from .export.fmu import export_fmu  # noqa: E402
 from .sim.ensemble import At, EnsembleResult, Final, Max, Mean, Min, Sampler  # noqa: E402
 from .intake.hybrid import Impact, Reset  # noqa: E402
 from .design.ocp import OptimalControl, OptimalSolution  # noqa: E402
+from .design.mpc import MPC  # noqa: E402
 from .intake.robots import Robot, load_mjcf, load_urdf  # noqa: E402
 
 __all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "RunOptions",
@@ -42,7 +43,7 @@ __all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "Ru
            "ModelError", "BuildError", "InputError", "MissingDependencyError",
            "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "UnusedInputWarning", "MasslessSpeedWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
            "TrajectoryTracker", "export_fmu", "Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult",
-           "Impact", "Reset", "OptimalControl", "OptimalSolution", "Robot", "load_urdf",
+           "Impact", "Reset", "OptimalControl", "OptimalSolution", "MPC", "Robot", "load_urdf",
            "load_mjcf", "__version__"]
 
 

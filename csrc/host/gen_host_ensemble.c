@@ -1,12 +1,15 @@
 /*
  * gen_host_ensemble.c - many simulations of one model in one call, each
  * through the model's plugin table exactly as one sim.simulate call makes
- * it (simulate, or simulate_input with a table, a feedback), then reduced
+ * it (simulate, or simulate_input with a table, a feedback, or for a hybrid
+ * model simulate_events with its hybrid work), then reduced
  * into the caller's arrays (gen_host_ensemble.h). The options' cancel flag
  * (Ctrl-C, gen/sim/interrupt.py) is read before each run and, inside a run, by
  * the runtime before each step. Hand-written; compiled
  * into eomgen's Python host module after its declarations.
  */
+
+#include <string.h>
 
 /* the status of a run not made because the caller cancelled the call
  * (sim_options.cancel set): the runtime's GEN_RT_ERR_CANCELLED */
@@ -97,8 +100,9 @@ int eomgen_ensemble_run(const eomgen_api *api, const eomgen_ensemble *e)
 {
     const int nx = api->nx;
     eomgen_sim_options opts = *e->opts;
-    eomgen_input in;
+    eomgen_input in, in_zero;
     int i, k, q, failed = 0, capacity;
+    memset(&in_zero, 0, sizeof in_zero);    /* the inputs' struct zero-filled: r = NULL, zero */
     opts.final_only = e->final_only ? 1 : opts.final_only;
     /* the rows simulate writes (the runtime's count, gen_rt_simulate_rows_kept) */
     capacity = api->simulate_rows_kept(e->rows, opts.every, opts.final_only);
@@ -130,7 +134,16 @@ int eomgen_ensemble_run(const eomgen_api *api, const eomgen_ensemble *e)
         if (e->consistent)
             st = api->consistent_state(e->t0, p, 0, 0, e->x_start);
         if (!st) {
-            if (e->input) {
+            if (e->events) {
+                /* hybrid={...}: the engine's jumps need its events struct
+                 * (simulate and simulate_input refuse a hybrid model) */
+                if (e->input) in = *e->input;
+                else in = in_zero;
+                if (r) in.r = r;
+                st = api->simulate_events(e->x_start, e->t0, e->t_end, e->dt, &in, e->events,
+                                          p, &opts, capacity, e->t_buf, e->x_buf, NULL,
+                                          e->r_buf, s);
+            } else if (e->input) {
                 in = *e->input;
                 if (r) in.r = r;
                 st = api->simulate_input(e->x_start, e->t0, e->t_end, e->dt, &in, p, &opts,

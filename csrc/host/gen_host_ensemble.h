@@ -34,6 +34,12 @@ typedef struct {
     const eomgen_real *r;     /* constant inputs (the base of in), run i at r + i * r_stride; NULL: zero or in's */
     int r_stride;
     const eomgen_input *input; /* NULL: constant inputs (simulate); else simulate_input with it, its r replaced by run i's */
+    /* a hybrid model (hybrid={...}): its events struct (no user events, no
+     * log needed: capacity 0) with the engine's hybrid work; every run is
+     * then simulate_events with the inputs (input, or a zero-filled one with
+     * run i's r), as sim.simulate makes it: the same impacts, resets and
+     * contacts, the same bits. NULL for a model without declarations */
+    const eomgen_events *events;
     const eomgen_sim_options *opts;
     eomgen_real t0, t_end, dt;
     int rows;                 /* output rows of a full run (simulate_rows) */

@@ -662,9 +662,11 @@ static void write_events(const gen_rt_main_model *m, const gen_rt_main_args *a, 
         FILE *f = ev_out ? ev_out : stderr;
         const char *sep = ev_out ? "," : " t=";
         int w = log_which[k];
-        /* hybrid jumps are the log's entries n_ev + j (declaration j) and
-         * n_ev + nh + j (lift-off of contact j) */
-        const char *suffix = w >= a->n_ev + m->nh ? ".liftoff" : "";
+        /* hybrid jumps are the log's entries n_ev + j (declaration j),
+         * n_ev + nh + j (lift-off of contact j) and n_ev + 2 nh + j
+         * (contact j held from then on) */
+        const char *suffix = w >= a->n_ev + GEN_RT_HYBRID_LOG_HOLD * m->nh ? ".hold"
+                             : w >= a->n_ev + m->nh ? ".liftoff" : "";
         const char *name = w < a->n_ev ? event_name(m, a->ev_which[w])
                          : m->hybrid_names[(w - a->n_ev) % (m->nh > 0 ? m->nh : 1)];
         fprintf(f, "%s%s%s%s%.17g", ev_out ? "" : "event ", name, suffix, sep,
@@ -684,6 +686,38 @@ static void write_events(const gen_rt_main_model *m, const gen_rt_main_args *a, 
     }
 }
 
+/* a run that a hybrid declaration stopped (its log's last entry k: the
+ * start refused, or a jump whose map is not finite or violates the
+ * constraints): the declaration, its value or the map's entries */
+static void hybrid_failure(const gen_rt_main_model *m, const gen_rt_main_args *a,
+                           const gen_rt_main_run *rn, int st, int k, void *work)
+{
+    int j = rn->log_which[k] - a->n_ev, i, reset;
+    const char *what;
+    double t = gen_rt_main_get(m, rn->log_t, k);
+    if (j < 0 || j >= m->nh) return;
+    reset = m->hybrid_kinds && m->hybrid_kinds[j] == GEN_RT_HYBRID_RESET;
+    what = reset ? "reset" : "impact";
+    if (st == GEN_RT_ERR_PENETRATED && m->eval_hybrid &&
+        !m->eval_hybrid(t, (const char *)rn->log_x + (long)k * m->nx * m->real_size, rn->p,
+                        work)) {
+        double g = gen_rt_main_get(m, work, j);
+        fprintf(stderr, "%s_sim: the run starts inside the %s of %s '%s': its %s is %.12g at "
+                "t = %.17g, %s zero, the side its %s (refused: ERR_PENETRATED)\n", m->name,
+                reset ? "guard region" : "contact", what, m->hybrid_names[j],
+                reset ? "guard" : "gap", g, t, g < 0 ? "below" : "above",
+                reset ? "crossing fires into" : "impact closes onto");
+        return;
+    }
+    if (st == GEN_RT_ERR_PENETRATED) return;
+    fprintf(stderr, "%s_sim: at %s '%s', t = %.17g: the state after it:", m->name, what,
+            m->hybrid_names[j], t);
+    for (i = 0; i < m->nx; ++i)
+        fprintf(stderr, " %s=%.17g", m->state_names[i],
+                gen_rt_main_get(m, rn->log_x_after, (long)k * m->nx + i));
+    fprintf(stderr, "\n");
+}
+
 /* the run and its CSV: the exit code */
 static int run(const gen_rt_main_model *m, const gen_rt_main_args *a, gen_rt_main_run *rn,
                int rows, FILE *out, FILE *ev_out)
@@ -693,7 +727,7 @@ static int run(const gen_rt_main_model *m, const gen_rt_main_args *a, gen_rt_mai
     void *x_out = malloc((size_t)rows * (size_t)m->nx * (size_t)m->real_size);
     void *l_out = malloc((size_t)rows * (size_t)smv * (size_t)m->real_size);
     void *r_out = malloc((size_t)rows * (size_t)snr * (size_t)m->real_size);
-    void *work = reals(m, (long)(m->mc + m->na + m->ny) + 3);
+    void *work = reals(m, (long)(m->mc + m->na + m->ny + m->nh) + 3);
     gen_rt_main_stats stats;
     int failed = 0, st = 0, i;
     int varying = m->nr > 0 && (a->input_csv || a->gain_file || m->tracker);
@@ -737,6 +771,8 @@ static int run(const gen_rt_main_model *m, const gen_rt_main_args *a, gen_rt_mai
         }
         n_log = failed ? 0 : (stats.n_events < cap ? stats.n_events : cap);
         write_events(m, a, ev_out, n_log, log_which, log_t, log_x, log_xa);
+        if (st && m->nh > 0 && n_log > 0 && stats.n_events <= cap)
+            hybrid_failure(m, a, rn, st, n_log - 1, work);
         free(log_which); free(log_t); free(log_x); free(log_xa);
         if (ev_out) {
             if (fclose(ev_out) != 0) {

@@ -92,6 +92,10 @@ typedef struct {
      * jumps are events: the run always logs them */
     int nh;
     const char *const *hybrid_names;
+    const int *hybrid_kinds;            /* nh: GEN_RT_HYBRID_IMPACT or _RESET */
+    /* the gaps and guards at (t, x) (nh values; NULL when nh == 0): a refused
+     * start names its declaration's value */
+    int (*eval_hybrid)(double t, const void *x, const void *p, void *g);
 } gen_rt_main_model;
 
 /* The command line, parsed. The arrays hold the model's scalar type and

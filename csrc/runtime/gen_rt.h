@@ -68,7 +68,7 @@ typedef double gen_rt_real;
 #define GEN_RT_STATUS_ENUM_(name, value, text) GEN_RT_##name = (value),
 enum gen_rt_status { GEN_RT_STATUS_TABLE(GEN_RT_STATUS_ENUM_) GEN_RT_STATUS_END_ = 1 };
 #undef GEN_RT_STATUS_ENUM_
-#define GEN_RT_STATUS_MIN (-15)
+#define GEN_RT_STATUS_MIN (-17)
 
 /* The integration methods, the table holds, the stack bound and the structs
  * of the public API (gen_rt_sim_options, gen_rt_sim_stats, gen_rt_input,
@@ -711,10 +711,11 @@ int gen_rt_model_linearize_discrete(const gen_rt_model *m, const gen_rt_real *x_
                 (nh) * ((nq) + (nu)) + (nq) + (nu) + 1)
 #define GEN_RT_HYBRID_FN_IWORK(nq, nu, mv, nh) ((nq) + GEN_RT_ACCEL_IWORK(nu, (mv) + (nh)))
 /* the engine's: the functions' and its own (values at three points, the
- * state before a jump; the active contacts and the closing set) */
+ * state before a jump; the active contacts, the closing set and the
+ * contacts held before a jump) */
 #define GEN_RT_HYBRID_WORK(nq, nu, mv, nh)                                       \
     (GEN_RT_HYBRID_FN_WORK(nq, nu, mv, nh) + 5 * (nh) + 2 * ((nq) + (nu)) + 8)
-#define GEN_RT_HYBRID_IWORK(nq, nu, mv, nh) (GEN_RT_HYBRID_FN_IWORK(nq, nu, mv, nh) + 2 * (nh) + 4)
+#define GEN_RT_HYBRID_IWORK(nq, nu, mv, nh) (GEN_RT_HYBRID_FN_IWORK(nq, nu, mv, nh) + 3 * (nh) + 4)
 /* a reset's map must meet the constraints to this (relative to the state) */
 #ifndef GEN_RT_HYBRID_RESET_TOL
 #ifdef GEN_RT_REAL_FLOAT
@@ -738,12 +739,16 @@ int gen_rt_hybrid_rates(const gen_rt_model *m, gen_rt_real t, const gen_rt_real 
                         const gen_rt_real *p, gen_rt_real *work, int *iwork,
                         gen_rt_real *gd);
 /* the impulse of the gaps rows[k] != 0 with restitutions e (nh): x's
- * speeds updated; impulse (nh, may be NULL) gets the gaps' impulses */
+ * speeds updated; impulse (nh, may be NULL) gets the gaps' impulses. When
+ * the solve's matrices (M, A, W, w) or its result are not finite
+ * (GEN_RT_ERR_NONFINITE_MODEL), x's speeds are the result, or NaN */
 int gen_rt_hybrid_impulse(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *p,
                           const int *rows, const gen_rt_real *e, gen_rt_real *work,
                           int *iwork, gen_rt_real *x, gen_rt_real *impulse);
 /* x <- the map of reset k, checked against the constraints
- * (GEN_RT_ERR_INCONSISTENT_RESET) and projected (pwork: the projection's) */
+ * (GEN_RT_ERR_INCONSISTENT_RESET) and projected (pwork: the projection's);
+ * a map that is not finite (GEN_RT_ERR_NONFINITE_MODEL) or violates the
+ * constraints is still written to x, so the caller can name its entries */
 int gen_rt_hybrid_reset(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *p, int k,
                         gen_rt_real proj_tol, int proj_max_iter, gen_rt_real *pwork,
                         gen_rt_real *work, gen_rt_real *x);
@@ -756,10 +761,36 @@ int gen_rt_hybrid_reset(const gen_rt_model *m, gen_rt_real t, const gen_rt_real 
  * *what = 0: a gap that is not closing (grazing), x unchanged. rows (nh
  * ints) and scratch (3 nh reals) are the caller's. */
 #define GEN_RT_HYBRID_LIFTOFF 3
+/* the log's entries of a jump (simulate_events; n user events, nh
+ * declarations): n + k the jump of declaration k (an impact or a reset),
+ * n + nh + k the lift-off of contact k, n + 2 nh + k contact k held from
+ * then on (after an impact, by the Zeno rule or e = 0) */
+#define GEN_RT_HYBRID_LOG_LIFTOFF 1
+#define GEN_RT_HYBRID_LOG_HOLD 2
 int gen_rt_hybrid_jump(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *r,
                        const gen_rt_real *p, int k, gen_rt_real proj_tol, int proj_max_iter,
                        gen_rt_real *pwork, int *active, int *rows, gen_rt_real *scratch,
                        gen_rt_real *work, int *iwork, gen_rt_real *x, int *what);
+/* the gaps and guards g (nh) at (t, x), every contact free: OK and nothing
+ * written for a model without declarations; GEN_RT_ERR_NONFINITE_MODEL
+ * when one is NaN or infinite */
+int gen_rt_model_eval_hybrid(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                             const gen_rt_real *p, gen_rt_real *g);
+/* A start at (t, x) on the wrong side of a declaration with a direction:
+ * a gap or guard past zero (by more than 1024 eps of the state's size) in
+ * the direction its crossing fires on (an impact's gap below zero when it
+ * closes downwards). GEN_RT_ERR_PENETRATED with *which = the first such
+ * declaration (its value g[*which]), else OK and *which = -1. g: nh. */
+int gen_rt_hybrid_penetrated(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                             const gen_rt_real *p, gen_rt_real *g, int *which);
+/* A step from (t0, x0) to (t1, x1) across a declaration: its gap or guard
+ * from strictly before zero to strictly past it in its direction (a step
+ * that ends on zero, or starts on or past it, is none).
+ * GEN_RT_ERR_GUARD_CROSSED with *which = the first such (g: its values at
+ * both ends, 2 nh), else OK and *which = -1. */
+int gen_rt_hybrid_crossed(const gen_rt_model *m, gen_rt_real t0, const gen_rt_real *x0,
+                          gen_rt_real t1, const gen_rt_real *x1, const gen_rt_real *p,
+                          gen_rt_real *g, int *which);
 
 #ifdef __cplusplus
 }

@@ -144,23 +144,78 @@ static int count_active_(const gen_rt_engine *e)
     return n;
 }
 
-/* the jump of hybrid declaration k at (t, e->xe) (gen_rt_hybrid_jump),
- * logged; *jumped = 0 when nothing happens (a gap that is not closing) */
-static int hybrid_jump_(gen_rt_engine *e, int k, gen_rt_real t, int *jumped)
+/* the log's entries of a jump of declaration k at t (what: gen_rt_hybrid_jump's)
+ * from e->xb to e->xe: the jump (or the lift-off), then each contact held
+ * from now on that was not before (held0) */
+static void log_jump_(gen_rt_engine *e, int k, gen_rt_real t, int what, const int *held0)
+{
+    int j;
+    log_event_(e, e->nev + (what == GEN_RT_HYBRID_LIFTOFF ? e->nh : 0) + k, t, e->xb, e->xe);
+    for (j = 0; j < e->nh; ++j)
+        if (e->active[j] && !held0[j])
+            log_event_(e, e->nev + GEN_RT_HYBRID_LOG_HOLD * e->nh + j, t, e->xe, e->xe);
+}
+
+/* the jump of hybrid declaration k at (t, e->xe) (gen_rt_hybrid_jump);
+ * *jumped = 0 when nothing happens (a gap that is not closing). Logged
+ * with logged = 1; with logged = 0 the caller logs (log_jump_). A jump
+ * that fails is logged with the map's state (NaN where it is not finite),
+ * for the caller's message. held0: nh ints, the last of the hybrid iwork
+ * (GEN_RT_HYBRID_IWORK), the contacts held before. */
+static int hybrid_jump_(gen_rt_engine *e, int k, gen_rt_real t, int logged, int *jumped)
 {
     gen_rt_sim_ctx *c = e->c;
     const gen_rt_real *r;
-    int st, what = 0;
+    int *held0 = e->rows + e->nh;
+    int st, what = 0, j;
     *jumped = 0;
     rt_copy(e->nx, e->xe, e->xb);
+    for (j = 0; j < e->nh; ++j) held0[j] = e->active[j];
     if ((st = gen_rt_input_now(c, t, e->xe, &r))) return st;
     st = gen_rt_hybrid_jump(c->m, t, r, c->p, k, c->proj_tol, c->proj_max_iter, c->work,
                             e->active, e->rows, e->hvi, e->hw, e->hiw, e->xe, &what);
-    if (st) return st;
+    if (st) {
+        log_event_(e, e->nev + k, t, e->xb, e->xe);
+        return st;
+    }
     if (!what) return GEN_RT_OK;
     c->n_active = count_active_(e);
-    log_event_(e, e->nev + (what == GEN_RT_HYBRID_LIFTOFF ? e->nh : 0) + k, t, e->xb, e->xe);
+    if (logged) log_jump_(e, k, t, what, held0);
     *jumped = 1;
+    return GEN_RT_OK;
+}
+
+int gen_rt_events_start(gen_rt_engine *e, gen_rt_real t0, gen_rt_real *x)
+{
+    gen_rt_sim_ctx *c = e->c;
+    gen_rt_real tol = 1;
+    int k, j, st, which, jumped = 0, changed = 0;
+    const int *held0 = e->rows + e->nh;
+    if (e->nh <= 0) return GEN_RT_OK;
+    st = gen_rt_hybrid_penetrated(c->m, t0, x, c->p, e->hva, &which);
+    if (st == GEN_RT_ERR_PENETRATED) log_event_(e, e->nev + which, t0, x, x);
+    if (st) return st;
+    if ((st = gen_rt_hybrid_rates(c->m, t0, x, c->p, e->hw, e->hiw, e->gd))) return st;
+    for (j = 0; j < e->nx; ++j) tol = rt_max(tol, rt_abs(x[j]));
+    tol *= 1024 * GEN_RT_EPS;
+    for (k = 0; k < e->nh; ++k) {
+        int d = e->hy->direction[k];
+        /* a gap at zero that closes, or rests there: the impact (and the
+         * contact held while it pushes) at t0 */
+        if (e->hy->kind[k] != GEN_RT_HYBRID_IMPACT || d == 0 || !(rt_abs(e->hva[k]) <= tol) ||
+            !((gen_rt_real)d * e->gd[k] >= 0))
+            continue;
+        rt_copy(e->nx, x, e->xe);
+        if ((st = hybrid_jump_(e, k, t0, 0, &jumped))) return st;
+        if (!jumped) break;
+        for (j = 0; j < e->nx; ++j) changed |= e->xe[j] != x[j];
+        for (j = 0; j < e->nh; ++j) changed |= e->active[j] && !held0[j];
+        if (changed) {     /* else a contact at rest whose force would pull: nothing */
+            log_jump_(e, k, t0, GEN_RT_HYBRID_IMPACT + 1, held0);
+            rt_copy(e->nx, e->xe, x);
+        }
+        break;
+    }
     return GEN_RT_OK;
 }
 
@@ -209,7 +264,7 @@ int gen_rt_events_step(gen_rt_engine *e, int *stop, int *jump, gen_rt_real *te)
         if (th_best < 1 && (st = gen_rt_engine_project(e, t_ev, e->xe))) return st;
         if (best >= e->nev) {
             int jumped = 0;
-            if ((st = hybrid_jump_(e, best - e->nev, t_ev, &jumped))) return st;
+            if ((st = hybrid_jump_(e, best - e->nev, t_ev, 1, &jumped))) return st;
             if (jumped) {
                 *jump = 1;
                 *te = t_ev;

@@ -150,7 +150,13 @@ int gen_rt_hybrid_impulse(const gen_rt_model *m, gen_rt_real t, const gen_rt_rea
         ++na;
     }
     st = kkt_(nu, mv + na, &L);
+    if (st == GEN_RT_ERR_NONFINITE_MODEL)
+        for (j = 0; j < nu; ++j) u[j] = (gen_rt_real)NAN; /* no impulse: not finite */
     if (st) return st;
+    if (!gen_rt_all_finite(nu, L.ud)) {
+        rt_copy(nu, L.ud, u);
+        return GEN_RT_ERR_NONFINITE_MODEL;
+    }
     rt_copy(nu, L.ud, u);
     if (impulse) {
         na = 0;
@@ -171,7 +177,10 @@ int gen_rt_hybrid_reset(const gen_rt_model *m, gen_rt_real t, const gen_rt_real 
     xr = work;  /* nres x nx */
     hy->reset(x, x + nq, p, t, xr);
     xr += (long)hy->reset_index[k] * nx;
-    if (!gen_rt_all_finite(nx, xr)) return GEN_RT_ERR_NONFINITE_MODEL;
+    if (!gen_rt_all_finite(nx, xr)) {
+        rt_copy(nx, xr, x);   /* the map as it came out: the caller names its entry */
+        return GEN_RT_ERR_NONFINITE_MODEL;
+    }
     /* the map must land on the constraints (to a tolerance loose enough for
      * a map written by hand): |f_c| and |A u + b| relative to the state */
     for (i = 0; i < nx; ++i) scale = rt_max(scale, rt_abs(xr[i]));
@@ -186,8 +195,8 @@ int gen_rt_hybrid_reset(const gen_rt_model *m, gen_rt_real t, const gen_rt_real 
         m->velocity_constraints(xr, xr + nq, p, t, fv);
         for (i = 0; i < mv; ++i) res = rt_max(res, rt_abs(fv[i]));
     }
+    rt_copy(nx, xr, x);   /* on failure too: the caller shows the map's state */
     if (!(res <= GEN_RT_HYBRID_RESET_TOL * scale)) return GEN_RT_ERR_INCONSISTENT_RESET;
-    rt_copy(nx, xr, x);
     if ((mc || mv) && pwork) {
         st = gen_rt_model_project(m, t, p, proj_tol, proj_max_iter, pwork, x);
         if (st) return GEN_RT_ERR_INCONSISTENT_RESET;
@@ -263,5 +272,73 @@ int gen_rt_hybrid_jump(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *
             if (active[j] && !(g[j] > 0)) active[j] = 0;
     }
     *what = GEN_RT_HYBRID_IMPACT + 1;
+    return GEN_RT_OK;
+}
+
+int gen_rt_model_eval_hybrid(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                             const gen_rt_real *p, gen_rt_real *g)
+{
+    const gen_rt_hybrid *hy = m->hybrid;
+    if (!hy || hy->n <= 0) return GEN_RT_OK;
+    hy->values(x, x + m->nq, p, t, g);
+    return gen_rt_all_finite(hy->n, g) ? GEN_RT_OK : GEN_RT_ERR_NONFINITE_MODEL;
+}
+
+/* the distance from zero within which a gap or guard counts as at zero:
+ * 1024 eps of the state's size (the engine's simultaneous impacts' rule) */
+static gen_rt_real zero_tol_(int nx, const gen_rt_real *x)
+{
+    gen_rt_real s = 1;
+    int i;
+    for (i = 0; i < nx; ++i) s = rt_max(s, rt_abs(x[i]));
+    return 1024 * GEN_RT_EPS * s;
+}
+
+/* 1 when a value v is past zero in direction dir (by more than tol): the
+ * side a crossing in dir leads into */
+static int past_(int dir, gen_rt_real v, gen_rt_real tol)
+{
+    return (dir < 0 && v < -tol) || (dir > 0 && v > tol);
+}
+
+int gen_rt_hybrid_penetrated(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                             const gen_rt_real *p, gen_rt_real *g, int *which)
+{
+    const gen_rt_hybrid *hy = m->hybrid;
+    gen_rt_real tol;
+    int k, st;
+    *which = -1;
+    if (!hy || hy->n <= 0) return GEN_RT_OK;
+    if ((st = gen_rt_model_eval_hybrid(m, t, x, p, g))) return st;
+    tol = zero_tol_(m->nq + m->nu, x);
+    for (k = 0; k < hy->n; ++k)
+        if (past_(hy->direction[k], g[k], tol)) {
+            *which = k;
+            return GEN_RT_ERR_PENETRATED;
+        }
+    return GEN_RT_OK;
+}
+
+int gen_rt_hybrid_crossed(const gen_rt_model *m, gen_rt_real t0, const gen_rt_real *x0,
+                          gen_rt_real t1, const gen_rt_real *x1, const gen_rt_real *p,
+                          gen_rt_real *g, int *which)
+{
+    const gen_rt_hybrid *hy = m->hybrid;
+    int nh, k, st;
+    *which = -1;
+    if (!hy || hy->n <= 0) return GEN_RT_OK;
+    nh = hy->n;
+    if ((st = gen_rt_model_eval_hybrid(m, t0, x0, p, g))) return st;
+    if ((st = gen_rt_model_eval_hybrid(m, t1, x1, p, g + nh))) return st;
+    for (k = 0; k < nh; ++k) {
+        int d = hy->direction[k];
+        gen_rt_real a = g[k], b = g[nh + k];
+        /* from strictly before to strictly past: a step that ends on the
+         * guard (a phase's last) or starts on or past it is no crossing */
+        if ((d <= 0 && a > 0 && b < 0) || (d >= 0 && a < 0 && b > 0)) {
+            *which = k;
+            return GEN_RT_ERR_GUARD_CROSSED;
+        }
+    }
     return GEN_RT_OK;
 }

@@ -338,6 +338,12 @@ GEN_RT_INTERNAL int gen_rt_engine_project(gen_rt_engine *e, gen_rt_real t, gen_r
 /* gen_rt_events.c: the events description checked (with a hybrid model's
  * work) */
 GEN_RT_INTERNAL int gen_rt_events_check(const gen_rt_model *m, const gen_rt_events *ev);
+/* the start of a run at (t0, x) of a hybrid model, before its first row:
+ * refused (GEN_RT_ERR_PENETRATED, logged as the declaration's event with
+ * x) when x is on the wrong side of a declaration (gen_rt_hybrid_penetrated);
+ * an impact whose gap is at zero and closing or at rest is made at t0
+ * (logged, x the state after it, the contacts it holds held) */
+GEN_RT_INTERNAL int gen_rt_events_start(gen_rt_engine *e, gen_rt_real t0, gen_rt_real *x);
 /* the events in the step just taken, in time order: logged, and *stop set
  * (with *te, e->xe) at the first terminal one; *jump set (with *te and the
  * state after in e->xe) at the first hybrid jump */

@@ -188,6 +188,7 @@ static int simulate_(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t
     out.dx = dx; out.lam = lam;
 #define FAIL_AT_(tf, xf) do { s->t_last = (tf); rt_copy(nx, (xf), s->x_last); return st; } while (0)
     if ((st = gen_rt_engine_project(&e, t0, x))) return st;
+    if ((st = gen_rt_events_start(&e, t0, x))) FAIL_AT_(t0, x);  /* hybrid={...} */
     if (in && in->period > 0 && (st = sample_(&e, t0, x))) FAIL_AT_(t0, x);
     if ((st = emit_row(&e, &out, 0, rows == 1, t0, x))) FAIL_AT_(t0, x);
     k = 1;

@@ -36,7 +36,14 @@
                                    "not determined at this state: the matrix of their " \
                                    "auxiliary equations is singular")                 \
     X(ERR_INCONSISTENT_RESET, -15, "a reset's map gives a state that violates the "     \
-                                   "model's constraints (hybrid={...}: gen.Reset)")
+                                   "model's constraints (hybrid={...}: gen.Reset)")         \
+    X(ERR_PENETRATED, -16, "the run starts on the wrong side of a hybrid declaration "   \
+                           "(hybrid={...}): an impact's gap past zero in its closing "   \
+                           "direction, or a reset's guard inside the region its "       \
+                           "direction fires on")                                        \
+    X(ERR_GUARD_CROSSED, -17, "a step crosses a hybrid guard in its direction: the "     \
+                              "function integrates one phase and never jumps (split the " \
+                              "trajectory at the guard: guard_<name>, map_<name>)")
 
 /* the message of a code outside the table */
 #define GEN_RT_STATUS_UNKNOWN "unknown status code"

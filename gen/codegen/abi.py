@@ -357,6 +357,10 @@ FUNCTIONS = (
     Function("eval_outputs", _params("t:scalar, x:in:NX, r:in?:NR=r, p:in?:NP=p, y:out:NY"),
              "The outputs y(q, u, r, t), NY (the model's outputs={...}); NY == 0: nothing "
              "written."),
+    # issue 46: the gaps and guards of hybrid={...} (a start's check names its value)
+    Function("eval_hybrid", _params("t:scalar, x:in:NX, p:in?:NP=p, g:out:NH"),
+             "The gaps and guards of the hybrid declarations (hybrid={...}) at (t, x), NH in "
+             "declaration order, every contact free; NH == 0: nothing written."),
     Function("linearize_outputs",
              _params("x_op:in:NX, r_op:in?:NR=r, p:in?:NP=p, t:scalar, A:out:NS*NS, B:out:NS*NR, "
                      "C:out:NY*NS, D:out:NY*NR"),
@@ -423,7 +427,7 @@ class Interface:
     name: str
     real: str
     method: str                     # "kane" or "lagrange"
-    sizes: dict                     # NQ, NU, NX, NR, NP, MC, MV, NS
+    sizes: dict                     # NQ, NU, NX, NR, NP, MC, MV, NS, NA, NY, NH
     state_names: list
     state_labels: list
     input_names: list
@@ -533,7 +537,8 @@ def interface(model, real="double", accel="lu"):
     """The Interface of a canonical model (gen.Model); accel: the Plan's."""
     m = model
     sizes = {"NQ": m.nq, "NU": m.nu, "NX": m.nx, "NR": m.nr, "NP": m.np, "MC": m.mc,
-             "MV": m.mv, "NS": m.ns, "NA": getattr(m, "na", 0), "NY": getattr(m, "ny", 0)}
+             "MV": m.mv, "NS": m.ns, "NA": getattr(m, "na", 0), "NY": getattr(m, "ny", 0),
+             "NH": len(getattr(m, "hybrid", None) or [])}
     return Interface(
         name=m.name, real=real, method=m.method, sizes=sizes,
         state_names=list(m.state_names), state_labels=list(m.state_labels),
@@ -556,7 +561,7 @@ def interface(model, real="double", accel="lu"):
 def host_interface(real="double"):
     """The Interface of the Python host module (gen.build): the shared
     description under the prefix "eomgen", for models of every size."""
-    sizes = {k: 0 for k in ("NQ", "NU", "NX", "NR", "NP", "MC", "MV", "NS", "NA", "NY")}
+    sizes = {k: 0 for k in ("NQ", "NU", "NX", "NR", "NP", "MC", "MV", "NS", "NA", "NY", "NH")}
     return Interface(
         name="eomgen", real=real, method="", sizes=sizes, state_names=[], state_labels=[],
         input_names=[], input_labels=[], constant_names=[], constant_labels=[],

@@ -8,13 +8,19 @@ and the cffi cdef of the functions. Read by the casadi backend
 it; it imports no later stage of the pipeline."""
 from __future__ import annotations
 
+from ..intake.hybrid import KIND_IMPACT
 from .templating import template_env
 
-__all__ = ["NAMES", "STEP_METHODS", "MODES", "function_specs", "derivative_kernels",
-           "kernel_context", "library_context", "cdef"]
+__all__ = ["NAMES", "HYBRID_PREFIXES", "STEP_METHODS", "MODES", "function_specs",
+           "hybrid_bases", "derivative_kernels", "hybrid_derivative_kernels", "kernel_context",
+           "library_context", "cdef"]
 
-#: the functions, in the order of the dict functions() returns
+#: the functions, in the order of the dict functions() returns (then, for a
+#: hybrid model, guard_<name> and map_<name> of each declaration in order)
 NAMES = ("rhs", "implicit", "step", "outputs", "constraints")
+
+#: the kinds of a hybrid model's functions (hybrid_bases): guard_<name>, map_<name>
+HYBRID_PREFIXES = ("guard_", "map_")
 
 #: the methods of step (functions(model, step=...)): the library symbol of
 #: each (<model>_<symbol>); "rodas4" for unconstrained models only
@@ -77,9 +83,11 @@ def _spec(p, base, prefix, ins, outs):
     function, mode, the base's inputs: the template's gen_rt_cs_fn)."""
     mode = MODES.get(prefix)
     name = prefix + base[0]
+    rt = base[3] if len(base) > 3 else base[0].upper()
     return {"sym": f"{prefix}{p}_{base[0]}", "kind": name, "name": name, "base": base[0],
             "mode": mode, "ins": ins, "outs": outs,
-            "c_fn": {"base": f"GEN_RT_CS_{base[0].upper()}",
+            "model": f"{p}_{base[4]}" if len(base) > 4 else f"{p}_cs", "phase": False,
+            "c_fn": {"base": f"GEN_RT_CS_{rt}",
                      "mode": f"GEN_RT_CS_{(mode or 'value').upper()}",
                      "ins": [f"GEN_RT_CS_{a.upper()}" for a, _, _ in base[1]]}}
 
@@ -88,7 +96,7 @@ def _first(p, base):
     """The value and its first derivatives: <f>, jac_<f> (the blocks
     jac_<out>_<in>), fwd1_<f> (J times a forward seed per input), adj1_<f>
     (J^T times the output's adjoint seed)."""
-    _, ins, outs = base
+    ins, outs = base[1], base[2]
     (yname, nrow), = outs
     nom = [(a, _dense(k, 1), 0) for a, k, _ in ins] + [(f"out_{yname}", _dense(nrow, 1), 0)]
     value = _spec(p, base, "", [(a, _dense(k, 1), d) for a, k, d in ins],
@@ -106,7 +114,7 @@ def _second(p, base, first):
     """The Jacobians of jac_, fwd1_ and adj1_ (their outputs w.r.t. their
     inputs; CasADi's names): the second derivatives CasADi's Hessians are
     built from. A block w.r.t. a nominal output is a structural zero."""
-    _, ins, outs = base
+    ins, outs = base[1], base[2]
     (yname, nrow), = outs
     nin = len(ins)
     jac, fwd, adj = first[1:]
@@ -152,8 +160,11 @@ def function_specs(model, hessians=True, rodas4=True):
     """
     m = model
     specs = []
-    for base in _bases(m, rodas4):
+    hybrid = bool(getattr(m, "hybrid", None))
+    for base in _bases(m, rodas4) + hybrid_bases(m):
         first = _first(m.name, base)
+        if hybrid and base[0] in STEP_METHODS.values():
+            first[0]["phase"] = True   # the value refuses a step across a guard
         if base[0] == "step" and (m.mc or m.mv):
             specs.append(first[0])  # the projection has no derivative kernels
             continue
@@ -161,6 +172,28 @@ def function_specs(model, hessians=True, rodas4=True):
         if hessians and base[0] != "step_rodas4":
             specs += _second(m.name, base, first)
     return specs
+
+
+def hybrid_bases(model):
+    """A hybrid model's functions of each declaration (hybrid={...}), as
+    _bases' entries with the runtime's base and the C model that computes
+    them (the template's gen_rt_cs_model of the declaration):
+
+    guard_<name>(x, p, t) -> g          the gap or guard (explicit: CONSTRAINTS
+                                        of a model whose one constraint it is)
+    map_<name>(x, p, t) -> x_after      a reset's map (explicit, CONSTRAINTS of
+                                        nx rows), or an impact's impulse map
+                                        (implicit: RHS of a model whose
+                                        equations are the impulse's)
+    """
+    m = model
+    x_, p_, t_ = ("x", m.nx, 0), ("p", m.np, "NAN" if m.np else 0), ("t", 1, 0)
+    out = []
+    for k, d in enumerate(getattr(m, "hybrid", None) or []):
+        out.append((f"guard_{d.name}", [x_, p_, t_], [("g", 1)], "CONSTRAINTS", f"cs_g{k}"))
+        out.append((f"map_{d.name}", [x_, p_, t_], [("x_after", m.nx)],
+                    "RHS" if d.kind == KIND_IMPACT else "CONSTRAINTS", f"cs_m{k}"))
+    return out
 
 
 # ----------------------------------------------------- the derivative kernels
@@ -198,7 +231,6 @@ every derivative from them.
     import sympy as sm
 
     from ..plan.ir import Arg, make_jacobian_kernel, make_kernel
-    from ..sym.graph import gradient
     m = model
     U = sm.Matrix(m.u)
     z = list(m.q) + list(m.u) + list(m.r) + list(m.p) + [m.t]
@@ -220,14 +252,7 @@ every derivative from them.
     ks["cs_wz"] = make_jacobian_kernel("cs_wz", zargs + [Aw], [], [("Rz", R, z)])
 
     def hess(name, F, args, wrt_extra=()):
-        """d2(mu^T F)/dz2 (and d(d(mu^T F)/d wrt_extra)/dz)."""
-        lam = list(args[-1].symbols)
-        L = sum((a * b for a, b in zip(lam, F)), sm.S.Zero)
-        g = gradient(L, set(z) | set(wrt_extra))
-        jacs = [("H", sm.Matrix([g.get(s, 0) for s in z]), z)]
-        if wrt_extra:
-            jacs.append(("W", sm.Matrix([g.get(s, 0) for s in wrt_extra]), z))
-        return make_jacobian_kernel(name, args, [], jacs)
+        return _hess(name, F, args, z, wrt_extra)
 
     keep_wh = hessians if rhs_hessian is None else rhs_hessian
     if keep_wh:
@@ -246,6 +271,90 @@ every derivative from them.
         ks["cs_c1"] = make_jacobian_kernel("cs_c1", zargs, [], [("J", c, z)])
         if hessians:
             ks["cs_ch"] = hess("cs_ch", c, zargs + [lc])
+    ks.update(hybrid_derivative_kernels(m, hessians))
+    return ks
+
+
+def _hess(name, F, args, z, wrt_extra=()):
+    """A kernel of d2(mu^T F)/dz2 (and d(d(mu^T F)/d wrt_extra)/dz), mu the
+    last argument's symbols."""
+    import sympy as sm
+
+    from ..plan.ir import make_jacobian_kernel
+    from ..sym.graph import gradient
+    lam = list(args[-1].symbols)
+    L = sum((a * b for a, b in zip(lam, F)), sm.S.Zero)
+    g = gradient(L, set(z) | set(wrt_extra))
+    jacs = [("H", sm.Matrix([g.get(s, 0) for s in z]), z)]
+    if wrt_extra:
+        jacs.append(("W", sm.Matrix([g.get(s, 0) for s in wrt_extra]), z))
+    return make_jacobian_kernel(name, args, [], jacs)
+
+
+def hybrid_derivative_kernels(model, hessians=True):
+    """The derivative kernels of a hybrid model's guard_ and map_ functions
+    (hybrid_bases), over the same z = (q, u, r, p, t), for declaration k:
+
+    cs_g<k>_1(z) -> J, cs_g<k>_h(z, mu) -> H      the gap or guard (explicit)
+    cs_m<k>_1(z) -> J, cs_m<k>_h(z, mu) -> H      a reset's map (explicit)
+    cs_m<k>_w0, _wz, _wh                          an impact's impulse map: the
+        implicit function x+ = (q+, u+) of the equations the runtime's impulse
+        solves (gen_rt_hybrid_impulse), linear in w = (q+, u+, mu, Lambda):
+            q+ - q = 0,   M u+ - A^T mu - W_k^T Lambda - M u = 0,
+            A u+ + b = 0,   W_k u+ + w_k + e_k (W_k u + w_k) = 0
+        (the gap's rate g' = W_k u + w_k, e_k its restitution), differentiated
+        by the runtime's implicit-function algorithms as x' is.
+    hessians=False leaves out the second-derivative kernels (_h, _wh)."""
+    import sympy as sm
+
+    from ..intake.hybrid import hybrid_kernels
+    from ..plan.ir import Arg, make_jacobian_kernel, make_kernel
+    m = model
+    decls = getattr(m, "hybrid", None) or []
+    if not decls:
+        return {}
+    z = list(m.q) + list(m.u) + list(m.r) + list(m.p) + [m.t]
+    zargs = [Arg("z", tuple(z))]
+    kern = {name: dict(outs) for name, _, outs in hybrid_kernels(m)}
+    W, w = kern["hybrid_jacobian"]["W"], kern["hybrid_jacobian"]["w"]
+    U = sm.Matrix(m.u)
+    ks = {}
+
+    def explicit(stem, F):
+        mu = Arg("mu", tuple(sm.Dummy(f"mu{i}") for i in range(F.shape[0])))
+        ks[stem + "_1"] = make_jacobian_kernel(stem + "_1", zargs, [], [("J", F, z)])
+        if hessians:
+            ks[stem + "_h"] = _hess(stem + "_h", F, zargs + [mu], z)
+
+    for k, d in enumerate(decls):
+        explicit(f"cs_g{k}", sm.Matrix([d.expr]))
+        if d.kind != KIND_IMPACT:
+            explicit(f"cs_m{k}", sm.Matrix(d.xmap))
+            continue
+        Qp = [sm.Dummy(f"qp{i}") for i in range(m.nq)]
+        Up = [sm.Dummy(f"up{i}") for i in range(m.nu)]
+        Mu = [sm.Dummy(f"ma{i}") for i in range(m.mv)]
+        Lam = sm.Dummy("lam")
+        wv = Qp + Up + Mu + [Lam]
+        Wk, wk, e = W[k, :], w[k], sm.Float(d.restitution)
+        Upm = sm.Matrix(Up)
+        R = sm.Matrix(Qp) - sm.Matrix(m.q)
+        R2 = m.M * Upm - Wk.T * Lam - m.M * U
+        if m.mv:
+            R2 -= m.A.T * sm.Matrix(Mu)
+        R = R.col_join(R2)
+        if m.mv:
+            R = R.col_join(m.A * Upm + m.b)
+        R = R.col_join(sm.Matrix([(Wk * Upm)[0] + wk + e * ((Wk * U)[0] + wk)]))
+        stem = f"cs_m{k}"
+        ks[stem + "_w0"] = make_kernel(stem + "_w0", zargs, [
+            ("Rw", R.jacobian(wv)), ("R0", R.xreplace({s: 0 for s in wv}))])
+        ks[stem + "_wz"] = make_jacobian_kernel(stem + "_wz", zargs + [Arg("ws", tuple(wv))],
+                                                [], [("Rz", R, z)])
+        if hessians:
+            mu = Arg("mu", tuple(sm.Dummy(f"mu{i}") for i in range(len(wv))))
+            ks[stem + "_wh"] = _hess(stem + "_wh", R, zargs + [Arg("ws", tuple(wv)), mu], z,
+                                     wv)
     return ks
 
 
@@ -282,6 +391,10 @@ def library_context(model, printer_for, hessians=True, rodas4=True):
 
     def name(c, there=True):
         return f"{m.name}_{c}" if there else "0"
+    events = _hybrid_models(m, have)
+    sizes = [(m.mc, m.mv, ny)] + [(e["mc"], e["mv"], 0) for e in events]
+    work = [f"GEN_RT_CS_WORK({m.nx}, {m.nr}, {m.np}, {a}, {b}, {c})" for a, b, c in sizes]
+    iwork = [f"GEN_RT_CS_IWORK({m.nx}, {m.nr}, {m.np}, {b})" for _, b, _ in sizes]
     return {
         "cs_functions": function_specs(m, hessians, rodas4),
         "cs_kernels": kernels,
@@ -291,8 +404,48 @@ def library_context(model, printer_for, hessians=True, rodas4=True):
                                                          "cs_c1", "cs_yh", "cs_ch")],
                "api": [name("eval_rhs"), name("step_rk4"), name("jacobian"),
                        name("eval_outputs", ny), name("eval_constraints", m.mc),
-                       name("eval_velocity_constraints", m.mv)]},
+                       name("eval_velocity_constraints", m.mv)],
+               # every function's work: the most any model below needs
+               "work": _max_of(work), "iwork": _max_of(iwork)},
+        "cs_hybrid": events,
     }
+
+
+def _max_of(terms):
+    """A C expression of the largest of terms (GEN_RT_MAX_)."""
+    out = terms[-1]
+    for t in reversed(terms[:-1]):
+        out = f"GEN_RT_MAX_({t}, {out})"
+    return out
+
+
+def _hybrid_models(model, have):
+    """The template's gen_rt_cs_model of each hybrid function (hybrid_bases):
+    its C name, sizes (mc, mv: the rows of a constraint-like function, the
+    impulse's extra multiplier), the deriv model's nw and kernels, the
+    explicit kernels and the value function; and what that value function
+    reads: the declaration k, a reset's block of the maps, an impact's
+    restitution (the runtime model's own)."""
+    m, p = model, model.name
+    out = []
+
+    def k_(name):
+        return f"{p}_{name}" if name in have else "0"
+    for k, d in enumerate(getattr(m, "hybrid", None) or []):
+        base = {"k": k, "d_kernels": ["0", "0", "0"], "nw": m.nx, "mc": 0, "mv": 0,
+                "c1": "0", "ch": "0", "constraints": "0", "rhs": "0"}
+        out.append(dict(base, name=f"{p}_cs_g{k}", what="guard", mc=1, c1=k_(f"cs_g{k}_1"),
+                        ch=k_(f"cs_g{k}_h"), constraints=f"{p}_cs_guard_{k}"))
+        if d.kind == KIND_IMPACT:
+            out.append(dict(base, name=f"{p}_cs_m{k}", what="impulse", mv=m.mv + 1,
+                            nw=m.nx + m.mv + 1, rhs=f"{p}_cs_impulse_{k}",
+                            d_kernels=[k_(f"cs_m{k}_{w}") for w in ("w0", "wz", "wh")]))
+        else:
+            ridx = sum(1 for e in m.hybrid[:k] if e.kind != KIND_IMPACT)
+            out.append(dict(base, name=f"{p}_cs_m{k}", what="reset", mc=m.nx, ridx=ridx,
+                            c1=k_(f"cs_m{k}_1"), ch=k_(f"cs_m{k}_h"),
+                            constraints=f"{p}_cs_reset_{k}"))
+    return out
 
 
 def cdef(specs):

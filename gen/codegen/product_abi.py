@@ -26,7 +26,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field, replace
 
-__all__ = ["CConst", "CEnum", "CField", "CStruct", "CFunction", "ProductInterface",
+__all__ = ["CConst", "CEnum", "CField", "CStruct", "CTypedef", "CFunction", "ProductInterface",
            "ProductPlan", "bind_text"]
 
 
@@ -68,10 +68,21 @@ class CField:
 
 @dataclass(frozen=True)
 class CStruct:
-    """A typedef'd struct."""
+    """A typedef'd struct; fields None: an opaque one (``typedef struct
+    name name;``: the library's header completes it, the cdef passes
+    pointers to it)."""
     name: str
     doc: str
-    fields: tuple
+    fields: tuple | None
+
+
+@dataclass(frozen=True)
+class CTypedef:
+    """A typedef other than a struct's: its name and its C declaration
+    (``double (*{name}_clock)(void *ctx)``)."""
+    name: str
+    decl: str
+    doc: str = ""
 
 
 @dataclass(frozen=True)
@@ -121,6 +132,7 @@ class ProductInterface:
     name: str = "{name}"
     includes: tuple = ()
     types_header: str | None = None
+    typedefs: tuple = ()
     enums: tuple = ()
     structs: tuple = ()
     macros: tuple = ()
@@ -133,9 +145,10 @@ class ProductInterface:
         return replace(
             self, name=b(self.name), doc=b(self.doc),
             includes=tuple(b(i) for i in self.includes),
+            typedefs=tuple(CTypedef(b(t.name), b(t.decl), b(t.doc)) for t in self.typedefs),
             enums=tuple(CEnum(b(e.doc), tuple(CConst(b(c.name), c.value, b(c.doc))
                                               for c in e.members)) for e in self.enums),
-            structs=tuple(CStruct(b(s.name), b(s.doc), tuple(
+            structs=tuple(CStruct(b(s.name), b(s.doc), None if s.fields is None else tuple(
                 CField(b(f.name), b(f.ctype), b(f.doc)) for f in s.fields))
                 for s in self.structs),
             macros=tuple(CConst(b(c.name), b(str(c.value)), b(c.doc)) for c in self.macros),
@@ -177,8 +190,11 @@ class ProductPlan:
     values its interface is bound with ({p}: the model's prefix, ...);
     kernels: gen.plan.ir Kernel objects (printed by the backend's printer as
     static functions <name>_<kernel name>); data: plain values for its
-    templates and its backend's context."""
+    templates and its backend's context; files: sources rendered by another
+    backend that the library compiles with its own ({file name: text}: a
+    model's C sources, for a product that calls the model)."""
     name: str
     names: dict = field(default_factory=dict)
     kernels: list = field(default_factory=list)
     data: dict = field(default_factory=dict)
+    files: dict = field(default_factory=dict)

@@ -388,8 +388,9 @@ def _product_kernel(kernel, backend, real):
 
 
 def _render_product(plan, b, real, timings):
-    """A product's files: its templates and its interface's headers over
-    the plan's data, its printed kernels and its backend's context, and its
+    """A product's files: the plan's files (another backend's, such as the
+    model's sources), its templates and its interface's headers over the
+    plan's data, its printed kernels and its backend's context, and its
     runtime files (b: a ProductBackend)."""
     t0 = time.perf_counter()
     iface = b.interface.bind(**b.names(plan, real))
@@ -398,8 +399,9 @@ def _render_product(plan, b, real, timings):
     t1 = time.perf_counter()
     ctx.update(b.context(plan, iface, real))
     env = template_env()
-    files = {fname.format(name=plan.name): env.get_template(tname).render(**ctx)
-             for fname, tname, _ in b.file_templates(iface)}
+    files = dict(plan.files)
+    files.update({fname.format(name=plan.name): env.get_template(tname).render(**ctx)
+                  for fname, tname, _ in b.file_templates(iface)})
     for src in b.runtime_files:
         files[Path(src).name] = csrc_file(src).read_text()
     timings["printing"] = t1 - t0

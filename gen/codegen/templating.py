@@ -4,12 +4,13 @@ module, the FMU) shares, below them all."""
 from __future__ import annotations
 
 import functools
+import hashlib
 import os
 
 import jinja2
 
 from .._version import __version__
-from ..core.cache import cache_dir
+from ..core.cache import cache_dir, shipped
 from ..core.resources import templates_dir
 
 __all__ = ["template_env", "fmt_real"]
@@ -20,8 +21,22 @@ class _BytecodeCache(jinja2.FileSystemBytecodeCache):
     them is most of the first render in a process); a cache that cannot be
     written is skipped, never an error."""
 
+    def __init__(self, directory, shipped=None):
+        super().__init__(directory)
+        self.shipped = shipped          # the same, built at install time (read only)
+
+    def get_cache_key(self, name, filename=None):
+        # by the template's name, not its path: the one built at install time
+        # was compiled from the checkout (a changed source is still
+        # recompiled: the bucket checks its checksum)
+        return hashlib.sha1(name.encode("utf-8")).hexdigest()
+
     def load_bytecode(self, bucket):
         try:
+            if self.shipped is not None and not os.path.exists(self._get_cache_filename(bucket)):
+                with open(os.path.join(self.shipped, self.pattern % bucket.key), "rb") as f:
+                    bucket.load_bytecode(f)
+                return
             super().load_bytecode(bucket)
         except (OSError, ValueError, EOFError):
             bucket.reset()
@@ -35,11 +50,12 @@ class _BytecodeCache(jinja2.FileSystemBytecodeCache):
 
 
 def _bytecode_cache():
-    import hashlib
     import sys
     key = hashlib.sha256(f"{__version__}\0{jinja2.__version__}\0{sys.version}\0xml-escaped"
-                         .encode())
-    return _BytecodeCache(str(cache_dir() / f"templates_{key.hexdigest()[:16]}"))
+                         "\0by-name".encode())
+    name = f"templates_{key.hexdigest()[:16]}"
+    pre = shipped(name)                         # built at install time (gen.core.cache)
+    return _BytecodeCache(str(cache_dir() / name), None if pre is None else str(pre))
 
 
 @functools.lru_cache(maxsize=None)

@@ -31,7 +31,22 @@ from pathlib import Path
 from .errors import BuildError
 
 __all__ = ["cache_dir", "cache_error", "clean_stale", "new_build_dir", "make_temp", "publish",
-           "write_marker", "find_entry_file", "cache_info", "clear_cache", "STALE_SECONDS"]
+           "write_marker", "find_entry_file", "cache_info", "clear_cache", "STALE_SECONDS",
+           "PREBUILT", "shipped"]
+
+
+# the package's folder of the entries every model shares (the host module,
+# the runtime's objects, the compiled templates), built at install time by
+# gen/toolchain/prebuilt.py; read only
+PREBUILT = Path(__file__).resolve().parents[1] / "_prebuilt"
+
+
+def shipped(name: str):
+    """The folder of the cache entry `name` built at install time (its
+    folder under the very name the cache would give it: the same key), or
+    None."""
+    folder = PREBUILT / name
+    return folder if folder.is_dir() else None
 
 
 def cache_dir() -> Path:

@@ -79,6 +79,8 @@ EXCEPTIONS = {
     "ERR_CANCELLED": KeyboardInterrupt,   # Ctrl-C (gen/sim/interrupt.py)
     "ERR_SINGULAR_REACTIONS": SingularError,
     "ERR_INCONSISTENT_RESET": SolverError,
+    "ERR_PENETRATED": InputError,         # a start inside a contact (hybrid={...})
+    "ERR_GUARD_CROSSED": SolverError,     # a CasADi step across a guard
 }
 
 

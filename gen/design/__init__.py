@@ -1,2 +1,2 @@
 """Products that design with the model: optimal control by direct collocation,
-trajectory tracking."""
+trajectory tracking, model predictive control."""

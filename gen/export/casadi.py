@@ -19,6 +19,19 @@ the model's, ``<model>_rhs``; the dict's keys are the short names):
                                                  name <p>_step_rodas4, first derivatives)
     outputs(x, r, p, t) -> y                     <p>_eval_outputs (models with outputs)
     constraints(x, p, t) -> c                    [f_c(q); f_v(q, u)] (constrained models)
+    guard_<name>(x, p, t) -> g                   a hybrid model's (hybrid={...}) gap or
+                                                 guard of declaration <name>, as the
+                                                 simulator's events see it
+    map_<name>(x, p, t) -> x_after               its jump: a Reset's map, or an Impact's
+                                                 impulse (the runtime's impulse solve with
+                                                 this gap alone, its restitution)
+
+step of a hybrid model integrates one phase and never jumps: a step that
+starts strictly before a guard and ends strictly past it, in the
+declaration's direction, is refused (ERR_GUARD_CROSSED: gen.SolverError
+naming the declaration and its values at x and x_next); one that ends on
+the guard, a phase's last, is computed. A multi-phase problem ends each
+phase on guard_<name>(x_N) = 0 and starts the next from map_<name>(x_N).
 
 The derivatives, found by CasADi by name in the same library: jac_<f>,
 fwd1_<f>, adj1_<f> (every input: x, xdot, r, p, t, h) and their Jacobians
@@ -48,9 +61,10 @@ from __future__ import annotations
 import threading
 
 from ..codegen.backends import get_backend
-from ..codegen.casadi_kernels import NAMES, STEP_METHODS, cdef, function_specs
+from ..codegen.casadi_kernels import NAMES, STEP_METHODS, cdef, function_specs, hybrid_bases
 from ..core.errors import MissingDependencyError, ModelError
 from ..core.optional import require
+from ..intake.hybrid import KIND_RESET
 from ..intake.model import require_model
 from ..pipeline import build_product
 
@@ -201,7 +215,7 @@ def _library_status(F, keep):
         res[i] = ffi.cast("double *", o.ctypes.data)
     w = ffi.new("double[]", max(1, sz[3]))
     iw = ffi.new("long long[]", max(1, sz[2]))
-    return getattr(lib, spec["sym"])(arg, res, iw, w, 0)
+    return getattr(lib, spec["sym"])(arg, res, iw, w, 0), outs
 
 
 def _explain(F, args, kwargs, err):
@@ -218,7 +232,7 @@ def _explain(F, args, kwargs, err):
         return                      # symbolic or odd arguments: CasADi's error stands
     _input_error(F, model, arrays, err)
     keep = [np.ascontiguousarray(v if v is not None else np.zeros(k)) for _, k, v in arrays]
-    st = _library_status(F, keep)
+    st, outs = _library_status(F, keep)
     if st == 0:
         return
     name = status_name(st)
@@ -228,11 +242,33 @@ def _explain(F, args, kwargs, err):
                    if n in ("x", "t", "h"))
     cls = EXCEPTIONS.get(name, SolverError)
     msg = f"{F.name()}({', '.join(names)}) failed with {name}: {status_message(st)} (at {at})"
+    if name == "ERR_GUARD_CROSSED":
+        msg += _crossed(F, dict(zip(names, keep)), outs[0])
     try:
         exc = cls(msg, status=st, status_name=name)
     except TypeError:           # an error class without a status (InputError)
         exc = cls(msg)
     raise exc from err
+
+
+def _crossed(F, args, x_next):
+    """Which guards a refused step crossed: each declaration's value at x
+    and at x_next (the step's own guard_<name> functions), in the user's
+    names."""
+    import numpy as np
+    ca = _casadi()
+    path, model, _ = F._gen
+    t, h = float(args["t"][0]), float(args["h"][0])
+    parts = []
+    for d in getattr(model, "hybrid", None) or []:
+        g = ca.external(f"{model.name}_guard_{d.name}", path)
+        a = float(np.asarray(g(args["x"], args["p"], t)).ravel()[0])
+        b = float(np.asarray(g(x_next, args["p"], t + h)).ravel()[0])
+        if (d.direction <= 0 and a > 0 > b) or (d.direction >= 0 and a < 0 < b):
+            kind = "reset" if d.kind == KIND_RESET else "impact"
+            parts.append(f"{kind} {d.name!r} goes from {a:.6g} at x to {b:.6g} at x_next")
+    return ("; " + "; ".join(parts) + " (a phase ends on its guard: guard_<name>(x_N) = 0, "
+            "then map_<name>)") if parts else ""
 
 
 def functions(model, verbose=False, step="rk4", hessians=True):
@@ -268,8 +304,12 @@ def functions(model, verbose=False, step="rk4", hessians=True):
     -------
     dict of str to casadi.Function
         ``rhs``, ``implicit``, ``step`` and, when the model has them,
-        ``outputs`` and ``constraints`` (the module's docstring lists their
-        inputs and outputs; ``F.name_in()`` too).
+        ``outputs`` and ``constraints``, then for a hybrid model
+        ``guard_<name>`` and ``map_<name>`` of each declaration in order
+        (the module's docstring lists their inputs and outputs;
+        ``F.name_in()`` too). ``step`` of a hybrid model integrates one
+        phase: a step across a guard in its direction raises
+        ``gen.SolverError`` (``ERR_GUARD_CROSSED``) instead of jumping.
 
     Raises
     ------
@@ -302,14 +342,15 @@ def functions(model, verbose=False, step="rk4", hessians=True):
     path = str(library(model, verbose=verbose, hessians=hessians, step=step))
     out = {}
     want = STEP_METHODS[step]
+    hybrid = [b[0] for b in hybrid_bases(model)]
     for s in function_specs(model, hessians, hessians or step == "rodas4"):
-        if s["kind"] not in NAMES and s["kind"] != want:
+        if s["kind"] not in NAMES and s["kind"] != want and s["kind"] not in hybrid:
             continue
         if s["kind"] == "step" and want != "step":
             continue
         key = "step" if s["kind"] == want else s["name"]
         out[key] = _checked_class(ca)(ca.external(s["sym"], path, _OPTIONS), path, model, s)
-    out = {k: out[k] for k in NAMES if k in out}
+    out = {k: out[k] for k in (*NAMES, *hybrid) if k in out}
     if not out:
         raise ModelError(f"model {model.name!r} gave no CasADi functions")
     return out

@@ -473,6 +473,8 @@ def describe(model, fmi_version="2.0", kind="both", real="double", start=None, u
         d.nh = nh
         d.hwork = hybrid_work_len(m.nq, m.nu, m.mv, nh)
         d.hiwork = hybrid_iwork_len(m.nq, m.nu, m.mv, nh)
+        d.hybrid_names = [h.name for h in m.hybrid]     # a refused start names its own
+        d.hybrid_kinds = [h.kind for h in m.hybrid]
     return d
 
 

@@ -32,7 +32,7 @@ import numpy as np
 import sympy as sm
 from sympy.physics import mechanics as me
 
-from ..core.errors import ModelError
+from ..core.errors import InputError, ModelError
 from ..intake.model import Model
 
 __all__ = ["ODEFunctionGenerator", "generate_ode_function"]
@@ -52,6 +52,12 @@ def _column(x, what):
     if m.shape[1] != 1:
         raise ModelError(f"{what} must be a column of expressions, got shape {m.shape}")
     return m
+
+
+def _shown(s):
+    """A symbol as the user spells it: q for q(t)."""
+    return str(s.func) if isinstance(s, sm.Function) or getattr(s, "is_Function", False) \
+        else str(s)
 
 
 def _is_zero(e):
@@ -347,6 +353,26 @@ class ODEFunctionGenerator:
             return a if r_id else a.take(ridx)
         return p_of, r_of
 
+    def _nonfinite(self, x, r, p):
+        """After the C call refused a NaN or infinite value: an InputError
+        naming it as the caller gave it (a state of x, a specified of r, a
+        constant of p, by its symbol and its index in the caller's order);
+        r and p as the call converted them (the model's order)."""
+        rows = [("p", p, [self.constants[i] for i in self._p_order], self._p_order,
+                 "constant"),
+                ("r", r, [self.specifieds[i] for i in self._r_order] if self.specifieds
+                 else [], self._r_order, "specified"),
+                ("x", x, self.coordinates + self.speeds, None, "state")]
+        for arg, a, syms, order, kind in rows:
+            a = np.zeros(0) if a is None else np.asarray(a, dtype=float).reshape(-1)
+            bad = np.flatnonzero(~np.isfinite(a))
+            if bad.size:
+                i = int(bad[0])
+                j = i if order is None else int(order[i])
+                raise InputError(
+                    f"the {kind} {_shown(syms[i])} of {arg} is {float(a[i])!r}: every "
+                    f"{kind} must be finite", arg, j, float(a[i])) from None
+
     # ------------------------------------------------------------- the rhs
     def _rhs_function(self, sim):
         nq, ns = self.num_coordinates, self.num_states
@@ -357,6 +383,7 @@ class ODEFunctionGenerator:
         # takes only t, x, r: with p it converts in Python, 4-5x the call);
         # the same C function, a fresh (1, nx) array per call
         batch = sim.rhs_batch
+        nonfinite = self._nonfinite
 
         def sim_rhs(t, x, r=None, p=None):
             try:
@@ -368,7 +395,12 @@ class ODEFunctionGenerator:
             if X is None or X.shape != (1, ns):
                 raise ValueError(f"x must have shape ({ns},), got {np.shape(x)}")
             if solve is None:
-                return batch(t, X, r=r, p=p)[0]
+                try:
+                    return batch(t, X, r=r, p=p)[0]
+                except InputError as e:
+                    if "ERR_NONFINITE_INPUT" in str(e):
+                        nonfinite(X[0], r, p)
+                    raise
             # the user's linear solver, on the speeds' M u' = f
             x = X[0].astype(float)
             q, u = x[:nq], x[nq:]

@@ -40,7 +40,7 @@ from ..sym.printers import check_printable
 from .checks import (check_expressions, check_partition, constant_value, outputs_of, sym_name,
                      user_stacklevel)
 from .checks import warn_unused as warn_names
-from .hybrid import attach_hybrid
+from .hybrid import attach_hybrid, hybrid_symbols
 
 __all__ = ["Equations", "finish", "split_last", "declare", "internal_symbols", "convert",
            "convert_auxiliary", "warn_unused", "check_structure", "explicit_kinematics",
@@ -96,7 +96,7 @@ def finish(cls, eqs, *, name, constants=None, inputs=None, energy=None, outputs=
     syms = internal_symbols(eqs, decl)
     conv = convert(eqs, decl, syms, energy, outputs)
     aux = convert_auxiliary(eqs, decl, syms)
-    warn_unused(name, decl, syms, conv, aux)
+    warn_unused(name, decl, syms, conv, aux, hybrid_symbols(hybrid))
     check_structure(name, eqs, syms, conv)
     qdot, qd = explicit_kinematics(conv, syms)
     names = name_all(eqs, decl, aux, conv)
@@ -274,20 +274,23 @@ def convert_auxiliary(eqs, decl, syms):
 
 
 # ---------------------------------------------------------- 5. warn unused
-def warn_unused(name, decl, syms, conv, aux):
+def warn_unused(name, decl, syms, conv, aux, hybrid_used=frozenset()):
     """A warning naming the constants, and one naming the inputs, that no
     expression of the model uses (kept, without effect): one walk over every
     distinct subexpression (the recursive formulation's matrices share
-    theirs)."""
+    theirs). hybrid_used: the user's symbols of the hybrid declarations (a
+    constant that moves only a guard is used)."""
     from ..core.errors import UnusedConstantWarning, UnusedInputWarning
     used = scan([e for mat in conv.matrices() + aux.matrices() for e in mat]
                 + ([conv.energy] if conv.energy is not None else []))[0]
     warn_names(UnusedConstantWarning, name, "constant",
-               [str(c) for c, d in zip(decl.constants, syms.P) if d not in used],
+               [str(c) for c, d in zip(decl.constants, syms.P)
+                if d not in used and c not in hybrid_used],
                "(mass matrix, forcing, kinematic equations, constraints, energy); kept as "
                "parameter(s) without effect")
     warn_names(UnusedInputWarning, name, "input",
-               [str(r_) for r_, d in zip(decl.inputs, syms.R) if d not in used],
+               [str(r_) for r_, d in zip(decl.inputs, syms.R)
+                if d not in used and r_ not in hybrid_used],
                "(forcing, outputs, ...): kept as input(s) without effect (a misspelt or "
                "stale entry of inputs=[...]?)")
 
@@ -300,6 +303,9 @@ def check_structure(name, eqs, syms, conv):
     speeds or inputs, f_c not on them, kf and b not on the inputs."""
     nu, U, R = len(eqs.u), syms.U, syms.R
     M, A = conv.M, conv.A
+    if nu == 0:
+        raise ModelError(f"model '{name}' has no speeds, so no state: nothing to simulate "
+                         "(an empty System or method?)")
     if M.shape != (nu, nu):
         raise ModelError(f"mass matrix has shape {M.shape}, expected ({nu}, {nu})")
     if conv.f.shape != (nu, 1):

@@ -26,7 +26,7 @@ import sympy as sm
 from ..core.errors import ModelError
 from .sympy_compat import time_symbol
 
-__all__ = ["Impact", "Reset", "attach_hybrid", "hybrid_kernels", "HybridDecl",
+__all__ = ["Impact", "Reset", "attach_hybrid", "hybrid_kernels", "hybrid_symbols", "HybridDecl",
            "KIND_IMPACT", "KIND_RESET", "hybrid_work_len", "hybrid_iwork_len"]
 
 KIND_IMPACT, KIND_RESET = 0, 1
@@ -39,6 +39,30 @@ def _check_direction(direction, what):
         raise ModelError(f"{what}: direction must be -1 (closing, downwards), 0 (both) or "
                          f"+1 (upwards), got {direction!r}")
     return int(direction)
+
+
+def _scalar(expr, who, what):
+    """expr as one sympy expression; a matrix, list or array is refused,
+    naming its size (one declaration per gap or guard)."""
+    shape = getattr(expr, "shape", None)
+    if isinstance(expr, (list, tuple)):
+        shape = (len(expr),)
+    if shape is not None and shape != ():
+        size = " x ".join(str(n) for n in shape)
+        kind = "list" if isinstance(expr, (list, tuple)) else \
+            "matrix" if isinstance(expr, sm.MatrixBase) else "array"
+        raise ModelError(f"{who}: the {what} must be one scalar expression, got a {size} {kind} "
+                         f"({expr}); declare one gen.{who.split('(')[0]} per {what.split('[')[0]} "
+                         "under names of their own (hybrid={'a': ..., 'b': ...})")
+    try:
+        e = sm.sympify(expr)
+    except (sm.SympifyError, TypeError) as err:
+        raise ModelError(f"{who}: the {what} must be a sympy expression, got {expr!r}") from err
+    if not isinstance(e, sm.Expr):
+        raise ModelError(f"{who}: the {what} must be one scalar expression, got "
+                         f"{type(e).__name__} ({e}); a gap or guard is an expression whose "
+                         "zero crossing is the event (y, not y < 0)")
+    return e
 
 
 class Impact:
@@ -77,7 +101,7 @@ class Impact:
     kind = KIND_IMPACT
 
     def __init__(self, gap, restitution=0.0, direction=-1, *, rest_speed=1e-6):
-        self.gap = sm.sympify(gap)
+        self.gap = _scalar(gap, "Impact", "gap")
         try:
             e = float(restitution)
         except (TypeError, ValueError):
@@ -127,11 +151,12 @@ class Reset:
     kind = KIND_RESET
 
     def __init__(self, guard, map, direction=-1):   # noqa: A002 (the issue's name)
-        self.guard = sm.sympify(guard)
+        self.guard = _scalar(guard, "Reset", "guard")
         if not isinstance(map, dict) or not map:
             raise ModelError(f"Reset({self.guard}): map must be a non-empty dict "
                              f"{{state: expression}}, got {map!r}")
-        self.map = {k: sm.sympify(v) for k, v in map.items()}
+        self.map = {k: _scalar(v, f"Reset({self.guard})", f"map[{_label(k)}]")
+                    for k, v in map.items()}
         self.direction = _check_direction(direction, f"Reset({self.guard})")
         self.restitution = 0.0
         self.rest_speed = 0.0
@@ -157,6 +182,24 @@ class HybridDecl:
                 self.rest_speed, None if self.xmap is None else [sm.srepr(e) for e in self.xmap])
 
 
+def hybrid_symbols(hybrid):
+    """The user's symbols (constants, inputs, coordinates) that the
+    declarations of ``hybrid={...}`` hold: a constant used only in a guard
+    or a map is used (no UnusedConstantWarning). Empty for anything that is
+    not a dict of declarations (attach_hybrid names the problem)."""
+    out = set()
+    if not isinstance(hybrid, dict):
+        return out
+    for d in hybrid.values():
+        exprs = [d.gap] if isinstance(d, Impact) else \
+            [d.guard, *d.map.values()] if isinstance(d, Reset) else []
+        for e in exprs:
+            out |= getattr(e, "free_symbols", set())
+            out |= {a for a in getattr(e, "atoms", lambda *_: ())(sm.Function)
+                    if isinstance(a, sm.core.function.AppliedUndef)}
+    return out
+
+
 def _user_names(model):
     return ", ".join(model.state_labels)
 
@@ -175,21 +218,7 @@ def attach_hybrid(model, hybrid):
         raise ModelError(f"model '{model.name}': gen.Impact on a model whose reactions ({names}) "
                          f"enter its motion is not supported (the impulse and the held contact "
                          f"would leave out the coupled reaction solve); gen.Reset is")
-    t = time_symbol()
-    # the user's symbols -> the internal ones
-    sub = {}
-    qdots = [qo.diff(t) for qo in model.q_orig]
-    if model.method == "lagrange":
-        sub.update(dict(zip(qdots, model.u)))
-    else:
-        sub.update(dict(zip(model.u_orig, model.u)))
-    sub.update(dict(zip(model.q_orig, model.q)))
-    sub.update(dict(zip(model.p_orig, model.p)))
-    sub.update(dict(zip(model.r_orig, model.r)))
-    sub[t] = model.t
-    states_user = list(model.q_orig) + (qdots if model.method == "lagrange" else list(model.u_orig))
-    back = {v: k for k, v in sub.items()}
-    Q, U, P, R = set(model.q), set(model.u), set(model.p), set(model.r)
+    ctx = _Symbols(model)
     decls = []
     for name, d in hybrid.items():
         if not isinstance(name, str) or not name.isidentifier():
@@ -198,44 +227,85 @@ def attach_hybrid(model, hybrid):
         if not isinstance(d, (Impact, Reset)):
             raise ModelError(f"model '{model.name}': hybrid[{name!r}] must be gen.Impact or "
                              f"gen.Reset, got {d!r}")
-        if isinstance(d, Impact):
-            e = d.gap.xreplace(sub)
-            bad_u = sorted(_label(back[s]) for s in e.free_symbols & U)
-            bad_u += [_label(qd) for qd in qdots if d.gap.has(qd)]
-            if bad_u:
-                raise ModelError(
-                    f"model '{model.name}': the gap of impact {name!r} ({d.gap}) must be a "
-                    f"function of the coordinates, but it holds the speed(s) "
-                    f"{', '.join(bad_u)}; coordinates: "
-                    f"{', '.join(_label(s) for s in model.q_orig)}")
-            bad_r = sorted(_label(back[s]) for s in e.free_symbols & R)
-            if bad_r:
-                raise ModelError(f"model '{model.name}': the gap of impact {name!r} ({d.gap}) "
-                                 f"holds the input(s) {', '.join(bad_r)}; a gap is a function "
-                                 "of the coordinates")
-            _check_known(model, name, "gap", d.gap, e, Q | P | {model.t})
-            if e.is_number:
-                raise ModelError(f"model '{model.name}': the gap of impact {name!r} ({d.gap}) "
-                                 "is constant; a gap is a function of the coordinates "
-                                 f"{', '.join(_label(s) for s in model.q_orig)}")
-            decls.append(HybridDecl(name, KIND_IMPACT, e, d.restitution, d.direction,
-                                    d.rest_speed))
-        else:
-            e = d.guard.xreplace(sub)
-            _check_known(model, name, "guard", d.guard, e, Q | U | P | {model.t})
-            xmap = list(model.q) + list(model.u)
-            for k, v in d.map.items():
-                if k not in states_user:
-                    raise ModelError(
-                        f"model '{model.name}': the map of reset {name!r} sets "
-                        f"{_label(k)}, which is "
-                        f"not a state; the states are {_user_names(model)}")
-                ve = v.xreplace(sub)
-                _check_known(model, name, f"map[{k}]", v, ve, Q | U | P | {model.t})
-                xmap[states_user.index(k)] = ve
-            decls.append(HybridDecl(name, KIND_RESET, e, 0.0, d.direction, 0.0, xmap))
+        decls.append(_impact(ctx, name, d) if isinstance(d, Impact) else _reset(ctx, name, d))
     model.hybrid = decls
     return model
+
+
+class _Symbols:
+    """The user's symbols of a model and its internal ones, both ways."""
+
+    def __init__(self, model):
+        t = time_symbol()
+        self.model = model
+        self.qdots = [qo.diff(t) for qo in model.q_orig]
+        sub = dict(zip(self.qdots, model.u)) if model.method == "lagrange" else \
+            dict(zip(model.u_orig, model.u))
+        sub.update(dict(zip(model.q_orig, model.q)))
+        sub.update(dict(zip(model.p_orig, model.p)))
+        sub.update(dict(zip(model.r_orig, model.r)))
+        sub[t] = model.t
+        self.sub, self.back = sub, {v: k for k, v in sub.items()}
+        self.states = list(model.q_orig) + (self.qdots if model.method == "lagrange"
+                                            else list(model.u_orig))
+        self.Q, self.U = set(model.q), set(model.u)
+        self.P, self.R = set(model.p), set(model.r)
+
+    def labels(self, symbols):
+        """The user's spelling of internal symbols, sorted."""
+        return sorted(_label(self.back.get(s, s)) for s in symbols)
+
+    def no_inputs(self, name, what, user_expr, e, rule):
+        """Refuse an input in a gap, guard or map, naming the user's input."""
+        bad = self.labels(e.free_symbols & self.R)
+        if bad:
+            m = self.model
+            raise ModelError(f"model '{m.name}': the {what} of {name!r} ({user_expr}) holds the "
+                             f"input(s) {', '.join(bad)}; {rule} (the engine evaluates it "
+                             "without the inputs)")
+
+
+def _impact(ctx, name, d):
+    """The HybridDecl of an Impact, its gap checked: a scalar function of
+    the coordinates (and constants, t)."""
+    m = ctx.model
+    e = d.gap.xreplace(ctx.sub)
+    bad_u = ctx.labels(e.free_symbols & ctx.U)
+    bad_u += [_label(qd) for qd in ctx.qdots if d.gap.has(qd)]
+    if bad_u:
+        raise ModelError(
+            f"model '{m.name}': the gap of impact {name!r} ({d.gap}) must be a function of the "
+            f"coordinates, but it holds the speed(s) {', '.join(bad_u)}; coordinates: "
+            f"{', '.join(_label(s) for s in m.q_orig)}")
+    ctx.no_inputs(name, "gap", d.gap, e, "a gap is a function of the coordinates")
+    _check_known(ctx, name, "gap", d.gap, e, ctx.Q | ctx.P | {m.t})
+    if e.is_number:
+        raise ModelError(f"model '{m.name}': the gap of impact {name!r} ({d.gap}) is constant; "
+                         "a gap is a function of the coordinates "
+                         f"{', '.join(_label(s) for s in m.q_orig)}")
+    return HybridDecl(name, KIND_IMPACT, e, d.restitution, d.direction, d.rest_speed)
+
+
+def _reset(ctx, name, d):
+    """The HybridDecl of a Reset, its guard and map checked: functions of the
+    state (and constants, t), the map's keys states."""
+    m = ctx.model
+    allowed = ctx.Q | ctx.U | ctx.P | {m.t}
+    e = d.guard.xreplace(ctx.sub)
+    ctx.no_inputs(name, "guard", d.guard, e, "a guard is a function of the state, the "
+                  "constants and t")
+    _check_known(ctx, name, "guard", d.guard, e, allowed)
+    xmap = list(m.q) + list(m.u)
+    for k, v in d.map.items():
+        if k not in ctx.states:
+            raise ModelError(f"model '{m.name}': the map of reset {name!r} sets {_label(k)}, "
+                             f"which is not a state; the states are {_user_names(m)}")
+        ve = v.xreplace(ctx.sub)
+        ctx.no_inputs(name, f"map[{_label(k)}]", v, ve, "a map is a function of the state "
+                      "before the jump, the constants and t")
+        _check_known(ctx, name, f"map[{_label(k)}]", v, ve, allowed)
+        xmap[ctx.states.index(k)] = ve
+    return HybridDecl(name, KIND_RESET, e, 0.0, d.direction, 0.0, xmap)
 
 
 def _label(s):
@@ -247,16 +317,18 @@ def _label(s):
     return str(s)
 
 
-def _check_known(model, name, what, user_expr, e, allowed):
+def _check_known(ctx, name, what, user_expr, e, allowed):
+    """Refuse a symbol that is not the model's, in the user's spelling."""
+    m = ctx.model
     unknown = e.free_symbols - allowed
     fns = {a for a in e.atoms(sm.Function) if isinstance(a, sm.core.function.AppliedUndef)}
     if unknown or fns:
-        names = sorted(_label(s) for s in (unknown | fns))
+        names = sorted(set(ctx.labels(unknown)) | {_label(f) for f in fns})
         raise ModelError(
-            f"model '{model.name}': the {what} of {name!r} ({user_expr}) holds unknown "
+            f"model '{m.name}': the {what} of {name!r} ({user_expr}) holds unknown "
             f"symbol(s) {', '.join(names)}: neither a coordinate "
-            f"({', '.join(_label(s) for s in model.q_orig)}), a speed nor a constant "
-            f"({', '.join(str(s) for s in model.p_orig) or 'none'})")
+            f"({', '.join(_label(s) for s in m.q_orig)}), a speed nor a constant "
+            f"({', '.join(str(s) for s in m.p_orig) or 'none'})")
 
 
 def _qdot(model):
@@ -316,4 +388,4 @@ def hybrid_work_len(nq, nu, mv, nh):
 
 def hybrid_iwork_len(nq, nu, mv, nh):
     """Ints of the engine's hybrid scratch: GEN_RT_HYBRID_IWORK."""
-    return nq + (nu + mv + nh + 1) + 2 * nh + 4
+    return nq + (nu + mv + nh + 1) + 3 * nh + 4

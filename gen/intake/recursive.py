@@ -78,6 +78,7 @@ from ..sym.intern import Interner
 from .sympy_compat import time_symbol
 
 __all__ = ["equations_of_tree", "accelerations_of_tree", "constraints_of_tree",
+           "check_joints_move", "massless_joint_error",
            "SUPPORTED_JOINTS"]
 
 SUPPORTED_JOINTS = ("PinJoint", "PrismaticJoint", "CylindricalJoint", "PlanarJoint",
@@ -380,6 +381,7 @@ def accelerations_of_tree(system, interner=None):
             sw, sv = n.Sw[:3, :], n.Sw[3:, :]
             Uw, Uv = ik.kept(A * sw + B * sv), ik.kept(B.T * sw + C * sv)
             D = ik.sym_kept(sw.T * Uw + sv.T * Uv)
+            _check_moved(n, D)
             n.Dinv = Dinv = _inv_small(D, ik)
             n.uu = uu = ik.kept(-(sw.T * pw + sv.T * pv))
             n.U = (Uw, Uv)
@@ -416,6 +418,39 @@ def accelerations_of_tree(system, interner=None):
             av = av + n.Sw[3:, :] * uj
         n.al, n.a = ik.kept(aw), ik.kept(av)
     return ud, tree.q, tree.u, tree.kdes
+
+
+def _check_moved(n, D):
+    """A ModelError naming the body when its joint moves no mass or
+    inertia (D = S^T IA S has a zero on its diagonal: a massless body, and
+    nothing beyond it that the joint's motion moves), whose accelerations
+    the equations then do not determine (1 / 0 in the recursion)."""
+    zero = [n.joint.speeds[k] for k in range(D.shape[0]) if D[k, k] == 0]
+    if zero:
+        raise massless_joint_error(n.joint, zero)
+
+
+def check_joints_move(system, M, speeds):
+    """For CRBA's M of an open tree: a ModelError naming the body when the
+    rows of M of one of its joint's speeds are all zero (the same refusal
+    as the articulated body algorithm's)."""
+    idx = {s: i for i, s in enumerate(speeds)}
+    n = len(speeds)
+    for j in system.joints:
+        zero = [s for s in j.speeds if s in idx
+                and all(M[idx[s], k] == 0 for k in range(n))]
+        if zero:
+            raise massless_joint_error(j, zero)
+
+
+def massless_joint_error(joint, speeds):
+    """The ModelError of a joint that moves no mass or inertia: its child
+    body named, and the speeds whose accelerations are undetermined."""
+    return ModelError(
+        f"body {_name(joint.child)!r} has no mass or inertia that its joint "
+        f"{_name(joint)!r} moves (nor has any body beyond it), so the equations do "
+        f"not determine the acceleration of {', '.join(str(s.func) for s in speeds)}: "
+        "give it a mass or inertia, or weld it to its parent (WeldJoint)")
 
 
 def _inv_small(D, ik):

@@ -183,7 +183,14 @@ def recursive_model(cls, system, formulation, partition, **options):
         raise ModelError(
             f"unknown argument(s) {', '.join(sorted(partition))} for "
             f"Model.from_system with formulation={formulation!r}: accepted are none")
-    from .recursive import accelerations_of_tree, constraints_of_tree, equations_of_tree
+    if isinstance(system, me.System) and not len(system.q) and not len(system.u):
+        raise ModelError(
+            f"Model.from_system: the System of frame {system.frame.name!r} and fixed point "
+            f"{system.fixed_point.name!r} is empty: no joints, coordinates or speeds, so "
+            "the model would have no state; add bodies and joints "
+            "(System.add_joints) first")
+    from .recursive import (accelerations_of_tree, check_joints_move, constraints_of_tree,
+                            equations_of_tree)
     cons = constraints_of_tree(system)
     interner = Interner()
     if cons is None and not options.get("hybrid") and formulation == "recursive":
@@ -193,4 +200,6 @@ def recursive_model(cls, system, formulation, partition, **options):
         M, f = sm.eye(len(u)), ud
     else:
         M, f, q, u, kdes = equations_of_tree(system, interner)
+        if cons is None:
+            check_joints_move(system, M, u)
     return cls.from_matrices(M, f, q, u, kdes, _constraints=cons, **options)

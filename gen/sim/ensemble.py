@@ -31,6 +31,7 @@ and not the model's derivation.
 """
 from __future__ import annotations
 
+import functools
 import os
 import sys
 import threading
@@ -107,18 +108,27 @@ class EnsembleResult:
     """What an ensemble returns. values: {key: array}, one per reducer (also
     as attributes: res.final, res[key]); status: (N,) 0 or the failing C
     status; failures: [(index, status name, t, x_last)] of the failed runs;
-    t: the output times (rows of a run); seconds: the wall time."""
+    t: the output times (rows of a run), made on first use when no reducer
+    needed them (times: the array or the function that makes it: a reduced
+    ensemble of 10^8-row runs holds no 10^8 times); seconds: the wall time."""
     values: dict
     status: np.ndarray
     t_last: np.ndarray
     x_last_failed: dict
-    t: np.ndarray
+    times: object
     seconds: float = 0.0
     chunks: int = 0
     extra: dict = field(default_factory=dict)
 
     def __getitem__(self, key):
         return self.values[key]
+
+    @property
+    def t(self):
+        """The output times of a run (rows), np.ndarray (rows,)."""
+        if callable(self.times):
+            self.times = self.times()
+        return self.times
 
     def __getattr__(self, key):
         values = self.__dict__.get("values", {})
@@ -425,6 +435,13 @@ def run_chunk(sim, job, since=None):
                        run.input_period, run.input_hold)
     if plan is not None:
         e.input = plan.struct
+    hybrid = None
+    if getattr(sim, "nh", 0):
+        # hybrid={...}: every run through simulate_events with the engine's
+        # hybrid work (this chunk's own), as sim.simulate runs it
+        from .events import plan_events
+        hybrid = plan_events(sim, None, capacity=0)
+        e.events = hybrid.struct
     opts = library.new("sim_options")
     library.function("sim_options_default")(opts)
     fill_sim_options(opts, run, rows=False)   # every and final_only: the reducers'
@@ -472,6 +489,10 @@ def run_chunk(sim, job, since=None):
 
 
 # ------------------------------------------------------------------ the call
+def _output_times(t0, dt, t_end, rows):
+    return np.minimum(t0 + dt * np.arange(rows), t_end)
+
+
 def _rows(sim, x0, p, r):
     lens = {len(a) for a in (x0, p, r) if a is not None}
     lens.discard(1)
@@ -545,7 +566,12 @@ def run_ensemble(sim, x0, opts, r=None, p=None, controller=None, reduce="final",
                         sim.library.function("simulate_rows_kept"),
                         what="every run of this ensemble" if keeps_rows else "this ensemble",
                         runs=n if keeps_rows else 1)
-    t_rows = np.minimum(t0 + dt * np.arange(rows), t_end)
+    # the output times only where a reducer reads them (rows kept, gen.At's
+    # rows): a final state of 10^8-row runs needs none of their 10^8 times
+    times = functools.partial(_output_times, t0, dt, t_end, rows)    # (picklable)
+    reads_t = keeps_rows or isinstance(reduce, At) or (
+        isinstance(reduce, dict) and any(isinstance(v, At) for v in reduce.values()))
+    t_rows = times() if reads_t else None
     reducers = _reducers(sim, reduce, rows, t0, dt, t_rows)
     workers = workers or os.cpu_count() or 1
     if chunk is None:
@@ -579,7 +605,8 @@ def run_ensemble(sim, x0, opts, r=None, p=None, controller=None, reduce="final",
         x_failed.update({i0 + k: v for k, v in res["x_last"].items()})
     values = {k: np.concatenate([res["values"][k] for res in results])
               for k in reducers}
-    return EnsembleResult(values, status, t_last, x_failed, t_rows, seconds, len(jobs))
+    return EnsembleResult(values, status, t_last, x_failed, times if t_rows is None else t_rows,
+                          seconds, len(jobs))
 
 
 def _run_local(sim, jobs, workers, bar):

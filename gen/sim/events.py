@@ -15,7 +15,7 @@ import numpy as np
 
 from ..core.errors import InputError
 
-__all__ = ["EventPlan", "plan_events"]
+__all__ = ["EventPlan", "plan_events", "hybrid_error"]
 
 _DIRECTIONS = (-1, 0, 1)
 
@@ -41,13 +41,15 @@ class EventPlan:
             s.terminal = lib.array(self.terminal, "int[]")
             s.level = lib.array(self.level)
         # hybrid={...}: the engine's work, and the names of the log's rows
-        # n + k (declaration k) and n + nh + k (lift-off of contact k)
+        # n + k (declaration k), n + nh + k (lift-off of contact k) and
+        # n + 2 nh + k (contact k held from then on)
         nh = getattr(sim, "nh", 0)
         self.log_names = list(names)
         if nh:
             from ..intake.hybrid import hybrid_iwork_len, hybrid_work_len
             self.log_names += list(sim.hybrid_names)
             self.log_names += [f"{n}.liftoff" for n in sim.hybrid_names]
+            self.log_names += [f"{n}.hold" for n in sim.hybrid_names]
             self.hwork = np.zeros(hybrid_work_len(sim.nq, sim.nu, sim.mv, nh), dtype=sim.dtype)
             self.hiwork = np.zeros(hybrid_iwork_len(sim.nq, sim.nu, sim.mv, nh), dtype=np.intc)
             s.hybrid_work = lib.array(self.hwork)
@@ -135,3 +137,65 @@ def plan_events(sim, events, terminal=False, capacity=256):
         direction.append(int(d))
         level.append(lev)
     return EventPlan(sim, names, which, direction, term, level, capacity)
+
+
+def _pairs(sim, x):
+    return ", ".join(f"{n}={float(v):.12g}" for n, v in zip(sim.state_names, x))
+
+
+def hybrid_error(sim, plan, status, n_events, p, where):
+    """The error of a run that a hybrid declaration stopped (its last log
+    entry: the declaration, the time, the state before and the map's), in
+    the user's names, or None for another failure.
+
+    - ERR_PENETRATED: the start is past a declaration's zero in its
+      direction (an impact's gap below zero): the declaration and its value;
+    - ERR_NONFINITE_MODEL, ERR_SINGULAR, ERR_INCONSISTENT_RESET at a jump:
+      the declaration, the state before it and the entries of the map (or
+      of the speeds after an impulse) that are not finite.
+    """
+    from ..core.errors import InputError, SingularError, SolverError
+    from ..core.status import status_message, status_name
+    nh = getattr(sim, "nh", 0)
+    name = status_name(status)
+    if plan is None or not nh or n_events < 1 or n_events > plan.capacity:
+        return None
+    k = n_events - 1
+    j = int(plan.log_which[k]) - len(plan.names)
+    if not 0 <= j < nh:
+        return None
+    decl, t = sim.hybrid_names[j], float(plan.log_t[k])
+    x, xa = plan.log_x[k].astype(float), plan.log_x_after[k].astype(float)
+    reset = sim.hybrid_kinds[j] == 1
+    what = f"reset {decl!r}" if reset else f"impact {decl!r}"
+    if name == "ERR_PENETRATED":
+        g = float(sim.hybrid_values(t, x, p=p)[j])
+        side = "below" if g < 0 else "above"
+        if reset:
+            text = (f"the run starts inside the guard region of {what}: its guard is {g:.12g} "
+                    f"at t = {t:.17g}, {side} zero, the side its crossing fires into (the "
+                    "reset would not fire where it should); start on the other side of its "
+                    "guard")
+        else:
+            text = (f"the run starts inside the contact of {what}: its gap is {g:.12g} at "
+                    f"t = {t:.17g}, {side} zero, the side its impact closes onto (the motion "
+                    "would run through it); start with the gap on its open side, or at zero")
+        return InputError(f"{sim.name}_{where}: {text} [ERR_PENETRATED], state: "
+                          f"{_pairs(sim, x)}", "x0", None, g)
+    if name not in ("ERR_NONFINITE_MODEL", "ERR_SINGULAR", "ERR_INCONSISTENT_RESET"):
+        return None
+    bad = [f"{n} = {float(v)!r}" for n, v in zip(sim.state_names, xa) if not np.isfinite(v)]
+    if reset and name == "ERR_INCONSISTENT_RESET":
+        body = (f"the map of {what} at t = {t:.17g} gives a state that violates the model's "
+                f"constraints: {_pairs(sim, xa)}")
+    elif reset:
+        body = f"the map of {what} is not finite at t = {t:.17g}: {', '.join(bad)}"
+    elif bad:
+        body = (f"the impulse of {what} is not finite at t = {t:.17g}: the speeds after it "
+                f"{', '.join(bad)} (the mass matrix, or the gap's gradient, is NaN or "
+                "infinite, or the impulse's system singular, at the state before it)")
+    else:
+        body = f"the impulse of {what} at t = {t:.17g}: {status_message(status)}"
+    text = f"{sim.name}_{where}: {body} [{name}], the state before it: {_pairs(sim, x)}"
+    cls = SingularError if name in ("ERR_NONFINITE_MODEL", "ERR_SINGULAR") else SolverError
+    return cls(text, status=status, status_name=name, time=t, state=x)

@@ -96,6 +96,11 @@ EVALUATIONS = {e.name: e for e in (
                "The outputs y(q, u, r, t) given at model creation (``outputs={...}``).",
                texts={"y": ("", "Named by ``output_names``; empty for a model without "
                             "outputs.")}),
+    Evaluation("hybrid_values", "eval_hybrid", "t x",
+               "The gaps and guards of the hybrid declarations (``hybrid={...}``) at a state, "
+               "every contact free: an impact's gap must stay >= 0 (:doc:`/guides/hybrid`).",
+               texts={"g": ("", "In the order of ``hybrid_names``; empty for a model without "
+                            "declarations.")}),
     Evaluation("project", "project", "x",
                "Project a state onto the configuration and velocity constraints "
                "(minimum-norm Gauss-Newton; independent of the partition).", returns=("x",)),

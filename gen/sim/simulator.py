@@ -318,6 +318,7 @@ class Simulator:
     multipliers = method(EVALUATIONS["multipliers"], __name__)
     auxiliary_forces = method(EVALUATIONS["auxiliary_forces"], __name__)
     outputs = method(EVALUATIONS["outputs"], __name__)
+    hybrid_values = method(EVALUATIONS["hybrid_values"], __name__)
     project = method(EVALUATIONS["project"], __name__)
     consistent_state = method(EVALUATIONS["consistent_state"], __name__)
     jacobian = method(EVALUATIONS["jacobian"], __name__)
@@ -428,7 +429,7 @@ class Simulator:
     def _run(self, o, x0, r, pp, plan, rows):
         """simulate's C call (simulate, simulate_input with a plan of inputs,
         simulate_events with events or hybrid jumps) and its Solution."""
-        from .events import plan_events
+        from .events import hybrid_error, plan_events
         from .inputs import InputPlan
         opts = self._new("sim_options")
         self._fn("sim_options_default")(opts)
@@ -465,6 +466,10 @@ class Simulator:
                 break
             evplan.resize(stats.n_events)   # the same run again, with room for all
         if st != 0:
+            if evplan is not None and self.nh:   # a jump or the start, in the user's names
+                err = hybrid_error(self, evplan, st, stats.n_events, pp, verb)
+                if err is not None:
+                    raise err
             if stats.n_out > 0:
                 self._check(st, verb, stats.t_last,
                             np.array([stats.x_last[i] for i in range(self.nx)]))

@@ -35,7 +35,7 @@ from pathlib import Path
 from .._version import __version__
 from ..codegen.backends import (C_FLAGS, C_LIN_FLAGS, RUNTIME_FLAGS, RUNTIME_HEADERS, RUNTIME_SOURCES,
                        c_compiler, cxx_compiler, get_backend)
-from ..core.cache import cache_dir, cache_error, new_build_dir, publish, write_marker
+from ..core.cache import cache_dir, cache_error, new_build_dir, publish, shipped, write_marker
 from ..core.errors import BuildError
 
 __all__ = ["build", "build_derivatives", "Built", "compile_units", "link_library"]
@@ -258,6 +258,9 @@ def _runtime_objects(src: Path, cc: str, sources=RUNTIME_SOURCES):
     objs = [folder / (Path(s).stem + ".o") for s in sources]
     if all(o.is_file() for o in objs):
         return objs, None
+    pre = shipped(folder.name)                     # built at install time
+    if pre is not None and all((pre / o.name).is_file() for o in objs):
+        return [pre / o.name for o in objs], None
     return None, folder
 
 

@@ -35,7 +35,7 @@ from pathlib import Path
 
 from .._version import __version__
 from ..codegen.abi import ABI_TAG, host_interface
-from ..core.cache import cache_dir, cache_error, find_entry_file, new_build_dir, publish
+from ..core.cache import cache_dir, cache_error, find_entry_file, new_build_dir, publish, shipped
 from ..core.errors import BuildError
 
 __all__ = ["host_module", "host_sources", "open_model", "open_library", "load", "load_product",
@@ -94,7 +94,9 @@ def _key(real, cdef, source):
     h = hashlib.sha256()
     for part in (__version__, ABI_TAG, real, sys.version, sysconfig.get_config_var("EXT_SUFFIX")
                  or "", sysconfig.get_config_var("CC") or "", os.environ.get("CC", ""),
-                 " ".join(HOST_FLAGS), _numpy_include(), _numpy_version(), "full-api", cdef, source):
+                 " ".join(HOST_FLAGS), _numpy_version(), "full-api", cdef, source):
+        # (numpy's version, not the folder of its headers: a wheel's host is
+        # built at install time in another environment, gen/toolchain/prebuilt.py)
         h.update(str(part).encode() + b"\0")
     return h.hexdigest()[:16]
 
@@ -118,6 +120,8 @@ def _build_and_load(real):
     root = cache_dir()
     final = root / f"host_{real}_{key}"
     so = find_entry_file(final, modname)
+    if so is None and shipped(final.name) is not None:
+        so = find_entry_file(shipped(final.name), modname)     # built at install time
     if so is None:
         tmp = new_build_dir(root, f"host_{real}_{key}")
         try:

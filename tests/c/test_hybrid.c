@@ -4,7 +4,9 @@
  * together against the reflection computed by hand, the contact held as a
  * constraint (its force m g), the Zeno rule and a lift-off in
  * gen_rt_hybrid_jump, a reset map and the argument checks of the work
- * macros' layout. */
+ * macros' layout; the engine's start (a refused start inside a gap, a
+ * contact held from t0), a step across a guard and a map that is not
+ * finite. */
 #include "test_common.h"
 
 #define PM 1.5
@@ -84,6 +86,7 @@ static const int ind2[2] = { 0, 1 };
 static gen_rt_model point_model(const gen_rt_hybrid *hy)
 {
     gen_rt_model m;
+    memset(&m, 0, sizeof m);   /* every kernel the point has not: NULL */
     m.nq = 2; m.nu = 2; m.nr = 0; m.np = 0; m.mc = 0; m.mv = 0;
     m.explicit_kinematics = 1; m.accel = GEN_RT_ACCEL_LU;
     m.q_ind = ind2; m.q_dep = ind2; m.u_ind = ind2; m.u_dep = ind2;
@@ -100,6 +103,123 @@ static gen_rt_model point_model(const gen_rt_hybrid *hy)
 #define NH 3
 static gen_rt_real work[GEN_RT_HYBRID_WORK(2, 2, 0, NH)];
 static int iwork[GEN_RT_HYBRID_IWORK(2, 2, 0, NH)];
+
+/* a run of the engine (simulate_events, no user events) from x0 to t_end
+ * with RK4 on a grid of dt: its status, the log (which, t, x, x after) */
+#define SW GEN_RT_MODEL_SIMULATE_EVENTS_WORK(2, 2, 0, 0, 0, 1, GEN_RT_ACCEL_LU, 0)
+#define SIW GEN_RT_MODEL_SIMULATE_EVENTS_IWORK(2, 2, 0, 0, 0, 1, GEN_RT_ACCEL_LU, 0)
+#define CAP 8
+static gen_rt_real s_work[SW], s_t[64], s_x[64 * 4], s_lt[CAP], s_lx[CAP * 4], s_la[CAP * 4];
+static int s_iwork[SIW], s_lw[CAP];
+static gen_rt_real s_last[4];
+
+static int run(const gen_rt_model *m, const gen_rt_real *x0, gen_rt_real t_end,
+               gen_rt_real dt, gen_rt_sim_stats *s)
+{
+    gen_rt_input in;
+    gen_rt_events ev;
+    gen_rt_sim_options o;
+    memset(&in, 0, sizeof in);
+    memset(&ev, 0, sizeof ev);
+    memset(&o, 0, sizeof o);
+    o.method = GEN_RT_METHOD_RK4;
+    o.project = 1;
+    o.rtol = GEN_RT_C(1e-8);
+    o.atol = GEN_RT_C(1e-10);
+    o.max_steps = 1000;
+    o.proj_tol = 16 * GEN_RT_EPS;
+    o.proj_max_iter = 10;
+    ev.capacity = CAP;
+    ev.log_which = s_lw; ev.log_t = s_lt; ev.log_x = s_lx; ev.log_x_after = s_la;
+    ev.hybrid_work = work;
+    ev.hybrid_iwork = iwork;
+    s->x_last = s_last;
+    return gen_rt_model_simulate_events(m, x0, 0, t_end, dt, &in, &ev, NULL, &o, 64, s_work,
+                                        s_iwork, s_t, s_x, NULL, NULL, s);
+}
+
+/* a reset whose map is NaN where x > 7 (the reset of x crossing 5 upwards) */
+static void h_reset_nan(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *p,
+                        gen_rt_real t, gen_rt_real *xr)
+{
+    h_reset(q, u, p, t, xr);
+    xr[2] = (gen_rt_real)sqrt(-1.0 - (double)u[0] * 0);
+}
+
+/* the start of a run: a gap below zero (or a guard inside its region) is
+ * refused with its declaration logged; a gap at zero and at rest is held
+ * from t0 (the point rests on the floor), at zero and closing an impact at
+ * t0; a step across a guard (gen_rt_hybrid_crossed); a map that is not
+ * finite, logged with the map's values */
+static void starts(gen_rt_model *m)
+{
+    gen_rt_hybrid hy = *m->hybrid;
+    gen_rt_real x[4], x1[4], g[2 * NH];
+    gen_rt_sim_stats s;
+    int which = 7, k;
+    x[0] = 2; x[1] = -0.5; x[2] = 0; x[3] = 0;
+    CHECK_INT(gen_rt_model_eval_hybrid(m, 0, x, NULL, g), GEN_RT_OK);
+    CHECK_NEAR(g[0], -0.5, 0);
+    CHECK_NEAR(g[1], 2, 0);
+    CHECK_NEAR(g[2], -3, 0);
+    CHECK_INT(gen_rt_hybrid_penetrated(m, 0, x, NULL, g, &which), GEN_RT_ERR_PENETRATED);
+    CHECK_INT(which, 0);
+    CHECK_INT(run(m, x, GEN_RT_C(0.5), GEN_RT_C(0.1), &s), GEN_RT_ERR_PENETRATED);
+    CHECK_INT(s.n_events, 1);
+    CHECK_INT(s_lw[0], 0);
+    CHECK_NEAR(s_lx[1], -0.5, 0);
+    CHECK_INT(s.n_out, 0);
+    /* the reset's guard x - 5 inside its region (above zero, direction +1) */
+    x[0] = 6; x[1] = 1;
+    CHECK_INT(gen_rt_hybrid_penetrated(m, 0, x, NULL, g, &which), GEN_RT_ERR_PENETRATED);
+    CHECK_INT(which, 2);
+    CHECK_NEAR(g[2], 1, 0);
+    /* on the floor and the wall's open side, below the guard: a start */
+    x[0] = 2; x[1] = 0;
+    CHECK_INT(gen_rt_hybrid_penetrated(m, 0, x, NULL, g, &which), GEN_RT_OK);
+    CHECK_INT(which, -1);
+    /* at rest on the floor: held from t0, the rows stay on it */
+    CHECK_INT(run(m, x, GEN_RT_C(0.5), GEN_RT_C(0.1), &s), GEN_RT_OK);
+    CHECK_INT(s.n_out, 6);
+    CHECK_INT(s.n_events, 2);
+    CHECK_INT(s_lw[0], 0);            /* the impact at t0 */
+    CHECK_INT(s_lw[1], 2 * NH + 0);   /* the floor held from then on */
+    CHECK_NEAR(s_lt[1], 0, 0);
+    for (k = 0; k < 6; ++k) {
+        CHECK_NEAR(s_x[4 * k + 1], 0, 1e-14 * TS);
+        CHECK_NEAR(s_x[4 * k + 3], 0, 1e-14 * TS);
+    }
+    /* at zero and closing: the impact at t0 (e = 0.5) */
+    x[3] = -2;
+    CHECK_INT(run(m, x, GEN_RT_C(0.1), GEN_RT_C(0.1), &s), GEN_RT_OK);
+    CHECK_INT(s_lw[0], 0);
+    CHECK_NEAR(s_la[3], 1, 1e-14 * TS);
+    CHECK_NEAR(s_x[3], 1, 1e-14 * TS);  /* row 0: the state after it */
+    /* steps across a declaration, from strictly before to strictly past */
+    x[0] = 4; x[1] = 1; x[2] = x[3] = 0;
+    x1[0] = 6; x1[1] = 1; x1[2] = x1[3] = 0;
+    CHECK_INT(gen_rt_hybrid_crossed(m, 0, x, 1, x1, NULL, g, &which), GEN_RT_ERR_GUARD_CROSSED);
+    CHECK_INT(which, 2);
+    CHECK_NEAR(g[NH + 2], 1, 0);
+    x1[0] = 5;                         /* ends on the guard: the phase's last step */
+    CHECK_INT(gen_rt_hybrid_crossed(m, 0, x, 1, x1, NULL, g, &which), GEN_RT_OK);
+    CHECK_INT(which, -1);
+    x1[0] = 3;                         /* back, against its direction */
+    CHECK_INT(gen_rt_hybrid_crossed(m, 0, x, 1, x1, NULL, g, &which), GEN_RT_OK);
+    x1[0] = 4; x1[1] = -1;             /* through the floor */
+    CHECK_INT(gen_rt_hybrid_crossed(m, 0, x, 1, x1, NULL, g, &which), GEN_RT_ERR_GUARD_CROSSED);
+    CHECK_INT(which, 0);
+    /* a map that is not finite: the run stops, the map's values logged */
+    hy.reset = h_reset_nan;
+    m->hybrid = &hy;
+    x[0] = 4.9; x[1] = 100; x[2] = 2; x[3] = 0;
+    CHECK_INT(run(m, x, GEN_RT_C(0.5), GEN_RT_C(0.1), &s), GEN_RT_ERR_NONFINITE_MODEL);
+    CHECK_INT(s.n_events, 1);
+    CHECK_INT(s_lw[0], 2);
+    CHECK(s_la[2] != s_la[2]);         /* the map's u_x: NaN */
+    CHECK_NEAR(s_la[0], s_lx[0] - 10, 1e-12 * TS);
+    CHECK_NEAR(s_lx[0], 5, 1e-9 * TS);
+}
 
 int main(void)
 {
@@ -177,5 +297,7 @@ int main(void)
     for (i = 1; i < 4; ++i) CHECK_NEAR(x[i], (gen_rt_real)i, 0);
     /* an impact's index has no reset map */
     CHECK_INT(gen_rt_hybrid_reset(&m, 0, NULL, 0, 0, 0, NULL, work, x), GEN_RT_ERR_BAD_ARG);
+
+    starts(&m);
     TEST_END();
 }

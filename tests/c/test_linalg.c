@@ -257,7 +257,7 @@ static void test_null_and_args(void)
 
 static void test_status(void)
 {
-    const char *msgs[16];
+    const char *msgs[1 - GEN_RT_STATUS_MIN];
     int code, other, nmsg = 0;
     const int unknown[5] = {1, GEN_RT_STATUS_MIN - 1, -100, INT_MAX, INT_MIN};
     for (code = GEN_RT_OK; code >= GEN_RT_STATUS_MIN; --code) {

@@ -167,7 +167,7 @@ static const gen_rt_main_model MODEL = {
     "osc", (int)sizeof(gen_rt_real), 1, 2, 1, 2, 1, 1, 2, 1, 1,
     x_names, r_names, p_names, y_names, a_names, i_names, p_default,
     opts_default, consistent, linearize, rows_of, simulate, constraints, energy, auxiliary,
-    outputs, message, 0, 0, NULL};
+    outputs, message, 0, 0, NULL, NULL, NULL};
 
 static void write_file(const char *path, const char *text)
 {

@@ -254,3 +254,33 @@ def test_command_line_ensemble_npz_and_parquet(kane_sim, tmp_path):
     bad = eomgen("ensemble", SEED, "--samples", "5", "--param", "L=gauss:1:2", "--t-end", "1",
                  "-o", str(tmp_path / "x.npz"), check_rc=2)
     assert "normal:MEAN:STD" in bad.stderr
+
+
+def test_reduce_final_holds_no_rows(kane_sim):
+    """Issue 47: ensemble(reduce="final") allocated every output time of a
+    run (1.6 GB at 10^8 rows) although it keeps only the final state. Its
+    Python allocations (tracemalloc, numpy's included) are now at most
+    2x those of one simulate(final_only=True) per worker, whatever the
+    rows; the output times are made only when res.t is read."""
+    import tracemalloc
+    x0 = pendulum_state(0.3, 0.0, 1.0, "kane")
+    X0 = np.tile(x0, (2, 1))
+    dt, rows = 1e-3, 20001
+    t_end = (rows - 1) * dt
+    final = gen.RunOptions(final_only=True)
+
+    def peak(f):
+        f()                                       # first calls' imports and caches
+        tracemalloc.start()
+        try:
+            out = f()
+            return tracemalloc.get_traced_memory()[1], out
+        finally:
+            tracemalloc.stop()
+
+    one, sol = peak(lambda: kane_sim.simulate(x0, t_end, dt, options=final))
+    ens, res = peak(lambda: kane_sim.ensemble(X0, t_end, dt, reduce="final", workers=2))
+    assert ens <= 2 * 2 * one < 8 * rows         # 2 workers; the times alone are 8 * rows
+    np.testing.assert_array_equal(res.final[1], sol.x[-1])
+    t = res.t
+    assert t.shape == (rows,) and t[-1] == t_end and t[1] == dt

@@ -352,7 +352,10 @@ def test_inconsistent_reset_is_an_error():
     from gen.intake.hybrid import attach_hybrid
     attach_hybrid(m, {"kick": gen.Reset(q2 + sm.Rational(1, 5), {q1: 2 * q1})})
     sim = gen.compile(m)
-    with pytest.raises(gen.SolverError, match=r"reset\(s\) kick.*ERR_INCONSISTENT_RESET"):
+    with pytest.raises(gen.SolverError, match=r"hyb_pend_bad_simulate_events: the map of reset "
+                       r"'kick' at t = 0\.6058\d+ gives a state that violates the model's "
+                       r"constraints: q1=1\.9595.*\[ERR_INCONSISTENT_RESET\], the state before "
+                       r"it: q1=0\.9797"):
         sim.simulate([np.cos(0.8), np.sin(0.8), 0.0, 0.0], 1.5, 0.01, method="dopri5")
 
 

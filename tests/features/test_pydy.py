@@ -400,3 +400,33 @@ def test_derivative_specifieds_and_time():
     timed = generate_ode_function(F + sm.Matrix([sm.sin(t)]), [x], [v], [k, c, m],
                                   generator=OURS, **kw)
     assert rel_err(timed(X, 0.7, r, p), expected + [0, np.sin(0.7) / 1.5]) < 1e-15
+
+
+def test_non_finite_values_are_named_by_their_kind_and_symbol():
+    """A NaN constant was reported as "an input value is NaN" (issue 47): the
+    C call refuses it, and the drop-in names it in the caller's terms, a
+    constant of p, a specified of r or a state of x, by its symbol."""
+    sysm = system("pendulum1")
+    args, kw = sysm._args_for_gen_ode_func(), sysm._kwargs_for_gen_ode_func()
+    ours = generate_ode_function(*args, generator=OURS, **kw)
+    x, t, r, p = samples(sysm)[0]
+    consts, spec = list(sysm.constants_symbols), list(sysm.specifieds_symbols)
+    states = [str(s.func) for s in list(sysm.coordinates) + list(sysm.speeds)]
+    bad = p.copy()
+    bad[1] = np.nan
+    with pytest.raises(gen.InputError) as e:
+        ours(x, t, r, bad)
+    assert str(e.value) == f"the constant {consts[1]} of p is nan: every constant must be finite"
+    assert (e.value.argument, e.value.index) == ("p", 1)
+    with pytest.raises(gen.InputError, match=rf"^the constant {consts[0]} of p is inf: "):
+        ours(x, t, r, {c: (np.inf if c == consts[0] else 1.0) for c in consts})
+    rb = r.copy()
+    rb[-1] = -np.inf
+    with pytest.raises(gen.InputError, match=rf"^the specified {spec[-1].func} of r is -inf: "
+                       "every specified must be finite$"):
+        ours(x, t, rb, p)
+    xb = x.copy()
+    xb[2] = np.nan
+    with pytest.raises(gen.InputError, match=rf"^the state {states[2]} of x is nan: every "
+                       "state must be finite$"):
+        ours(xb, t, r, p)

@@ -144,7 +144,7 @@ def test_failed_render_leaves_output_untouched(tmp_path, monkeypatch, kane_model
 
     def broken(*a, **k):
         raise RuntimeError("disk on fire")
-    monkeypatch.setattr(render, "_env", broken)
+    monkeypatch.setattr(render, "template_env", broken)
     with pytest.raises(RuntimeError, match="disk on fire"):
         gen.generate(kane_model, out)
     assert _snapshot(out) == before

@@ -321,6 +321,8 @@ def test_runtime_object_cache_key_covers_every_runtime_file(tmp_path, monkeypatc
     from gen.codegen.backends import RUNTIME_HEADERS, RUNTIME_SOURCES, c_compiler
     from gen.core.resources import csrc_file
     monkeypatch.setenv("EOMGEN_CACHE", str(tmp_path / "cache"))
+    # (not the objects built at install time: the cache's own key is checked)
+    monkeypatch.setattr("gen.core.cache.PREBUILT", tmp_path / "no-prebuilt")
     src = tmp_path / "src"
     src.mkdir()
     for f in RUNTIME_SOURCES + RUNTIME_HEADERS + ["gen_rt_config.h", "gen_rt_abi.h"]:

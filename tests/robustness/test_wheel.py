@@ -25,6 +25,24 @@ WITHOUT = {"ocp": "ocp", "tracker": "control", "casadi": "casadi", "fmu": "fmu",
            "statespace": "control"}
 
 
+# the first model in a fresh process, right after the install (issue 47): the
+# host module, the runtime's objects and the compiled templates come with the
+# wheel, so the cache gains none of them
+FIRST_MODEL = """
+import os, sys
+from pathlib import Path
+import sympy as sm
+import gen
+t = sm.Symbol("t")
+q, u = sm.Function("q")(t), sm.Function("u")(t)
+m = gen.Model.from_matrices(sm.Matrix([[1]]), sm.Matrix([-4 * q]), [q], [u],
+                            sm.Matrix([q.diff(t) - u]), name="first47")
+_, x = gen.compile(m).simulate([1.0, 0.0], 1.5707963267948966, 1e-3)
+assert abs(x[-1][0] + 1.0) < 1e-9, x[-1]
+print(" ".join(sorted(p.name for p in Path(os.environ["EOMGEN_CACHE"]).iterdir())))
+"""
+
+
 def _run(cmd, **kw):
     r = subprocess.run(cmd, capture_output=True, text=True, **kw)
     assert r.returncode == 0, f"$ {' '.join(map(str, cmd))}\n{r.stdout}\n{r.stderr}"
@@ -50,6 +68,13 @@ def test_wheel_carries_the_templates_and_the_runtime(wheel):
     assert any(n.endswith("entry_points.txt") for n in names)
 
 
+def test_wheel_ships_the_host_and_runtime_built_at_install_time(wheel):
+    names = zipfile.ZipFile(wheel).namelist()
+    kinds = {n.split("/")[2].split("_")[0] for n in names if n.startswith("gen/_prebuilt/")}
+    assert kinds == {"host", "runtime", "templates"}
+    assert not wheel.name.endswith("-none-any.whl")          # a platform wheel
+
+
 @pytest.mark.slow
 def test_every_product_runs_from_the_installed_wheel(wheel, tmp_path):
     require_tool("cmake")
@@ -63,6 +88,8 @@ def test_every_product_runs_from_the_installed_wheel(wheel, tmp_path):
     work.mkdir()
     # the wheel alone: the core runs, a product without its extra names the extra
     _run([py, "-m", "pip", "install", "-q", str(wheel)], env=env)
+    made = _run([py, "-c", FIRST_MODEL], cwd=work, env=env).split()
+    assert [e for e in made if e.startswith(("host_", "runtime_", "templates_"))] == [], made
     out = _run([py, str(HERE / "without_extras.py"), str(tmp_path)], cwd=work, env=env)
     named = dict(line.split()[1:] for line in out.splitlines() if line.startswith("missing "))
     assert named == WITHOUT, out
@@ -70,7 +97,7 @@ def test_every_product_runs_from_the_installed_wheel(wheel, tmp_path):
     _run([py, "-m", "pip", "install", "-q", f"{wheel}[{EXTRAS}]"], env=env)
     out = _run([py, str(HERE / "products.py"), str(tmp_path)], cwd=work, env=env)
     done = [line.split()[1] for line in out.splitlines() if line.startswith("ok ")]
-    assert done == ["simulate", "eigen", "fmu", "casadi", "ocp+tracker", "hybrid", "recursive"]
+    assert done == ["simulate", "eigen", "fmu", "casadi", "ocp+tracker", "hybrid", "recursive", "mpc"]
     # the command line: a standalone binary from a model file
     exe = Path(_run([env_dir / "bin" / "eomgen", "build", str(HERE / "model_file.py"), "-o",
                      str(tmp_path / "spring")], cwd=work, env=env).split()[-1])

@@ -249,6 +249,30 @@ static gen_fmu_real side_tol(const gen_fmu *c)
     return (gen_fmu_real)(sizeof(gen_fmu_real) == sizeof(float) ? 1e-4 : 1e-9) * s;
 }
 
+/* a start on the wrong side of a declaration (gen_rt_hybrid_penetrated:
+ * an impact's gap past zero in its closing direction, a reset's guard
+ * inside the region its direction fires on) is refused, naming it and its
+ * value: the importer would run through the contact */
+static int refuse_penetrated(gen_fmu *c, const char *fn)
+{
+    static const char *const names[GEN_FMU_NH] = GEN_FMU_HYBRID_NAMES;
+    static const int kinds[GEN_FMU_NH] = GEN_FMU_HYBRID_KINDS;
+    gen_fmu_real g[GEN_FMU_NH];
+    int which = -1, st, reset;
+    st = gen_rt_hybrid_penetrated(GEN_FMU_RUNTIME_MODEL(), (gen_fmu_real)c->time, c->x, c->p,
+                                  g, &which);
+    if (st != GEN_RT_ERR_PENETRATED) return st ? model_failed(c, fn, "the hybrid gaps", st)
+                                               : GEN_FMU_OK;
+    reset = kinds[which] == GEN_RT_HYBRID_RESET;
+    snprintf(c->message, sizeof c->message, "%s: the start is inside the %s of %s '%s': its "
+             "%s is %.12g at t = %.17g, %s zero, the side its %s (ERR_PENETRATED: the state "
+             "would run through it)", fn, reset ? "guard region" : "contact",
+             reset ? "reset" : "impact", names[which], reset ? "guard" : "gap",
+             (double)g[which], c->time, g[which] < 0 ? "below" : "above",
+             reset ? "crossing fires into" : "impact closes onto");
+    return fail(c, c->message);
+}
+
 static void update_sides(gen_fmu *c)
 {
     gen_fmu_real tol = side_tol(c);
@@ -356,7 +380,7 @@ int gen_fmu_exit_init(gen_fmu *c)
     {
         int k;
         for (k = 0; k < GEN_FMU_NH; ++k) c->h_active[k] = c->h_side[k] = 0;
-        if ((st = hybrid_values(c, fn))) {
+        if ((st = hybrid_values(c, fn)) || (st = refuse_penetrated(c, fn))) {
             c->mode = GEN_FMU_FAILED;
             return st;
         }

@@ -24,6 +24,8 @@ ProductPlan, their C interface described once, gen/codegen/product_abi.py):
     OCP     "ocp"     an optimal control problem's kernels over the node loop
                       (csrc/products/ocp, gen/design/ocp)
     Tracker "tracker" a trajectory tracker's const tables (gen/design/tracking.py)
+    MPC     "mpc"     a model predictive controller over the model's C and the RTI and
+                      QP runtime (csrc/products/mpc, gen/design/mpc)
 
 A new backend is a module here, a subclass of Backend or ProductBackend
 (gen/codegen/backends/base.py) with its templates under templates/<name>/,
@@ -39,11 +41,12 @@ from .c import C_TEMPLATES, CBackend
 from .casadi import CasadiBackend
 from .eigen import CXX_RESERVED, EIGEN_RUNTIME_HEADERS, EigenBackend, eigen_include_dir
 from .fmu import FmuBackend
+from .mpc import MpcBackend
 from .ocp import OcpBackend
 from .tracker import TrackerBackend
 
 __all__ = ["Backend", "CBackend", "EigenBackend", "FmuBackend", "CasadiBackend", "ProductBackend",
-           "OcpBackend", "TrackerBackend", "BACKENDS", "get_backend",
+           "OcpBackend", "TrackerBackend", "MpcBackend", "BACKENDS", "get_backend",
            "backend_names", "c_compiler", "cxx_compiler", "eigen_include_dir", "C_TEMPLATES",
            "RUNTIME_SOURCES", "RUNTIME_HEADERS", "RUNTIME_MAIN", "EIGEN_RUNTIME_HEADERS", "C_FLAGS",
            "C_LIN_FLAGS", "RUNTIME_FLAGS", "STRICT_FLAGS", "CXX_FLAGS", "CXX_STRICT_FLAGS",
@@ -52,7 +55,7 @@ __all__ = ["Backend", "CBackend", "EigenBackend", "FmuBackend", "CasadiBackend",
 
 #: the registry: every backend, by name
 BACKENDS = {b.name: b for b in (CBackend(), EigenBackend(), FmuBackend(), CasadiBackend(),
-                                OcpBackend(), TrackerBackend())}
+                                OcpBackend(), TrackerBackend(), MpcBackend())}
 
 
 def backend_names(need=None):

@@ -203,7 +203,7 @@ def context(iface, real, c_templates, runtime_sources):
 # the face's name of a C array size (gen/codegen/abi.py size expressions)
 _TYPES = {"NX": "State", "NQ": "Coords", "NU": "Speeds", "NR": "Inputs", "NP": "Params",
           "MV": "Multipliers", "MC": "ConfigResiduals", "NA": "AuxiliaryForces",
-          "NY": "Outputs", "NU*NU": "MassMatrix", "MC*NQ": "ConstraintJacobian",
+          "NY": "Outputs", "NH": "HybridValues", "NU*NU": "MassMatrix", "MC*NQ": "ConstraintJacobian",
           "MV*NU": "VelocityMatrix", "NS*NS": "StateMatrix", "NS*NR": "InputMatrix",
           "NY*NS": "OutputMatrix", "NY*NR": "FeedthroughMatrix"}
 

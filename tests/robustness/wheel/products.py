@@ -1,7 +1,8 @@
 """Every product once, run from an installed wheel in a fresh virtual
 environment (tests/robustness/test_wheel.py): simulate, the Eigen backend,
 an FMU (checked by FMPy), CasADi functions, optimal control with its
-tracker, a hybrid model, the recursive formulation. Each prints one line
+tracker, a hybrid model, the recursive formulation, model predictive
+control. Each prints one line
 `ok <product> <number>`; the numbers are checked here against independent
 references (exact physics, the model's own equations)."""
 import math
@@ -143,6 +144,18 @@ def check_recursive():
     print("ok recursive", rec.rhs(0.0, x)[2])
 
 
+def check_mpc(model, syms):
+    """gen.MPC brings the pendulum from 0.5 rad to hanging at rest, |T| <= 1, loop in C."""
+    mpc = gen.MPC(model, 20, 0.05, Q=[10.0, 1.0], R=[0.1], bounds={syms[2]: (-1.0, 1.0)})
+    u0 = mpc([0.5, 0.0], t=0.0)
+    sim = gen.compile(model, derivatives=True)
+    sol = sim.simulate([0.5, 0.0], 4.0, 1e-3, controller=mpc)
+    assert mpc.status == 0 and abs(u0[0]) <= 1.0, (mpc.status, u0)
+    assert np.max(np.abs(sol.r)) <= 1.0 and abs(sol.r[0, 0] - u0[0]) < 1e-12
+    assert np.max(np.abs(sol.x[-1])) < 1e-3, sol.x[-1]
+    print("ok mpc", sol.x[-1, 0])
+
+
 def main():
     tmp = Path(sys.argv[1])
     model, syms = check_simulate()
@@ -152,6 +165,7 @@ def main():
     check_ocp_and_tracker(model, syms)
     check_hybrid()
     check_recursive()
+    check_mpc(model, syms)
 
 
 if __name__ == "__main__":

@@ -26,6 +26,7 @@ SIGNATURES = {
     "multipliers": "(self, t, x, *, r=None, p=None)",
     "auxiliary_forces": "(self, t, x, *, r=None, p=None)",
     "outputs": "(self, t, x, *, r=None, p=None)",
+    "hybrid_values": "(self, t, x, *, p=None)",             # issue 46
     "project": "(self, x, *, p=None, t=0.0, tol=0.0, max_iter=0)",
     "consistent_state": "(self, x, *, p=None, t=0.0, tol=0.0, max_iter=0)",
     "jacobian": "(self, t, x, *, r=None, p=None)",

@@ -694,6 +694,15 @@ int pendulum_kane_eval_outputs(pendulum_kane_real t, const pendulum_kane_real *x
     return gen_rt_model_eval_outputs(&pendulum_kane_model, t, x, r, p, y);
 }
 
+int pendulum_kane_eval_hybrid(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *p, pendulum_kane_real *g)
+{
+    PENDULUM_KANE_CHECK_REAL(t);
+    PENDULUM_KANE_CHECK_IN(x, 4);
+    if (!p) p = pendulum_kane_p_default;
+    else PENDULUM_KANE_CHECK_IN(p, 3);
+    return gen_rt_model_eval_hybrid(&pendulum_kane_model, t, x, p, g);
+}
+
 int pendulum_kane_linearize_outputs(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B, pendulum_kane_real *C, pendulum_kane_real *D)
 {
     pendulum_kane_real work[GEN_RT_MODEL_LINEARIZE_OUTPUTS_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED, 0)];

@@ -44,7 +44,9 @@ typedef double pendulum_kane_real;
 #define PENDULUM_KANE_ERR_CANCELLED (-13) /* cancelled: the caller set the cancellation flag of the options (sim_options.cancel) */
 #define PENDULUM_KANE_ERR_SINGULAR_REACTIONS (-14) /* the reaction forces of the auxiliary speeds are not determined at this state: the matrix of their auxiliary equations is singular */
 #define PENDULUM_KANE_ERR_INCONSISTENT_RESET (-15) /* a reset's map gives a state that violates the model's constraints (hybrid={...}: gen.Reset) */
-#define PENDULUM_KANE_STATUS_MIN (-15) /* the most negative code */
+#define PENDULUM_KANE_ERR_PENETRATED (-16) /* the run starts on the wrong side of a hybrid declaration (hybrid={...}): an impact's gap past zero in its closing direction, or a reset's guard inside the region its direction fires on */
+#define PENDULUM_KANE_ERR_GUARD_CROSSED (-17) /* a step crosses a hybrid guard in its direction: the function integrates one phase and never jumps (split the trajectory at the guard: guard_<name>, map_<name>) */
+#define PENDULUM_KANE_STATUS_MIN (-17) /* the most negative code */
 
 /* Integration methods for pendulum_kane_sim_options.method */
 #define PENDULUM_KANE_METHOD_RK4 0
@@ -228,6 +230,9 @@ int pendulum_kane_eval_input(pendulum_kane_real t, const pendulum_kane_real *x, 
 
 /* The outputs y(q, u, r, t), NY (the model's outputs={...}); NY == 0: nothing written. */
 int pendulum_kane_eval_outputs(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *y);
+
+/* The gaps and guards of the hybrid declarations (hybrid={...}) at (t, x), NH in declaration order, every contact free; NH == 0: nothing written. */
+int pendulum_kane_eval_hybrid(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *p, pendulum_kane_real *g);
 
 /* linearize() and the outputs' C = dy/dx_ind (NY x NS), D = dy/dr (NY x NR), the dependent entries following the constraints as for A. */
 int pendulum_kane_linearize_outputs(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B, pendulum_kane_real *C, pendulum_kane_real *D);

@@ -11,7 +11,7 @@
  * every model through the same compiled module this way. The functions
  * that take a struct appear with void pointers (a trampoline below casts
  * them back), so the table's types are the same for every model; the
- * layout is tagged by abi (eomgen-abi-3e50b7319e7de5f6). Not needed by a program
+ * layout is tagged by abi (eomgen-abi-22a007e8714155d0). Not needed by a program
  * that links the model and calls pendulum_kane.h directly.
  */
 #include <stddef.h>
@@ -55,6 +55,7 @@ typedef struct {
     int (*step_sensitivity)(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *x, pendulum_kane_real *Fx, pendulum_kane_real *Fr);
     int (*eval_input)(pendulum_kane_real t, const pendulum_kane_real *x, const void *in, pendulum_kane_real *r);
     int (*eval_outputs)(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *y);
+    int (*eval_hybrid)(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *p, pendulum_kane_real *g);
     int (*linearize_outputs)(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B, pendulum_kane_real *C, pendulum_kane_real *D);
     int (*linearize_discrete)(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real dt, pendulum_kane_real *Ad, pendulum_kane_real *Bd);
 } pendulum_kane_api_table;
@@ -92,7 +93,7 @@ static int pendulum_kane_api_eval_input(pendulum_kane_real t, const pendulum_kan
 PENDULUM_KANE_API_EXPORT extern const pendulum_kane_api_table pendulum_kane_api;
 
 PENDULUM_KANE_API_EXPORT const pendulum_kane_api_table pendulum_kane_api = {
-    "eomgen-abi-3e50b7319e7de5f6", "pendulum_kane", (int)sizeof(pendulum_kane_real),
+    "eomgen-abi-22a007e8714155d0", "pendulum_kane", (int)sizeof(pendulum_kane_real),
     PENDULUM_KANE_NQ, PENDULUM_KANE_NU, PENDULUM_KANE_NX, PENDULUM_KANE_NR, PENDULUM_KANE_NP, PENDULUM_KANE_MC, PENDULUM_KANE_MV, PENDULUM_KANE_NS, PENDULUM_KANE_NA, PENDULUM_KANE_NY,
     sizeof(pendulum_kane_sim_options), sizeof(pendulum_kane_input), sizeof(pendulum_kane_events), sizeof(pendulum_kane_sim_stats),
     pendulum_kane_status_message,
@@ -121,6 +122,7 @@ PENDULUM_KANE_API_EXPORT const pendulum_kane_api_table pendulum_kane_api = {
     pendulum_kane_step_sensitivity,
     pendulum_kane_api_eval_input,
     pendulum_kane_eval_outputs,
+    pendulum_kane_eval_hybrid,
     pendulum_kane_linearize_outputs,
     pendulum_kane_linearize_discrete
 };

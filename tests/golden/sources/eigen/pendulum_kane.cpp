@@ -45,6 +45,7 @@ template int jacobian<double>(detail::Real<double> t, const State<double> &x, co
 template int step_sensitivity<double>(detail::Real<double> t, detail::Real<double> h, const Inputs<double> &r, const Params<double> &p, State<double> &x, StateMatrix<double> &Fx, InputMatrix<double> &Fr) noexcept;
 template int eval_input<double>(detail::Real<double> t, const State<double> &x, const Input<double> &in, Inputs<double> &r) noexcept;
 template int eval_outputs<double>(detail::Real<double> t, const State<double> &x, const Inputs<double> &r, const Params<double> &p, Outputs<double> &y) noexcept;
+template int eval_hybrid<double>(detail::Real<double> t, const State<double> &x, const Params<double> &p, HybridValues<double> &g) noexcept;
 template int linearize_outputs<double>(const State<double> &x_op, const Inputs<double> &r_op, const Params<double> &p, detail::Real<double> t, StateMatrix<double> &A, InputMatrix<double> &B, OutputMatrix<double> &C, FeedthroughMatrix<double> &D) noexcept;
 template int linearize_discrete<double>(const State<double> &x_op, const Inputs<double> &r_op, const Params<double> &p, detail::Real<double> t, detail::Real<double> dt, StateMatrix<double> &Ad, InputMatrix<double> &Bd) noexcept;
 
@@ -79,6 +80,7 @@ template int jacobian<float>(detail::Real<float> t, const State<float> &x, const
 template int step_sensitivity<float>(detail::Real<float> t, detail::Real<float> h, const Inputs<float> &r, const Params<float> &p, State<float> &x, StateMatrix<float> &Fx, InputMatrix<float> &Fr) noexcept;
 template int eval_input<float>(detail::Real<float> t, const State<float> &x, const Input<float> &in, Inputs<float> &r) noexcept;
 template int eval_outputs<float>(detail::Real<float> t, const State<float> &x, const Inputs<float> &r, const Params<float> &p, Outputs<float> &y) noexcept;
+template int eval_hybrid<float>(detail::Real<float> t, const State<float> &x, const Params<float> &p, HybridValues<float> &g) noexcept;
 template int linearize_outputs<float>(const State<float> &x_op, const Inputs<float> &r_op, const Params<float> &p, detail::Real<float> t, StateMatrix<float> &A, InputMatrix<float> &B, OutputMatrix<float> &C, FeedthroughMatrix<float> &D) noexcept;
 template int linearize_discrete<float>(const State<float> &x_op, const Inputs<float> &r_op, const Params<float> &p, detail::Real<float> t, detail::Real<float> dt, StateMatrix<float> &Ad, InputMatrix<float> &Bd) noexcept;
 

@@ -43,6 +43,7 @@ inline constexpr int MV = 1;   // velocity constraints A(q) u + b = 0 (= multipl
 inline constexpr int NS = 2;   // independent state [q_ind, u_ind] (linearization)
 inline constexpr int NA = 0;   // auxiliary speeds = reaction forces
 inline constexpr int NY = 0;   // outputs
+inline constexpr int NH = 0;   // hybrid declarations (gaps and guards)
 inline constexpr int NQI = NQ - MC; // independent coordinates
 inline constexpr int NUI = NU - MV; // independent speeds
 inline constexpr bool HAS_ENERGY = true;
@@ -67,6 +68,8 @@ inline constexpr Status ERR_CONTROLLER = PENDULUM_KANE_ERR_CONTROLLER;
 inline constexpr Status ERR_CANCELLED = PENDULUM_KANE_ERR_CANCELLED;
 inline constexpr Status ERR_SINGULAR_REACTIONS = PENDULUM_KANE_ERR_SINGULAR_REACTIONS;
 inline constexpr Status ERR_INCONSISTENT_RESET = PENDULUM_KANE_ERR_INCONSISTENT_RESET;
+inline constexpr Status ERR_PENETRATED = PENDULUM_KANE_ERR_PENETRATED;
+inline constexpr Status ERR_GUARD_CROSSED = PENDULUM_KANE_ERR_GUARD_CROSSED;
 inline const char *status_message(int status) noexcept { return pendulum_kane_status_message(status); }
 
 using Method = int;
@@ -95,6 +98,7 @@ template <typename S> using StateMatrix = Mat<S, NS, NS>;
 template <typename S> using InputMatrix = Mat<S, NS, NR>;
 template <typename S> using AuxiliaryForces = Mat<S, NA, 1>;
 template <typename S> using Outputs = Mat<S, NY, 1>;
+template <typename S> using HybridValues = Mat<S, NH, 1>;
 template <typename S> using OutputMatrix = Mat<S, NY, NS>;
 template <typename S> using FeedthroughMatrix = Mat<S, NY, NR>;
 
@@ -146,6 +150,7 @@ template <> struct Api<double> {
     static constexpr auto &step_sensitivity = ::pendulum_kane_step_sensitivity;
     static constexpr auto &eval_input = ::pendulum_kane_eval_input;
     static constexpr auto &eval_outputs = ::pendulum_kane_eval_outputs;
+    static constexpr auto &eval_hybrid = ::pendulum_kane_eval_hybrid;
     static constexpr auto &linearize_outputs = ::pendulum_kane_linearize_outputs;
     static constexpr auto &linearize_discrete = ::pendulum_kane_linearize_discrete;
 };
@@ -181,6 +186,7 @@ template <> struct Api<float> {
     static constexpr auto &step_sensitivity = ::pendulum_kane_s_step_sensitivity;
     static constexpr auto &eval_input = ::pendulum_kane_s_eval_input;
     static constexpr auto &eval_outputs = ::pendulum_kane_s_eval_outputs;
+    static constexpr auto &eval_hybrid = ::pendulum_kane_s_eval_hybrid;
     static constexpr auto &linearize_outputs = ::pendulum_kane_s_linearize_outputs;
     static constexpr auto &linearize_discrete = ::pendulum_kane_s_linearize_discrete;
 };
@@ -503,6 +509,14 @@ template <typename S>
 inline int eval_outputs(detail::Real<S> t, const State<S> &x, const Inputs<S> &r, const Params<S> &p, Outputs<S> &y) noexcept
 {
     return detail::Api<S>::eval_outputs(t, x.data(), r.data(), p.data(), y.data());
+}
+
+/* The gaps and guards of the hybrid declarations (hybrid={...}) at (t, x), NH
+ * in declaration order, every contact free; NH == 0: nothing written. */
+template <typename S>
+inline int eval_hybrid(detail::Real<S> t, const State<S> &x, const Params<S> &p, HybridValues<S> &g) noexcept
+{
+    return detail::Api<S>::eval_hybrid(t, x.data(), p.data(), g.data());
 }
 
 /* linearize() and the outputs' C = dy/dx_ind (NY x NS), D = dy/dr (NY x NR),

@@ -90,6 +90,7 @@ typedef struct {
     int (*step_sensitivity)(eomgen_real t, eomgen_real h, const eomgen_real *r, const eomgen_real *p, eomgen_real *x, eomgen_real *Fx, eomgen_real *Fr);
     int (*eval_input)(eomgen_real t, const eomgen_real *x, const void *in, eomgen_real *r);
     int (*eval_outputs)(eomgen_real t, const eomgen_real *x, const eomgen_real *r, const eomgen_real *p, eomgen_real *y);
+    int (*eval_hybrid)(eomgen_real t, const eomgen_real *x, const eomgen_real *p, eomgen_real *g);
     int (*linearize_outputs)(const eomgen_real *x_op, const eomgen_real *r_op, const eomgen_real *p, eomgen_real t, eomgen_real *A, eomgen_real *B, eomgen_real *C, eomgen_real *D);
     int (*linearize_discrete)(const eomgen_real *x_op, const eomgen_real *r_op, const eomgen_real *p, eomgen_real t, eomgen_real dt, eomgen_real *Ad, eomgen_real *Bd);
 } eomgen_api;
@@ -119,6 +120,7 @@ int eomgen_jacobian(const eomgen_api *api, eomgen_real t, const eomgen_real *x, 
 int eomgen_step_sensitivity(const eomgen_api *api, eomgen_real t, eomgen_real h, const eomgen_real *r, const eomgen_real *p, eomgen_real *x, eomgen_real *Fx, eomgen_real *Fr);
 int eomgen_eval_input(const eomgen_api *api, eomgen_real t, const eomgen_real *x, const eomgen_input *in, eomgen_real *r);
 int eomgen_eval_outputs(const eomgen_api *api, eomgen_real t, const eomgen_real *x, const eomgen_real *r, const eomgen_real *p, eomgen_real *y);
+int eomgen_eval_hybrid(const eomgen_api *api, eomgen_real t, const eomgen_real *x, const eomgen_real *p, eomgen_real *g);
 int eomgen_linearize_outputs(const eomgen_api *api, const eomgen_real *x_op, const eomgen_real *r_op, const eomgen_real *p, eomgen_real t, eomgen_real *A, eomgen_real *B, eomgen_real *C, eomgen_real *D);
 int eomgen_linearize_discrete(const eomgen_api *api, const eomgen_real *x_op, const eomgen_real *r_op, const eomgen_real *p, eomgen_real t, eomgen_real dt, eomgen_real *Ad, eomgen_real *Bd);
 int eomgen_rhs_batch(const eomgen_api *api, int n, const eomgen_real *t, int t_stride, const eomgen_real *x, const eomgen_real *r, int r_stride, const eomgen_real *p, int p_stride, eomgen_real *dxdt, int *status);
