@@ -64,6 +64,21 @@ def load_mjcf(source, constants="numeric", gravity=None, inputs="torques"):
     :class:`FreeJoint`, its ball joints as :class:`BallJoint`), the file's
     gravity unless ``gravity`` is given.
 
+    Parameters
+    ----------
+    source : str or path
+        A file path, or the XML itself.
+    constants : {"numeric", "symbolic"}
+        As for :func:`load_urdf`.
+    gravity : 3 numbers, optional
+        In the world's axes; the file's ``<option gravity>`` by default.
+    inputs : "torques", None or list of joint names
+        The joints that get a torque input ``tau_<joint>``.
+
+    Returns
+    -------
+    Robot
+
     Raises
     ------
     gen.ModelError

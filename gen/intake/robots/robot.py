@@ -101,6 +101,13 @@ class Robot:
         ``{joint: (lower, upper)}`` of the limited revolute and prismatic joints.
     name : str
         A model name made from the file's robot name.
+
+    Parameters
+    ----------
+    system, constants, inputs, joints, limits, name
+        The attributes above (made by ``gen.load_urdf`` and ``gen.load_mjcf``).
+    coordinates : dict
+        ``{joint: its coordinate}`` of the one-dof joints.
     """
 
     def __init__(self, system, constants, inputs, joints, limits, name, coordinates):
@@ -121,7 +128,18 @@ class Robot:
         """``{"<joint>_lower": gen.Impact(q - lower), "<joint>_upper":
         gen.Impact(upper - q)}`` for every limited joint: each limit a
         unilateral contact, ``restitution`` its coefficient (0: the joint
-        stays at its stop while pushed into it)."""
+        stays at its stop while pushed into it).
+
+        Parameters
+        ----------
+        restitution : float, optional
+            The impacts' coefficient of restitution.
+
+        Returns
+        -------
+        dict
+            ``{name: gen.Impact}``, empty for a robot without limits.
+        """
         from ..hybrid import Impact
         out = {}
         for j, (lo, hi) in self.limits.items():
@@ -146,6 +164,16 @@ class Robot:
         hybrid : None, "limits" or dict
             ``"limits"``: :meth:`limit_impacts`; a dict of ``gen.Impact`` /
             ``gen.Reset`` as for any model.
+
+        Returns
+        -------
+        dict
+            ``constants``, ``inputs``, ``name``, ``formulation``, ``hybrid``.
+
+        Raises
+        ------
+        gen.ModelError
+            On an unknown ``hybrid`` string, or ``"limits"`` without limits.
         """
         if isinstance(hybrid, str):
             if hybrid != "limits":
