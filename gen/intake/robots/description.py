@@ -132,6 +132,10 @@ class RobotDescription:
                 if not np.isfinite(nrm) or nrm == 0.0:
                     raise ModelError(f"{self.joint_label(j)} has the axis {list(j.axis)}")
                 j.axis = np.asarray(j.axis, float) / nrm
+                # components at rounding level (a URDF's 6.12323e-17 for cos(pi/2)) are
+                # zero: the axis is the aligned one, as Pinocchio's parser reads it
+                j.axis[np.abs(j.axis) < 1e-12] = 0.0
+                j.axis /= np.linalg.norm(j.axis)
         roots = [n for n in self.links if n not in parent_of]
         if not roots:
             j = self.joints[0]
