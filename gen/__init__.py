@@ -11,6 +11,7 @@ verified C simulators.
     A, B = gen.linearize_symbolic(model, {q1: L, q2: 0})   # sympy matrices
     gen.export_fmu(model, "pend.fmu", fmi_version="3.0")   # FMI 2.0/3.0, ME and CS
     sol = gen.OptimalControl(model, 101, 2.0, objective=F**2, ...).solve()   # IPOPT
+    ekf = gen.EKF(model, {"x_m": x}, 0.01, Q, R, x0, P0); ekf.step(z, r)   # Kalman filters in C
 """
 import importlib.abc
 import importlib.util
@@ -36,6 +37,7 @@ from .sim.ensemble import At, EnsembleResult, Final, Max, Mean, Min, Sampler  # 
 from .intake.hybrid import Impact, Reset  # noqa: E402
 from .design.ocp import OptimalControl, OptimalSolution  # noqa: E402
 from .design.mpc import MPC  # noqa: E402
+from .design.estimator import EKF, UKF  # noqa: E402
 from .intake.robots import Robot, load_mjcf, load_urdf  # noqa: E402
 
 __all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "RunOptions",
@@ -43,8 +45,8 @@ __all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "Ru
            "ModelError", "BuildError", "InputError", "MissingDependencyError",
            "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "UnusedInputWarning", "MasslessSpeedWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
            "TrajectoryTracker", "export_fmu", "Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult",
-           "Impact", "Reset", "OptimalControl", "OptimalSolution", "MPC", "Robot", "load_urdf",
-           "load_mjcf", "__version__"]
+           "Impact", "Reset", "OptimalControl", "OptimalSolution", "MPC", "EKF", "UKF", "Robot",
+           "load_urdf", "load_mjcf", "__version__"]
 
 
 # gen.casadi and gen.pydy (the products users name as modules: CasADi external

@@ -91,6 +91,7 @@
 #define gen_rt_model_simulate_events GEN_RT_NAME_(model_simulate_events)
 #define gen_rt_model_simulate_input GEN_RT_NAME_(model_simulate_input)
 #define gen_rt_model_step_rk4 GEN_RT_NAME_(model_step_rk4)
+#define gen_rt_model_state_map GEN_RT_NAME_(model_state_map)
 #define gen_rt_model_step_sensitivity GEN_RT_NAME_(model_step_sensitivity)
 #define gen_rt_reactions_columns GEN_RT_NAME_(reactions_columns)
 #define gen_rt_reactions_lin GEN_RT_NAME_(reactions_lin)

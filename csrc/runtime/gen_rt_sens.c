@@ -253,3 +253,40 @@ int gen_rt_model_step_sensitivity(const gen_rt_model *m, gen_rt_real t, gen_rt_r
     }
     return GEN_RT_OK;
 }
+
+int gen_rt_model_state_map(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                           const gen_rt_real *r, const gen_rt_real *p, gen_rt_real *work,
+                           int *iwork, gen_rt_real *E)
+{
+    int nq = m->nq, nu = m->nu, mc = m->mc, mv = m->mv, nr = m->nr, nx = nq + nu;
+    int ns = nq - mc + nu - mv, k, st;
+    gen_rt_real *w = work;
+    gen_rt_real *zd = rt_take(&w, 2 * nx + nr + mv + 4), *Eo;
+    gen_rt_real *Kqd, *Kq, *Ku, *M, *Rq, *Ru, *Rr, *A, *Sq, *Su, *Vq, *Sqd, *Jc;
+    sens_constraint_blocks cb;
+    gen_rt_lin_out o;
+    if (!mc && !mv) {
+        rt_zero(nx * ns, E);
+        for (k = 0; k < nq; ++k) E[m->q_ind[k] * ns + k] = 1;
+        for (k = 0; k < nu; ++k) E[(nq + m->u_ind[k]) * ns + nq + k] = 1;
+        return GEN_RT_OK;
+    }
+    /* the kernel's blocks at q, u with q', u', the multipliers (and the
+     * inputs when r is NULL) zero: Jc, A and Vq hold none of them */
+    rt_zero(2 * nx + nr + mv + 4, zd);
+    Kqd = rt_take(&w, nq * nq); Kq = rt_take(&w, nq * nq); Ku = rt_take(&w, nq * nu);
+    M = rt_take(&w, nu * nu); Rq = rt_take(&w, nu * nq); Ru = rt_take(&w, nu * nu);
+    Rr = rt_take(&w, nu * nr + 1); A = rt_take(&w, mv * nu + 1); Sq = rt_take(&w, mv * nq + 1);
+    Su = rt_take(&w, mv * nu + 1); Vq = rt_take(&w, mv * nq + 1);
+    Sqd = rt_take(&w, mv * nq + 1); Jc = rt_take(&w, mc * nq + 1);
+    Eo = rt_take(&w, nx * ns);
+    o.Kqd = Kqd; o.Ku = Ku; o.M = M; o.A = A; o.Kq = Kq; o.Rq = Rq; o.Ru = Ru; o.Rr = Rr;
+    o.Sq = Sq; o.Su = Su; o.Vq = Vq; o.Jc = Jc; o.Sqd = Sqd;
+    m->lin_terms(x, x + nq, zd, zd + nq, zd + nx, r ? r : zd + nx + mv + 1, p, t, &o);
+    if (!rt_finite(mv * nu, A) || !rt_finite(mv * nq, Vq) || !rt_finite(mc * nq, Jc))
+        return GEN_RT_ERR_NONFINITE_MODEL;
+    cb.A = A; cb.Vq = Vq; cb.Jc = Jc;
+    if ((st = elimination(m, &cb, w, iwork, Eo))) return st;
+    rt_copy(nx * ns, Eo, E);
+    return GEN_RT_OK;
+}

@@ -109,6 +109,26 @@ int gen_rt_model_step_sensitivity(const gen_rt_model *m, gen_rt_real t, gen_rt_r
                                   gen_rt_real *work, int *iwork, gen_rt_real *x,
                                   gen_rt_real *Fx, gen_rt_real *Fr);
 
+/* ---- the map from the independent state to the full state ------------
+ * gen_rt_model_state_map gives E (nx x ns) at x: an independent
+ * perturbation [dq_ind; du_ind] to the full perturbation that keeps the
+ * constraint residuals f_c(q) and A(q) u + b at their values at x to first
+ * order (the E of the step's output convention above). A function g(x) of
+ * the full state has g_x E as its derivative on the independent state (a
+ * Kalman filter's measurement Jacobian, gen.EKF). Without constraints E
+ * only picks the independent entries (the identity on x). r: the inputs
+ * (NULL when nr == 0). Statuses: GEN_RT_ERR_NONFINITE_MODEL when a
+ * constraint Jacobian is NaN/inf, GEN_RT_ERR_SINGULAR when a dependent
+ * block is singular; E is written only on success. */
+#define GEN_RT_MODEL_STATE_MAP_WORK(nq, nu, mc, mv, nr, ek, acc)                \
+    (2 * GEN_RT_NX_(nq, nu) + (nr) + (mv) + 4 + GEN_RT_SENS_CORE_WORK_(nq, nu, mc, mv, nr) + \
+     GEN_RT_SENS_ELIM_WORK_(nq, nu, mc, mv) + GEN_RT_NX_(nq, nu) * GEN_RT_NS_(nq, nu, mc, mv))
+#define GEN_RT_MODEL_STATE_MAP_IWORK(nq, nu, mc, mv, nr, ek, acc) ((mc) + (mv) + 1)
+
+int gen_rt_model_state_map(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
+                           const gen_rt_real *r, const gen_rt_real *p, gen_rt_real *work,
+                           int *iwork, gen_rt_real *E);
+
 #ifdef __cplusplus
 }
 #endif

@@ -49,17 +49,29 @@ def _run(cmd, **kw):
     return r.stdout
 
 
-@pytest.fixture(scope="module")
-def wheel(tmp_path_factory):
-    out = tmp_path_factory.mktemp("wheels")
+def _wheel(out, prebuild):
+    env = dict(os.environ, EOMGEN_PREBUILD="1" if prebuild else "0")
     _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
-          "-w", str(out), str(ROOT)])
+          "-w", str(out), str(ROOT)], env=env)
     (whl,) = out.glob("eomgen-*.whl")
     return whl
 
 
-def test_wheel_carries_the_templates_and_the_runtime(wheel):
-    names = set(zipfile.ZipFile(wheel).namelist())
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory):
+    """The wheel as pip builds it: the host and runtime compiled at install time."""
+    return _wheel(tmp_path_factory.mktemp("wheels"), prebuild=True)
+
+
+@pytest.fixture(scope="module")
+def pure_wheel(tmp_path_factory):
+    """The wheel without the install-time build (EOMGEN_PREBUILD=0): its
+    sources, for the fast tier."""
+    return _wheel(tmp_path_factory.mktemp("pure"), prebuild=False)
+
+
+def test_wheel_carries_the_templates_and_the_runtime(pure_wheel):
+    names = set(zipfile.ZipFile(pure_wheel).namelist())
     tracked = _run(["git", "ls-files", "templates", "csrc"], cwd=ROOT).split()
     missing = [f for f in tracked if f"gen/{f}" not in names]
     assert missing == []
@@ -68,6 +80,7 @@ def test_wheel_carries_the_templates_and_the_runtime(wheel):
     assert any(n.endswith("entry_points.txt") for n in names)
 
 
+@pytest.mark.slow
 def test_wheel_ships_the_host_and_runtime_built_at_install_time(wheel):
     names = zipfile.ZipFile(wheel).namelist()
     kinds = {n.split("/")[2].split("_")[0] for n in names if n.startswith("gen/_prebuilt/")}
@@ -97,7 +110,7 @@ def test_every_product_runs_from_the_installed_wheel(wheel, tmp_path):
     _run([py, "-m", "pip", "install", "-q", f"{wheel}[{EXTRAS}]"], env=env)
     out = _run([py, str(HERE / "products.py"), str(tmp_path)], cwd=work, env=env)
     done = [line.split()[1] for line in out.splitlines() if line.startswith("ok ")]
-    assert done == ["simulate", "eigen", "fmu", "casadi", "ocp+tracker", "hybrid", "recursive", "mpc"]
+    assert done == ["simulate", "eigen", "fmu", "casadi", "ocp+tracker", "hybrid", "recursive", "mpc", "estimator"]
     # the command line: a standalone binary from a model file
     exe = Path(_run([env_dir / "bin" / "eomgen", "build", str(HERE / "model_file.py"), "-o",
                      str(tmp_path / "spring")], cwd=work, env=env).split()[-1])

@@ -26,6 +26,8 @@ ProductPlan, their C interface described once, gen/codegen/product_abi.py):
     Tracker "tracker" a trajectory tracker's const tables (gen/design/tracking.py)
     MPC     "mpc"     a model predictive controller over the model's C and the RTI and
                       QP runtime (csrc/products/mpc, gen/design/mpc)
+    Estimator "estimator" a Kalman filter over the model's step (csrc/products/estimator,
+                      gen/design/estimator)
 
 A new backend is a module here, a subclass of Backend or ProductBackend
 (gen/codegen/backends/base.py) with its templates under templates/<name>/,
@@ -39,6 +41,7 @@ from .base import (C_FLAGS, C_LIN_FLAGS, CXX_FLAGS, CXX_STRICT_FLAGS, DERIVATIVE
                    STRICT_FLAGS, Backend, ProductBackend, c_compiler, cxx_compiler)
 from .c import C_TEMPLATES, CBackend
 from .casadi import CasadiBackend
+from .estimator import EstimatorBackend
 from .eigen import CXX_RESERVED, EIGEN_RUNTIME_HEADERS, EigenBackend, eigen_include_dir
 from .fmu import FmuBackend
 from .mpc import MpcBackend
@@ -46,7 +49,8 @@ from .ocp import OcpBackend
 from .tracker import TrackerBackend
 
 __all__ = ["Backend", "CBackend", "EigenBackend", "FmuBackend", "CasadiBackend", "ProductBackend",
-           "OcpBackend", "TrackerBackend", "MpcBackend", "BACKENDS", "get_backend",
+           "OcpBackend", "TrackerBackend", "MpcBackend", "EstimatorBackend", "BACKENDS",
+           "get_backend",
            "backend_names", "c_compiler", "cxx_compiler", "eigen_include_dir", "C_TEMPLATES",
            "RUNTIME_SOURCES", "RUNTIME_HEADERS", "RUNTIME_MAIN", "EIGEN_RUNTIME_HEADERS", "C_FLAGS",
            "C_LIN_FLAGS", "RUNTIME_FLAGS", "STRICT_FLAGS", "CXX_FLAGS", "CXX_STRICT_FLAGS",
@@ -55,7 +59,8 @@ __all__ = ["Backend", "CBackend", "EigenBackend", "FmuBackend", "CasadiBackend",
 
 #: the registry: every backend, by name
 BACKENDS = {b.name: b for b in (CBackend(), EigenBackend(), FmuBackend(), CasadiBackend(),
-                                OcpBackend(), TrackerBackend(), MpcBackend())}
+                                OcpBackend(), TrackerBackend(), MpcBackend(),
+                                EstimatorBackend())}
 
 
 def backend_names(need=None):

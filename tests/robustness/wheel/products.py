@@ -2,7 +2,7 @@
 environment (tests/robustness/test_wheel.py): simulate, the Eigen backend,
 an FMU (checked by FMPy), CasADi functions, optimal control with its
 tracker, a hybrid model, the recursive formulation, model predictive
-control. Each prints one line
+control, an extended Kalman filter. Each prints one line
 `ok <product> <number>`; the numbers are checked here against independent
 references (exact physics, the model's own equations)."""
 import math
@@ -156,6 +156,24 @@ def check_mpc(model, syms):
     print("ok mpc", sol.x[-1, 0])
 
 
+def check_estimator():
+    """gen.EKF's first predict and update on the pendulum hanging at rest,
+    against the linear pendulum's exact transition and the scalar Kalman gain."""
+    model, (theta, omega, T) = pendulum("wheel_kf")
+    P0 = np.diag([1e-4, 1e-3])
+    ekf = gen.EKF(model, {"angle": theta}, 0.01, np.zeros((2, 2)), [1e-4], [0.0, 0.0], P0)
+    ekf.predict([0.0])
+    w = math.sqrt(9.81 / 0.5)
+    c, s = math.cos(w * 0.01), math.sin(w * 0.01)
+    F = np.array([[c, s / w], [-w * s, c]])  # exp(A dt) of theta'' = -w^2 theta
+    Pp = F @ P0 @ F.T
+    assert np.allclose(ekf.P, Pp, rtol=1e-6, atol=0), ekf.P   # RK4 against exp: (w dt)^5/120
+    ekf.update([0.01])                       # K = P H^T / (H P H^T + R)
+    K = Pp[:, 0] / (Pp[0, 0] + 1e-4)
+    assert np.allclose(ekf.x, K * 0.01, rtol=1e-6, atol=0), ekf.x
+    print("ok estimator", ekf.x[0])
+
+
 def main():
     tmp = Path(sys.argv[1])
     model, syms = check_simulate()
@@ -166,6 +184,7 @@ def main():
     check_hybrid()
     check_recursive()
     check_mpc(model, syms)
+    check_estimator()
 
 
 if __name__ == "__main__":

@@ -15,7 +15,8 @@ GEN = Path(gen.__file__).resolve().parent
 
 
 def test_one_object_per_backend_in_one_registry():
-    assert list(BACKENDS) == ["c", "eigen", "fmu", "casadi", "ocp", "tracker", "mpc"]
+    assert list(BACKENDS) == ["c", "eigen", "fmu", "casadi", "ocp", "tracker", "mpc",
+                             "estimator"]
     assert type(get_backend("c")) is CBackend
     assert type(get_backend("eigen")) is EigenBackend
     assert type(get_backend("fmu")) is FmuBackend
@@ -24,7 +25,7 @@ def test_one_object_per_backend_in_one_registry():
     assert backend_names("loadable") == ["c", "eigen"]
     assert backend_names("project") == ["c", "eigen"]
     # the products' libraries: rendered from a face's plan, never gen.compile'd
-    assert backend_names("product") == ["ocp", "tracker", "mpc"]
+    assert backend_names("product") == ["ocp", "tracker", "mpc", "estimator"]
     assert type(get_backend("ocp")) is OcpBackend and type(get_backend("tracker")) is TrackerBackend
     assert all(isinstance(b, ProductBackend) == b.product for b in BACKENDS.values())
     # the capabilities the pipeline asks for
@@ -36,7 +37,7 @@ def test_one_object_per_backend_in_one_registry():
 def test_unknown_backend_names_the_known_ones(kane_model, tmp_path):
     with pytest.raises(gen.ModelError, match=r"unknown backend 'cuda': choose one of "
                                              r"\['c', 'eigen', 'fmu', 'casadi', 'ocp', "
-                                             r"'tracker', 'mpc'\]"):
+                                             r"'tracker', 'mpc', 'estimator'\]"):
         get_backend("cuda")
     # a product's library is not a model's
     with pytest.raises(gen.ModelError, match=r"unknown backend 'ocp': choose one of "

@@ -145,6 +145,13 @@ static const gen_rt_model pendulum_kane_model = {
     NULL
 };
 
+/* the runtime's model (internal): the FMU glue's hybrid events and a
+ * product's runtime (gen.EKF's) call the runtime's functions with it */
+const gen_rt_model *pendulum_kane_runtime_model(void)
+{
+    return &pendulum_kane_model;
+}
+
 /* ------------------------------------------------------------------ */
 /* The public API (gen/codegen/abi.py)                                        */
 /* ------------------------------------------------------------------ */

@@ -36,5 +36,7 @@ GEN_RT_INTERNAL void pendulum_kane_k_energy(const pendulum_kane_real *q, const p
 GEN_RT_INTERNAL void pendulum_kane_lin_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *ud,
                  const pendulum_kane_real *lam, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t,
                  const gen_rt_lin_out *o);
+/* the gen_rt_model of pendulum_kane.c (the FMU glue's hybrid events, a product's runtime) */
+GEN_RT_INTERNAL const gen_rt_model *pendulum_kane_runtime_model(void);
 
 #endif /* PENDULUM_KANE_KERNELS_H */
