@@ -114,12 +114,13 @@ DRIVER = textwrap.dedent("""\
     int main(void) {{
         static const double x0[{P}_NX] = {{ {x0} }};
         static const double p[{np}] = {{ {pvals} }};
-        double x[{P}_NX], r[1] = {{0.0}}, d_eom[{P}_NX], d_cas[{P}_NX];
+        double x[{P}_NX], r[{P}_NR + 1], d_eom[{P}_NX], d_cas[{P}_NX];
         volatile double sink = 0;
         volatile unsigned long long spin = 1;
         int i, rep, n = {iters};
         {cas_setup}
         for (i = 0; i < {P}_NX; ++i) x[i] = x0[i];
+        for (i = 0; i <= {P}_NR; ++i) r[i] = 0.0;     /* the inputs at zero */
         if ({p}_eval_rhs(0.0, x, r, p, d_eom, NULL) != 0) return 2;
         {cas_check}
         for (rep = 0; rep < {reps}; ++rep) {{

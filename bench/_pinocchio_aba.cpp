@@ -6,10 +6,12 @@
 // last bit of every parameter):
 //
 //   njoints                       (joints past the universe)
-//   per joint: kind parent R00 R01 R02 R10 .. R22 t0 t1 t2
+//   per joint: kind [a0 a1 a2] parent R00 R01 R02 R10 .. R22 t0 t1 t2
 //              mass c0 c1 c2 I00 I01 I02 I10 .. I22
-//     (kind: JointModelRX/RY/RZ/PX/PY/PZ; R, t: the joint's placement in
-//      its parent; mass, c, I: the joint's body, inertia about c)
+//     (kind: JointModelRX/RY/RZ/PX/PY/PZ, RUBX/RUBY/RUBZ, FreeFlyer,
+//      Spherical, or RevoluteUnaligned/PrismaticUnaligned followed by the
+//      axis a; R, t: the joint's placement in its parent; mass, c, I: the
+//      joint's body, inertia about c)
 //   g0 g1 g2                      (model.gravity.linear)
 //   q (nq)  v (nv)  tau (nv)
 //   iters reps
@@ -39,7 +41,10 @@ static double now() {
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
-static pinocchio::JointModel joint_of(const std::string &kind) {
+static void read(std::istream &in, double *p, int k);
+
+// kinds with an axis (RevoluteUnaligned, PrismaticUnaligned) read it next
+static pinocchio::JointModel joint_of(const std::string &kind, std::istream &in) {
     using namespace pinocchio;
     if (kind == "JointModelRX") return JointModelRX();
     if (kind == "JointModelRY") return JointModelRY();
@@ -47,6 +52,18 @@ static pinocchio::JointModel joint_of(const std::string &kind) {
     if (kind == "JointModelPX") return JointModelPX();
     if (kind == "JointModelPY") return JointModelPY();
     if (kind == "JointModelPZ") return JointModelPZ();
+    if (kind == "JointModelRUBX") return JointModelRUBX();
+    if (kind == "JointModelRUBY") return JointModelRUBY();
+    if (kind == "JointModelRUBZ") return JointModelRUBZ();
+    if (kind == "JointModelFreeFlyer") return JointModelFreeFlyer();
+    if (kind == "JointModelSpherical") return JointModelSpherical();
+    if (kind == "JointModelRevoluteUnaligned" || kind == "JointModelPrismaticUnaligned") {
+        double a[3];
+        read(in, a, 3);
+        Eigen::Vector3d axis(a[0], a[1], a[2]);
+        if (kind == "JointModelRevoluteUnaligned") return JointModelRevoluteUnaligned(axis);
+        return JointModelPrismaticUnaligned(axis);
+    }
     throw std::runtime_error("joint kind not taken by the driver: " + kind);
 }
 
@@ -64,7 +81,9 @@ int main() try {
         std::string kind;
         int parent;
         double R[9], t[3], m, c[3], I[9];
-        if (!(in >> kind >> parent)) throw std::runtime_error("short input");
+        if (!(in >> kind)) throw std::runtime_error("short input");
+        pinocchio::JointModel jm = joint_of(kind, in);
+        if (!(in >> parent)) throw std::runtime_error("short input");
         read(in, R, 9);
         read(in, t, 3);
         read(in, &m, 1);
@@ -78,7 +97,7 @@ int main() try {
             }
         pinocchio::SE3 place(Rm, Eigen::Vector3d(t[0], t[1], t[2]));
         pinocchio::JointIndex id = model.addJoint(
-            (pinocchio::JointIndex)parent, joint_of(kind), place, "J" + std::to_string(j));
+            (pinocchio::JointIndex)parent, jm, place, "J" + std::to_string(j));
         model.appendBodyToJoint(id, pinocchio::Inertia(m, Eigen::Vector3d(c[0], c[1], c[2]), Im),
                                 pinocchio::SE3::Identity());
     }

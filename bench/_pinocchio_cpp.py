@@ -125,8 +125,10 @@ def model_text(model, q, v, tau, iters, reps):
     for j in range(1, model.njoints):
         M, Y = model.jointPlacements[j], model.inertias[j]
         vals = [*M.rotation.ravel(), *M.translation, Y.mass, *Y.lever, *Y.inertia.ravel()]
-        lines.append(f"{model.joints[j].shortname()} {model.parents[j]} "
-                     + " ".join(repr(float(a)) for a in vals))
+        kind = model.joints[j].shortname()
+        if kind in ("JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned"):
+            kind += " " + " ".join(repr(float(a)) for a in model.joints[j].extract().axis)
+        lines.append(f"{kind} {model.parents[j]} " + " ".join(repr(float(a)) for a in vals))
     lines.append(" ".join(repr(float(a)) for a in model.gravity.linear))
     for vec in (q, v, tau):
         lines.append(" ".join(repr(float(a)) for a in vec))

@@ -38,13 +38,15 @@ from .intake.hybrid import Impact, Reset  # noqa: E402
 from .design.ocp import OptimalControl, OptimalSolution  # noqa: E402
 from .design.mpc import MPC  # noqa: E402
 from .design.estimator import EKF, UKF  # noqa: E402
+from .intake.robots import Robot, load_mjcf, load_urdf  # noqa: E402
 
 __all__ = ["Model", "generate", "compile", "Simulator", "Solution", "Event", "RunOptions",
            "EomgenError",
            "ModelError", "BuildError", "InputError", "MissingDependencyError",
            "SolverError", "SingularError", "ConvergenceError", "DivergenceError", "UnusedConstantWarning", "UnusedInputWarning", "MasslessSpeedWarning", "linearize_symbolic", "verify", "VerifyReport", "LinearFeedback",
            "TrajectoryTracker", "export_fmu", "Sampler", "At", "Min", "Max", "Mean", "Final", "EnsembleResult",
-           "Impact", "Reset", "OptimalControl", "OptimalSolution", "MPC", "EKF", "UKF", "__version__"]
+           "Impact", "Reset", "OptimalControl", "OptimalSolution", "MPC", "EKF", "UKF", "Robot",
+           "load_urdf", "load_mjcf", "__version__"]
 
 
 # gen.casadi and gen.pydy (the products users name as modules: CasADi external

@@ -29,6 +29,8 @@ EXTRAS = {
     "tqdm": ("ensemble", "tqdm"),
     "pandas": ("ensemble", "pandas"),
     "pyarrow": ("ensemble", "pyarrow"),
+    "yourdfpy": ("robots", "yourdfpy"),
+    "mujoco": ("robots", "mujoco"),
 }
 
 

@@ -439,6 +439,103 @@ class Model:
                              "accepted are 'kane', 'recursive' and 'crba'")
         return builder_of(cls, obj, partition)(obj, **options, **partition)
 
+    # ---- robots from their files (gen.intake.robots) ----
+    @classmethod
+    def from_urdf(cls, source, base="fixed", formulation="recursive", constants="numeric",
+                  name=None, hybrid=None, inputs="torques", mimic="constraints", gravity=None):
+        """Build from a URDF file: its bodies and joints as a sympy System
+        (``gen.load_urdf(...).system``), then :meth:`from_system`.
+
+        Parameters
+        ----------
+        source : str or path
+            A file path, or the URDF's XML itself.
+        base : {"fixed", "floating"}, optional
+            ``"floating"``: the root link on a free joint ``base``, coordinates
+            ``base_x, base_y, base_z, base_qx, base_qy, base_qz, base_qw``
+            (position, quaternion scalar last) and speeds ``base_vx ... base_wz``
+            (body axes), as Pinocchio's free flyer (docs/guides/robots.md).
+        formulation : {"recursive", "crba", "kane"}, optional
+            As for :meth:`from_system` (``"kane"`` forms the System's equations
+            first: small robots only).
+        constants : {"numeric", "symbolic"}, optional
+            ``"symbolic"``: each link's mass ``m_<link>``, centre of mass
+            ``c_<link>_x/y/z`` and inertia ``I_<link>_xx ... _zz`` as run-time
+            constants, valued from the file.
+        name : str, optional
+            The model's C prefix; made from the robot's name by default.
+        hybrid : None, "limits" or dict, optional
+            ``"limits"``: the joint limits as impacts (``gen.Impact``, named
+            ``<joint>_lower`` and ``<joint>_upper``); a dict as for
+            :meth:`from_system`.
+        inputs : "torques", None or list of joint names, optional
+            A torque ``tau_<joint>`` (a force for a prismatic joint) for each
+            one-dof joint, for none, or for those named.
+        mimic : {"constraints", "ignore"}, optional
+            Mimic joints as holonomic constraints (dependent coordinates, last),
+            or as independent joints (Pinocchio's default).
+        gravity : 3 numbers, optional
+            In the world's axes; ``(0, 0, -9.81)`` by default.
+
+        Returns
+        -------
+        Model
+            The state ``[q, u]``: the joints in the order of Pinocchio's
+            ``buildModelFromUrdf``, ``q_<joint>`` and ``u_<joint>`` (an angle for
+            a continuous joint).
+
+        Raises
+        ------
+        gen.ModelError
+            Malformed XML (its line), a kinematic loop, an unknown joint type,
+            a moving joint over a massless subtree, naming the link or joint
+            and its line.
+        gen.MissingDependencyError
+            Without yourdfpy (``pip install eomgen[robots]``).
+        """
+        from .robots import load_urdf
+        robot = load_urdf(source, base=base, constants=constants, mimic=mimic,
+                          gravity=gravity, inputs=inputs)
+        return cls.from_system(robot.system, **robot.model_options(formulation, name, hybrid))
+
+    @classmethod
+    def from_mjcf(cls, source, formulation="recursive", constants="numeric", name=None,
+                  hybrid=None, inputs="torques", gravity=None):
+        """Build from an MJCF file compiled by MuJoCo (its defaults, classes
+        and includes resolved by MuJoCo's own compiler): its bodies and
+        joints as a sympy System (``gen.load_mjcf(...).system``), then
+        :meth:`from_system`. The state follows MuJoCo's joint order; a free
+        joint and a ball joint hold a quaternion scalar last (MuJoCo's is
+        scalar first) and body-axes speeds (docs/guides/robots.md). The
+        rigid-body dynamics only: contacts, joint damping, armature, springs,
+        actuators, tendons and equality constraints are not modelled.
+
+        Parameters
+        ----------
+        source : str or path
+            A file path, or the MJCF's XML itself.
+        formulation, constants, name, hybrid, inputs
+            As for :meth:`from_urdf` (``hybrid="limits"``: the joints' ranges
+            where MuJoCo limits them).
+        gravity : 3 numbers, optional
+            The file's ``<option gravity>`` by default.
+
+        Returns
+        -------
+        Model
+
+        Raises
+        ------
+        gen.ModelError
+            What MuJoCo's compiler refuses (its message and line), or a moving
+            joint over a massless subtree.
+        gen.MissingDependencyError
+            Without mujoco (``pip install eomgen[robots]``).
+        """
+        from .robots import load_mjcf
+        robot = load_mjcf(source, constants=constants, gravity=gravity, inputs=inputs)
+        return cls.from_system(robot.system, **robot.model_options(formulation, name, hybrid))
+
     # ---- from matrices (gen.pydy: PyDy's forms; any M, f and kinematics) ----
     @classmethod
     @shared_doc

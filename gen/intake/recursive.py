@@ -55,7 +55,10 @@ left alone (nodes of different builds never compare equal, so an earlier
 build's nodes left in it are never walked).
 
 Taken: trees of ``PinJoint``, ``PrismaticJoint``, ``CylindricalJoint``,
-``PlanarJoint``, ``SphericalJoint`` and ``WeldJoint`` between rigid bodies,
+``PlanarJoint``, ``SphericalJoint`` and ``WeldJoint`` between rigid bodies
+(and of any joint with a ``motion_subspace()`` method returning its ``S`` and
+velocity-product part in the child's axes: the quaternion ``FreeJoint`` and
+``BallJoint`` of :mod:`gen.intake.robots.joints`),
 with forces on points and torques on frames the tree knows (gravity from
 ``apply_uniform_gravity``, loads, actuators), and the System's holonomic and
 nonholonomic constraints (loop closures) with their dependent coordinates
@@ -150,7 +153,7 @@ class _Tree:
         child_of = {}
         for j in system.joints:
             kind = type(j).__name__
-            if kind not in SUPPORTED_JOINTS:
+            if kind not in SUPPORTED_JOINTS and not callable(getattr(j, "motion_subspace", None)):
                 raise ModelError(
                     f"joint {_name(j)!r} is a {kind}: formulation='recursive' takes "
                     f"{', '.join(SUPPORTED_JOINTS)}")
@@ -457,11 +460,35 @@ def _inv_small(D, ik):
     k = D.shape[0]
     if k == 1:
         return sm.Matrix([[ik.keep(1 / D[0, 0])]])
+    if k > 3:
+        return _inv_ldlt(D, ik)
     X = sm.Matrix(k, k, lambda i, j: sm.Symbol(f"_D{min(i, j)}_{max(i, j)}"))
     sub = {X[i, j]: D[i, j] for i in range(k) for j in range(k)}
     idet = ik.keep(1 / ik.keep(X.det(method="berkowitz").xreplace(sub)))
     adj = X.adjugate(method="berkowitz").xreplace(sub)
     return ik.sym_kept(adj * idet)
+
+
+def _inv_ldlt(D, ik):
+    """The inverse of a symmetric positive definite matrix of kept entries
+    (a free joint's 6 x 6) through its LDL^T factors, each entry one kept
+    node: O(k^3) nodes, where the adjugate's cofactors grow factorially."""
+    k = D.shape[0]
+    L, d = sm.eye(k), [None] * k
+    for j in range(k):
+        d[j] = ik.keep(D[j, j] - sm.Add(*[L[j, m]**2 * d[m] for m in range(j)]))
+        for i in range(j + 1, k):
+            L[i, j] = ik.keep((D[i, j] - sm.Add(*[L[i, m] * L[j, m] * d[m] for m in range(j)]))
+                              / d[j])
+    # L^-1, unit lower triangular, by forward substitution
+    Li = sm.eye(k)
+    for i in range(k):
+        for j in range(i):
+            Li[i, j] = ik.keep(-sm.Add(*[L[i, m] * Li[m, j] for m in range(j, i)]))
+    dinv = [ik.keep(1 / x) for x in d]
+    low = {(i, j): ik.keep(sm.Add(*[Li[m, i] * dinv[m] * Li[m, j] for m in range(max(i, j), k)]))
+           for i in range(k) for j in range(i + 1)}
+    return sm.Matrix(k, k, lambda i, j: low[max(i, j), min(i, j)])
 
 
 def _walk(system, ik):
@@ -474,6 +501,7 @@ def _walk(system, ik):
     tree = _Tree(system)
     tree.ik = ik
     _joint_kinematics(tree)
+    _common_axes(tree)
     places = _Places(tree, system)
     # each body's axes in the inertial frame's: R = A Rot(k, theta) B, the
     # angles of consecutive joints about one axis summed (a chain of parallel
@@ -483,6 +511,26 @@ def _walk(system, ik):
     _external_loads(tree, system, places)
     _velocities(tree)
     return tree
+
+
+def _common_axes(tree):
+    """The axes the recursions run in: the inertial frame's, or, for a tree
+    whose one root body moves on a free joint (a joint with its own
+    six-column ``motion_subspace``, from the System's frame), that body's
+    own axes. Every equation of the recursions is a vector equation, true
+    in any axes; in the root's axes the limbs' orientations are those of a
+    fixed-base robot (constant rotations and joint angles) instead of
+    products with the root's quaternion, and only the loads given in the
+    inertial axes (gravity) are turned, by ``tree.Rt`` (inertial -> root
+    axes, kept nodes). ``tree.Rt`` is None for the inertial axes."""
+    tree.Rt, tree.float_root = None, None
+    roots = [n for n in tree.order if n.parent is None]
+    if len(roots) == 1:
+        n = roots[0]
+        if callable(getattr(n.joint, "motion_subspace", None)) and n.S.shape[1] == 6 \
+                and n.joint.parent.frame == tree.N:
+            tree.float_root = n
+            tree.Rt = tree.ik.kept(n.E)       # child <- parent = root <- inertial
 
 
 def _joint_kinematics(tree):
@@ -505,6 +553,11 @@ def _joint_kinematics(tree):
         if any(e.has(_T) for e in n.r_cc):
             raise ModelError(f"joint {_name(j)!r}: its child point moves in body "
                              f"{_name(child)!r}")
+        if callable(getattr(j, "motion_subspace", None)):
+            # a joint that gives its own S and velocity-product part (the
+            # quaternion joints of gen.intake.robots.joints)
+            n.S, n.rel_bias = j.motion_subspace()
+            continue
         # d/dt in the parent frame of C_child - C_parent, in the child's axes
         v_rel = n.E * n.r_pp.diff(_T) + _cross(w_rel, n.r_cc)
         rel = sm.Matrix.vstack(w_rel, v_rel).xreplace(tree.qdot)
@@ -585,19 +638,20 @@ class _Places:
 
     def in_world(self, vec):
         """vec's components in the inertial axes (through the bodies' R)."""
-        N, out = self.tree.N, sm.zeros(3, 1)
+        N, out, inertial = self.tree.N, sm.zeros(3, 1), sm.zeros(3, 1)
         for comp, frame in vec.args:
             comp = sm.Matrix(comp)
             if frame == N:
-                out += comp
+                inertial += comp
             elif frame in self.frames and frame not in self.ground_frames:
                 b = self.tree.nodes[self.frames[frame]]
                 if frame != b.body.frame:
                     comp = me.Vector([(comp, frame)]).to_matrix(b.body.frame)
                 out += b.R * comp
             else:
-                out += me.Vector([(comp, frame)]).to_matrix(N)
-        return out
+                inertial += me.Vector([(comp, frame)]).to_matrix(N)
+        # the recursions' axes (_common_axes)
+        return out + (inertial if self.tree.Rt is None else self.tree.Rt * inertial)
 
 
 def _external_loads(tree, system, places):
@@ -640,10 +694,10 @@ def _velocities(tree):
         R = n.R
         n.Sw = ik.kept(sm.Matrix.vstack(R * n.S[:3, :], R * n.S[3:, :])) if n.S.shape[1] \
             else sm.zeros(6, 0)
-        rel = n.Sw * _col(n.joint.speeds)
+        rel = ik.kept(n.Sw * _col(n.joint.speeds))
         w_rel, v_rel = rel[:3, :], rel[3:, :]
         if n.parent is None:
-            w_p, Rp = zero, sm.eye(3)
+            w_p, Rp = zero, (sm.eye(3) if tree.Rt is None else tree.Rt)
         else:
             w_p, Rp = n.parent.w, n.parent.R
         r = ik.kept(Rp * n.r_pp + R * n.r_cc)
@@ -656,9 +710,11 @@ def _velocities(tree):
         if n.rel_bias is not None:
             cw += R * n.rel_bias[:3, :]
             cv += R * n.rel_bias[3:, :]
-        n.cw, n.cv = cw, cv
+        n.cw, n.cv = ik.kept(cw), ik.kept(cv)
         b = n.body
-        n.Iw = ik.kept(R * _inertia_matrix(b) * R.T)
+        # R I first, one node per entry: R (I R^T) as one product would
+        # repeat each column of R I in three entries
+        n.Iw = ik.sym_kept(ik.kept(R * _inertia_matrix(b)) * R.T)
 
 
 def _inertia_matrix(body):
@@ -719,6 +775,11 @@ def _rot(k, th):
 def _orientation(n, tree):
     """n.R (body axes -> inertial axes) as A Rot(k, theta) B, sharing the
     angle with the parent when the joint turns about the parent's axis."""
+    if n is tree.float_root:
+        # the recursions' axes are this body's (_common_axes)
+        n.rep = (sm.eye(3), None, sm.S.Zero, sm.eye(3))
+        n.R = sm.eye(3)
+        return
     if n.parent is None:
         A, k, th, B = sm.eye(3), None, sm.S.Zero, sm.eye(3)
         if n.joint.parent.frame != tree.N:     # pragma: no cover - refused in _Tree
@@ -754,7 +815,7 @@ def _orientation(n, tree):
     ik = tree.ik
     n.rep = rep = (ik.kept(A), k, ik.keep(th), B)
     A, k, th, B = rep
-    n.R = ik.kept(A * (_rot(k, th) if k is not None else sm.eye(3)) * B)
+    n.R = ik.kept(ik.kept(A * _rot(k, th)) * B if k is not None else A * B)
 
 
 def _same(X, Y, q):

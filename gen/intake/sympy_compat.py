@@ -24,7 +24,8 @@ from sympy.physics import mechanics as me
 
 __all__ = ["time_symbol", "kane_is_formed", "kane_auxiliary_speeds", "kane_dependent_counts",
            "kane_kinematics", "kane_configuration_constraints", "kane_velocity_constraints",
-           "kane_frame", "kane_qdot_map", "lagrange_dynamics", "lagrange_holonomic"]
+           "kane_frame", "kane_qdot_map", "lagrange_dynamics", "lagrange_holonomic",
+           "orient_explicit_without_rates"]
 
 
 def time_symbol():
@@ -110,3 +111,16 @@ def lagrange_holonomic(lm):
     1.14)."""
     hol = getattr(lm, "_hol_coneqs", None)
     return sm.Matrix(hol) if hol is not None and len(hol) else sm.zeros(0, 1)
+
+
+# ------------------------------------------------------- ReferenceFrame
+def orient_explicit_without_rates(frame, parent, dcm):
+    """``frame.orient_explicit(parent, dcm)`` (``dcm``: parent components of
+    frame's axes) without sympy's angular velocity from the derivative of
+    ``dcm`` (``orient_dcm`` differentiates, expands and trigsimps its nine
+    entries: seconds for a quaternion's): the orientation alone, through
+    ``ReferenceFrame._dcm`` and a reset ``_var_dict``, as ``orient_dcm`` does
+    before its rates (sympy 1.14). The caller sets the angular velocity
+    (``frame.set_ang_vel``)."""
+    frame._dcm(parent, dcm)
+    frame._var_dict = {}

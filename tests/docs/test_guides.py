@@ -31,7 +31,8 @@ SETUP = re.compile(r"<!--\s*guide:\s*setup\s*\n(.*?)-->", re.S)
 LANGUAGES = {"python", "sh", "c", "cpp", "text"}
 
 # guides whose blocks take long to run (a C++ compile, an FMU build, 10^4 runs)
-SLOW = {"eigen.md", "fmu.md", "ensembles.md", "verification.md", "estimation.md"}
+SLOW = {"eigen.md", "fmu.md", "ensembles.md", "verification.md", "estimation.md",
+        "robots.md"}
 
 
 def blocks(path):
