@@ -18,11 +18,11 @@ from conftest import require_eigen, require_tool
 
 ROOT = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent / "wheel"
-EXTRAS = "control,ocp,casadi,fmu"
+EXTRAS = "control,ocp,casadi,fmu,robots"
 
 # the products that need an extra, run without it (wheel/without_extras.py)
 WITHOUT = {"ocp": "ocp", "tracker": "control", "casadi": "casadi", "fmu": "fmu",
-           "statespace": "control"}
+           "statespace": "control", "robots": "robots"}
 
 
 # the first model in a fresh process, right after the install (issue 47): the
@@ -110,7 +110,8 @@ def test_every_product_runs_from_the_installed_wheel(wheel, tmp_path):
     _run([py, "-m", "pip", "install", "-q", f"{wheel}[{EXTRAS}]"], env=env)
     out = _run([py, str(HERE / "products.py"), str(tmp_path)], cwd=work, env=env)
     done = [line.split()[1] for line in out.splitlines() if line.startswith("ok ")]
-    assert done == ["simulate", "eigen", "fmu", "casadi", "ocp+tracker", "hybrid", "recursive", "mpc", "estimator"]
+    assert done == ["simulate", "eigen", "fmu", "casadi", "ocp+tracker", "hybrid", "recursive",
+                    "mpc", "estimator", "robots"]
     # the command line: a standalone binary from a model file
     exe = Path(_run([env_dir / "bin" / "eomgen", "build", str(HERE / "model_file.py"), "-o",
                      str(tmp_path / "spring")], cwd=work, env=env).split()[-1])

@@ -2,7 +2,7 @@
 environment (tests/robustness/test_wheel.py): simulate, the Eigen backend,
 an FMU (checked by FMPy), CasADi functions, optimal control with its
 tracker, a hybrid model, the recursive formulation, model predictive
-control, an extended Kalman filter. Each prints one line
+control, an extended Kalman filter, a robot from URDF. Each prints one line
 `ok <product> <number>`; the numbers are checked here against independent
 references (exact physics, the model's own equations)."""
 import math
@@ -174,6 +174,27 @@ def check_estimator():
     print("ok estimator", ekf.x[0])
 
 
+URDF = """<robot name="pend">
+  <link name="base"/>
+  <link name="arm">
+    <inertial><origin xyz="0 0 -0.5"/><mass value="1.0"/>
+      <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <joint name="hinge" type="revolute"><parent link="base"/><child link="arm"/>
+    <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="10" velocity="10"/></joint>
+</robot>"""
+
+
+def check_robots():
+    """A URDF pendulum (yourdfpy) against its small-oscillation rate
+    m g l / (I + m l^2) about the hinge."""
+    model = gen.Model.from_urdf(URDF, name="wheel_urdf")
+    A, _ = gen.compile(model).linearize([0.0, 0.0])
+    w2 = 1.0 * 9.81 * 0.5 / (0.01 + 1.0 * 0.5 ** 2)
+    assert np.allclose(A, [[0, 1], [-w2, 0]], rtol=0, atol=1e-12), A
+    print("ok robots", A[1, 0])
+
+
 def main():
     tmp = Path(sys.argv[1])
     model, syms = check_simulate()
@@ -185,6 +206,7 @@ def main():
     check_recursive()
     check_mpc(model, syms)
     check_estimator()
+    check_robots()
 
 
 if __name__ == "__main__":

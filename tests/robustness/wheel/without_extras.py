@@ -11,7 +11,7 @@ import numpy as np
 import gen
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from products import pendulum  # noqa: E402
+from products import URDF, pendulum  # noqa: E402
 
 
 def attempt(what, call):
@@ -39,6 +39,7 @@ def main():
     attempt("casadi", lambda: gen.casadi.functions(model))
     attempt("fmu", lambda: gen.export_fmu(model, tmp / "bare.fmu"))
     attempt("statespace", lambda: sim.to_statespace([0.0, 0.0]))
+    attempt("robots", lambda: gen.Model.from_urdf(URDF, name="bare_urdf"))
 
 
 if __name__ == "__main__":
