@@ -191,6 +191,11 @@ class OptimalSolution:
         Returns
         -------
         gen.design.tracking.TrajectoryTracker
+
+        Raises
+        ------
+        gen.InputError
+            For a solution of several phases: a tracker follows one phase.
         """
         from ..tracking import TrajectoryTracker
         if len(self.phases) > 1:
