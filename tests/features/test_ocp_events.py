@@ -299,3 +299,85 @@ def test_ball_two_phases_across_its_impact_against_the_analytic_bounce():
     assert str(err.value) == ("tracker: this solution has 2 phases (events ['ground', "
                               "'ground']); a tracker follows one phase, not a trajectory "
                               "across events")
+
+
+def _impulse_strike(x, Mh, m, b, l=1.0):
+    """The heel strike of examples/compass_gait.py by the impulse method, in
+    numpy (Westervelt, Grizzle et al. 2007, 3.4): the walker floating (hip
+    x, y and each leg's absolute angle), D (p+' - p-') = J^T Lambda with the
+    new stance foot's velocity J p+' = 0; then the legs swap."""
+    th, ph, om, mu, tau = x
+    thd = om
+    phd = mu + 2 * om
+    psi, psid = th - ph, thd - phd                      # the swing leg's angle, rate
+    pd = np.array([-l * np.cos(th) * thd, -l * np.sin(th) * thd, thd, psid])
+
+    def point(a, s, k):       # hip + s (sin a, -cos a): its Jacobian in (x, y, th, psi)
+        J = np.zeros((2, 4))
+        J[:, :2] = np.eye(2)
+        J[:, k] = [s * np.cos(a), s * np.sin(a)]
+        return J
+    Jh = np.zeros((2, 4))
+    Jh[:, :2] = np.eye(2)
+    D = Mh * Jh.T @ Jh + sum(m * J.T @ J for J in (point(th, b, 2), point(psi, b, 3)))
+    Jf = point(psi, l, 3)
+    K = np.block([[D, -Jf.T], [Jf, np.zeros((2, 2))]])
+    after = np.linalg.solve(K, np.concatenate([D @ pd, [0, 0]]))[:4]
+    th1, thd1, phd1 = psi, after[3], after[3] - after[2]
+    return np.array([th1, -ph, thd1, phd1 - 2 * thd1, -tau])
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(cyipopt is None and os.environ.get("CI") != "true",
+                    reason="cyipopt not installed (pip install eomgen[ocp])")
+def test_powered_compass_gait_replays_through_its_heel_strikes():
+    """The powered compass gait on flat ground (examples/compass_gait.py: hip
+    mass 1, leg masses 0.5 at 0.5 from the hip, a hip torque tau with rate
+    sigma), least effort for a step of 0.5 in 2.0: its heel strike (from
+    angular momentum, derived in sympy) against the impulse method in
+    numpy, and Garcia's map in the limit of massless legs; the optimum
+    replayed through the simulator, which makes its own strike, to the
+    transcription's accuracy as the nodes double; the motor's torque
+    continuous and smooth across the strike (tau(0) = -tau(T) by the
+    periodic map, and its rate too, which nothing imposes)."""
+    sys.path.insert(0, str(EXAMPLES))
+    try:
+        import compass_gait as cg
+    finally:
+        sys.path.remove(str(EXAMPLES))
+    # Garcia's heel strike in the limit of massless legs with feet at their ends
+    garcia = gen.compile(cg.model(m=1e-9, b=1.0, name="compass_garcia"))
+    run = garcia.simulate([-0.2, -0.4 - 1e-4, -0.2, 0.1, 0.0], 0.01, 0.01, method="dopri5",
+                          rtol=1e-12, atol=1e-12)      # just before the guard phi = 2 theta
+    (ev,) = run.events
+    assert ev.name == "heelstrike"
+    th, ph, om, _, _ = ev.x
+    c2 = np.cos(ph)
+    assert abs(ph - 2 * th) < 1e-12
+    assert abs(ev.x_after[2] - c2 * om) < 1e-7
+    assert abs(ev.x_after[3] + 2 * ev.x_after[2] - c2 * (1 - c2) * om) < 1e-7
+    model = cg.model(name="compass_ocp")
+    errs, sols = [], []
+    for N in (41, 81):
+        ocp, sol = cg.powered_gait(model, nodes=N, tol=1e-12)
+        assert sol.status == 0, sol.message
+        T = sol.t[-1]
+        (phase,) = sol.phases
+        assert abs(2 * np.sin(-phase.x[-1, 0]) - 0.5) < 1e-12 and abs(phase.x[-1, 3] - 0.2) < 1e-12
+        # the strike's map at the optimum: the impulse method's
+        np.testing.assert_allclose(phase.x_after, _impulse_strike(phase.x[-1], 1.0, 0.5, 0.5),
+                                   rtol=0, atol=1e-12)
+        run = ocp.simulator.simulate(sol.x[0], 1.05 * T, 0.01,       # sigma held after T
+                                     r=lambda t, x, s=sol, T=T: s.input(min(t, T)),
+                                     method="dopri5", input_period=0, rtol=1e-13, atol=1e-13)
+        (strike,) = [e for e in run.events if e.name == "heelstrike"]
+        np.testing.assert_allclose(strike.x_after, _impulse_strike(strike.x, 1.0, 0.5, 0.5),
+                                   rtol=0, atol=1e-12)
+        errs.append(max(abs(strike.t - T), np.abs(strike.x - phase.x[-1]).max(),
+                        np.abs(strike.x_after - sol.x[0]).max()))
+        sols.append(sol)
+    assert errs[1] < 1e-5 and errs[0] / errs[1] > 8, errs      # fourth order or near it
+    sol = sols[1]
+    tau, sigma = sol.x[:, 4], sol.r[:, 0]
+    assert abs(tau[0] + tau[-1]) < 1e-10                       # the motor's torque
+    assert abs(sigma[0] + sigma[-1]) < 1e-3 * np.abs(sigma).max()    # and its rate
