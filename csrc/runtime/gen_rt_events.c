@@ -190,8 +190,9 @@ int gen_rt_events_start(gen_rt_engine *e, gen_rt_real t0, gen_rt_real *x)
     gen_rt_sim_ctx *c = e->c;
     gen_rt_real tol = 1;
     int k, j, st, which, jumped = 0, changed = 0;
-    const int *held0 = e->rows + e->nh;
+    const int *held0;
     if (e->nh <= 0) return GEN_RT_OK;
+    held0 = e->rows + e->nh;
     st = gen_rt_hybrid_penetrated(c->m, t0, x, c->p, e->hva, &which);
     if (st == GEN_RT_ERR_PENETRATED) log_event_(e, e->nev + which, t0, x, x);
     if (st) return st;
