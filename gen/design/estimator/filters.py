@@ -171,19 +171,13 @@ class EKF:
     ----------
     x, P : numpy.ndarray
         The estimate (n,) and its covariance (n, n).
-    x_full : numpy.ndarray
-        The model's full state (nx,) at the estimate (the dependent entries
-        on the constraints).
-    params : dict
-        The estimated constants' values.
-    t : float
-        The estimate's time.
     innovations, innovation_variances, status : numpy.ndarray
         The last update's, one per measurement (status: ACCEPTED 0, GATED 1,
         MISSING 2, DEGENERATE 3).
-    rejected : numpy.ndarray
-        Measurements not fused so far, counted per measurement.
     state_names, measurement_names : list of str
+        The names of the filter's states and of the measurements. The full
+        state ``x_full``, the estimated ``params``, the time ``t`` and the
+        ``rejected`` counts are properties, documented below.
 
     Raises
     ------

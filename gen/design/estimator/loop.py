@@ -55,9 +55,8 @@ class EstimatorFeedback:
     ----------
     t, x, sd : numpy.ndarray
         After a run: the sample times, the estimates (filter state) and
-        their standard deviations, for the first ``log`` samples.
-    n_samples : int
-        The samples of the last run.
+        their standard deviations, for the first ``log`` samples;
+        ``n_samples`` (a property, below) counts the last run's samples.
     """
 
     def __init__(self, kf, law, *, seed=0, noise=None, theta=None, log=10000):
