@@ -367,9 +367,10 @@ def accelerations_of_tree(system, interner=None):
             # body's mass centre: X^T Ia X, X^T pa (X: motion from here to there)
             Ac, Bc, Cc = c.IA
             pcw, pcv = c.pA
+            # (Rx Bc^T = -(Bc Rx)^T: one product, both triangles of it)
             Rx = _skew(c.rw)
-            RC = Rx * Cc
-            A = A + Ac - Bc * Rx + Rx * Bc.T - RC * Rx
+            RC, P = ik.kept(Rx * Cc), ik.kept(Bc * Rx)
+            A = A + Ac - P - P.T - RC * Rx
             B = B + Bc + RC
             C = C + Cc
             pw = pw + pcw + _cross(c.rw, pcv)

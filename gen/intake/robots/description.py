@@ -29,11 +29,29 @@ import numpy as np
 from ...core.errors import ModelError
 
 __all__ = ["Inertial", "Link", "JointSpec", "RobotDescription", "Body", "bodies_of",
-           "KINDS", "DOF", "merge_inertials"]
+           "KINDS", "DOF", "merge_inertials", "exact_rotation"]
 
 # the joint kinds a description holds, and their speeds
 DOF = {"revolute": 1, "continuous": 1, "prismatic": 1, "fixed": 0, "floating": 6, "ball": 3}
 KINDS = tuple(DOF)
+
+
+def exact_rotation(R, tol=1e-12):
+    """R (a rotation matrix of floats) with the entries that are 0 or +-1
+    up to rounding made exact: |entry| below tol is 0, and an entry alone
+    in its row and column after that is its sign. A file's ``rpy="0 0
+    1.5708"``-style right angles come as cos(pi/2) = 6.1e-17 beside exact
+    ones; exact, the generated code folds them (no products with 6.1e-17 or
+    3.7e-33, a joint axis along a frame axis stays one) and the result
+    differs from the unrounded one by those roundings (1e-16)."""
+    R = np.array(R, dtype=float)
+    R[np.abs(R) < tol] = 0.0
+    for i in range(3):
+        nz = np.flatnonzero(R[i])
+        if len(nz) == 1 and np.count_nonzero(R[:, nz[0]]) == 1 \
+                and abs(abs(R[i, nz[0]]) - 1.0) < tol:
+            R[i, nz[0]] = np.sign(R[i, nz[0]])
+    return R
 
 
 @dataclass
@@ -205,7 +223,7 @@ def bodies_of(desc, floating):
     def visit(body, link, R, p):
         # link: placed at (R, p) in body's frame (body None: the ground)
         for j in children.get(link, ()):
-            Rj, pj = R @ j.rotation, R @ j.translation + p
+            Rj, pj = exact_rotation(R @ j.rotation), R @ j.translation + p
             if j.kind == "fixed":
                 if body is not None:
                     out[body].links.append((desc.links[j.child], Rj, pj))

@@ -34,7 +34,7 @@ import numpy as np
 
 from ...core.errors import ModelError
 from ...core.optional import require
-from .description import Inertial, JointSpec, Link, RobotDescription
+from .description import Inertial, JointSpec, Link, RobotDescription, exact_rotation
 
 __all__ = ["read_mjcf", "compile_mjcf"]
 
@@ -67,9 +67,9 @@ def compile_mjcf(source):
 def _quat(wxyz):
     """The rotation matrix of MuJoCo's quaternion (scalar first)."""
     w, x, y, z = np.asarray(wxyz, float) / np.linalg.norm(wxyz)
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+    return exact_rotation(np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]))
 
 
 def _names(m, obj, n, prefix):

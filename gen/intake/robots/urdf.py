@@ -22,7 +22,7 @@ import numpy as np
 
 from ...core.errors import ModelError
 from ...core.optional import require
-from .description import Inertial, JointSpec, Link, RobotDescription
+from .description import Inertial, JointSpec, Link, RobotDescription, exact_rotation
 
 __all__ = ["read_urdf", "read_xml"]
 
@@ -125,7 +125,7 @@ def _inertial(lk, label, lines):
     inertia = np.zeros((3, 3)) if ine.inertia is None else \
         _floats(ine.inertia, 9, f"{what}: inertia").reshape(3, 3)
     T = np.eye(4) if ine.origin is None else np.asarray(ine.origin, float)
-    R = T[:3, :3]
+    R = exact_rotation(T[:3, :3])
     return Inertial(mass, T[:3, 3].copy(), R @ inertia @ R.T)
 
 
@@ -145,5 +145,5 @@ def _joint(j, label, line):
         if not j.mimic.joint:
             raise ModelError(f"{what}: <mimic> names no joint")
         mimic = (j.mimic.joint, float(j.mimic.multiplier), float(j.mimic.offset))
-    return JointSpec(j.name, j.type, j.parent, j.child, T[:3, :3].copy(), T[:3, 3].copy(),
+    return JointSpec(j.name, j.type, j.parent, j.child, exact_rotation(T[:3, :3]), T[:3, 3].copy(),
                      axis, limits, mimic, line)
