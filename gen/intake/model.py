@@ -499,8 +499,8 @@ class Model:
         return cls.from_system(robot.system, **robot.model_options(formulation, name, hybrid))
 
     @classmethod
-    def from_mjcf(cls, source, formulation="recursive", constants="numeric", name=None,
-                  hybrid=None, inputs="torques", gravity=None):
+    def from_mjcf(cls, source, base=None, formulation="recursive", constants="numeric",
+                  name=None, hybrid=None, inputs="torques", gravity=None):
         """Build from an MJCF file compiled by MuJoCo (its defaults, classes
         and includes resolved by MuJoCo's own compiler): its bodies and
         joints as a sympy System (``gen.load_mjcf(...).system``), then
@@ -514,9 +514,19 @@ class Model:
         ----------
         source : str or path
             A file path, or the MJCF's XML itself.
+        base : {None, "fixed", "floating"}, optional
+            ``None``: the file's joints (a body with a ``<freejoint/>`` is
+            floating). ``"fixed"``: every free joint welded, its body where
+            the file places it (``pos``, ``quat``), as if the
+            ``<freejoint/>`` were removed. ``"floating"``: every body of the
+            world without a joint gets a free joint ``base`` (``<body>_base``
+            when several do; coordinates and speeds as :meth:`from_urdf`'s),
+            as if it had a ``<freejoint/>``; a free body stays free, a body of
+            the world on another joint is refused.
         formulation, constants, name, hybrid, inputs
             As for :meth:`from_urdf` (``hybrid="limits"``: the joints' ranges
-            where MuJoCo limits them).
+            where MuJoCo limits them); there is no ``mimic`` (MJCF has no
+            mimic joints; its joint equality constraints are not modelled).
         gravity : 3 numbers, optional
             The file's ``<option gravity>`` by default.
 
@@ -533,7 +543,8 @@ class Model:
             Without mujoco (``pip install eomgen[robots]``).
         """
         from .robots import load_mjcf
-        robot = load_mjcf(source, constants=constants, gravity=gravity, inputs=inputs)
+        robot = load_mjcf(source, base=base, constants=constants, gravity=gravity,
+                          inputs=inputs)
         return cls.from_system(robot.system, **robot.model_options(formulation, name, hybrid))
 
     # ---- from matrices (gen.pydy: PyDy's forms; any M, f and kinematics) ----

@@ -166,3 +166,47 @@ def test_mujoco_compiler_errors_name_the_element_and_line():
         gen.load_mjcf(ARM.replace("</body>\n  </worldbody>", "</worldbody>"))
     with pytest.raises(gen.ModelError, match=r"no file"):
         gen.load_mjcf("/nonexistent/robot.xml")
+
+
+WALKER = """<mujoco model="walker">
+  <worldbody>
+    <body name="torso" pos="0.1 -0.2 1.2" quat="0.9 0.1 -0.3 0.2">
+      {joint}
+      <geom type="box" size="0.2 0.1 0.3"/>
+      <body name="thigh" pos="0 0.1 -0.3" euler="0 0 20">
+        <joint name="hip" axis="0 1 0"/>
+        <geom type="capsule" fromto="0 0 0 0 0 -0.4" size="0.05"/>
+        <body name="shin" pos="0 0 -0.4">
+          <joint name="knee" axis="1 0 1"/>
+          <joint name="ankle" type="slide" axis="0 0 1"/>
+          <geom type="capsule" fromto="0 0 0 0.1 0 -0.3" size="0.04"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>"""
+
+
+@pytest.mark.slow
+def test_base_fixed_and_floating_as_the_freejoint_removed_and_added():
+    """base="fixed" on a file whose torso has a <freejoint/> equals MuJoCo
+    on the file without it (the torso welded where the file puts it);
+    base="floating" on the file without it equals MuJoCo on the file with
+    it; base=None keeps the file's joints."""
+    free, welded = WALKER.format(joint='<freejoint name="root"/>'), WALKER.format(joint="")
+    assert gen.load_mjcf(free).joints == ["root", "hip", "knee", "ankle"]
+    assert gen.load_mjcf(welded).joints == ["hip", "knee", "ankle"]
+    assert gen.load_mjcf(free, base="floating").joints == ["root", "hip", "knee", "ankle"]
+    fixed = gen.Model.from_mjcf(free, base="fixed", name="mj_walker_fixed")
+    assert fixed.state_names[:3] == ["q_hip", "q_knee", "q_ankle"] and len(fixed.q) == 3
+    m_welded = rigid_only(mujoco.MjModel.from_xml_string(welded))
+    assert against_mujoco(gen.compile(fixed), m_welded, 3) < TOL
+    floating = gen.Model.from_mjcf(welded, "floating", name="mj_walker_floating")
+    assert floating.state_names[:7] == ["base_x", "base_y", "base_z", "base_qx", "base_qy",
+                                        "base_qz", "base_qw"]
+    m_free = rigid_only(mujoco.MjModel.from_xml_string(free))
+    assert against_mujoco(gen.compile(floating), m_free, 4) < TOL
+    with pytest.raises(gen.ModelError, match=r"base='floating'.*'upper'.*shoulder_z"):
+        gen.load_mjcf(ARM, base="floating")
+    with pytest.raises(gen.ModelError, match=r"base='welded'"):
+        gen.Model.from_mjcf(ARM, base="welded")

@@ -58,7 +58,7 @@ def load_urdf(source, base="fixed", constants="numeric", mimic="constraints", gr
     return build_robot(read_urdf(source), base, constants, mimic, gravity, inputs)
 
 
-def load_mjcf(source, constants="numeric", gravity=None, inputs="torques"):
+def load_mjcf(source, base=None, constants="numeric", gravity=None, inputs="torques"):
     """An MJCF file (or XML string) compiled by MuJoCo, as a :class:`Robot`
     (docs/guides/robots.md): the file's own joints (its free joints as
     :class:`FreeJoint`, its ball joints as :class:`BallJoint`), the file's
@@ -68,6 +68,14 @@ def load_mjcf(source, constants="numeric", gravity=None, inputs="torques"):
     ----------
     source : str or path
         A file path, or the XML itself.
+    base : {None, "fixed", "floating"}
+        ``None``: the file's joints. ``"fixed"``: every free joint welded,
+        its body where the file places it (``pos``, ``quat``), as if its
+        ``<freejoint/>`` were removed. ``"floating"``: every body of the
+        world that has no joint gets a free joint (named ``base``, or
+        ``<body>_base`` when several do), as if it had a ``<freejoint/>``;
+        a free body stays free, and a body of the world on another joint is
+        refused.
     constants : {"numeric", "symbolic"}
         As for :func:`load_urdf`.
     gravity : 3 numbers, optional
@@ -88,4 +96,4 @@ def load_mjcf(source, constants="numeric", gravity=None, inputs="torques"):
         Without mujoco (``pip install eomgen[robots]``).
     """
     from .mjcf import read_mjcf
-    return build_robot(read_mjcf(source), "fixed", constants, "ignore", gravity, inputs)
+    return build_robot(read_mjcf(source, base), "fixed", constants, "ignore", gravity, inputs)

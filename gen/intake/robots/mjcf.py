@@ -72,6 +72,35 @@ def _quat(wxyz):
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]))
 
 
+def _bases(m, base, bodies, jnames, label):
+    """{body: the name of its added free joint} for base="floating": every
+    body of the world without a joint gets one (``base``, or
+    ``<body>_base`` when several do); a body of the world on other joints
+    than a free one is refused. base="fixed" (free joints welded) and None
+    add none."""
+    if base not in (None, "fixed", "floating"):
+        raise ModelError(f"base={base!r}: accepted are None (the file's joints), 'fixed' and "
+                         "'floating'")
+    if base != "floating":
+        return {}
+    top = [b for b in range(1, m.nbody) if int(m.body_parentid[b]) == 0]
+    bare = []
+    for b in top:
+        adr, n = int(m.body_jntadr[b]), int(m.body_jntnum[b])
+        kinds = [_KINDS[int(m.jnt_type[j])] for j in range(adr, adr + max(n, 0))]
+        if not kinds:
+            bare.append(b)
+        elif kinds != ["floating"]:
+            raise ModelError(
+                f"{label}: base='floating': body {bodies[b]!r} of the world moves on the "
+                f"joint(s) {[jnames[j] for j in range(adr, adr + n)]}, not a free joint: a "
+                "free base is added only to a body welded to the world (base=None keeps "
+                "the file's joints)")
+    names = set(jnames)
+    one = "base" if "base" not in names else "root_joint"
+    return {b: one if len(bare) == 1 else f"{bodies[b]}_base" for b in bare}
+
+
 def _names(m, obj, n, prefix):
     import mujoco
     out = []
@@ -81,12 +110,14 @@ def _names(m, obj, n, prefix):
     return out
 
 
-def read_mjcf(source):
-    """The RobotDescription of an MJCF file or string (module docstring)."""
+def read_mjcf(source, base=None):
+    """The RobotDescription of an MJCF file or string (module docstring);
+    base: None (the file's joints), "fixed" or "floating" (:func:`_bases`)."""
     m, label = compile_mjcf(source)           # MissingDependencyError without mujoco
     import mujoco
     bodies = _names(m, mujoco.mjtObj.mjOBJ_BODY, m.nbody, "body")
     jnames = _names(m, mujoco.mjtObj.mjOBJ_JOINT, m.njnt, "joint")
+    free = _bases(m, base, bodies, jnames, label)
     links, joints = {bodies[0]: Link(bodies[0])}, []
     anchor = [np.zeros(3)] * m.nbody          # each body's link origin in its frame
     for b in range(1, m.nbody):
@@ -104,7 +135,12 @@ def read_mjcf(source):
         links[bodies[b]] = Link(bodies[b], Inertial(float(m.body_mass[b]),
                                                     np.array(m.body_ipos[b], float) - anchor[b],
                                                     inertia))
-        if not ids:
+        if b in free:                 # base="floating": a free joint added
+            joints.append(JointSpec(free[b], "floating", bodies[parent], bodies[b],
+                                    np.eye(3), np.zeros(3)))
+            continue
+        if not ids or (base == "fixed" and kinds == ["floating"]):
+            # welded (base="fixed": where the file puts the free body)
             joints.append(JointSpec(f"{bodies[b]}_weld", "fixed", bodies[parent], bodies[b], R, t))
             continue
         prev, prev_pos = bodies[parent], None
