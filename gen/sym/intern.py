@@ -44,6 +44,11 @@ class Kept(sm.UnevaluatedExpr):
     of one build)."""
 
     _build = 0          # the build's number, in the hash
+    # a scalar: products of nodes are commutative ones (sympy takes an
+    # UnevaluatedExpr of unknown commutativity as a matrix-like factor, and
+    # a non-commutative Mul is flattened and rebuilt the slow way: Talos's
+    # build 4.3 -> 3.7 s of CPU, its kernels the same)
+    is_commutative = True
 
     def __hash__(self):
         # equal nodes of different builds (never ==) hash apart: the entries

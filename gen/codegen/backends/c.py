@@ -30,6 +30,13 @@ C_TEMPLATES = [
 ]
 
 
+# a kernels unit at least this large (the right-hand side of a robot of some
+# 30 joints: Talos, 390 kB) is compiled at -O1, as the derivative kernels
+# are: clang's time on Talos's 3.8 -> 2.6 s of CPU, its right-hand side as
+# fast (3.79 us at -O1, 3.90 us at -O2, medians of 3; bench/README.md "Robots")
+LARGE_KERNELS = 256 * 1024
+
+
 class CBackend(Backend):
     """C99 over the C runtime: the model's kernels, its wiring and the
     plugin table, the derivative kernels in a unit of their own (-O1)
@@ -50,7 +57,9 @@ class CBackend(Backend):
     def units(self, name, files, derivatives, includes=()):
         cc = c_compiler()
         own = [(f"{name}_lin.c", C_LIN_FLAGS)] if derivatives else []
-        own += [(f"{name}_kernels.c", ()), (f"{name}.c", ()), (f"{name}_api.c", ())]
+        kern = f"{name}_kernels.c"
+        big = len(files.get(kern, "").encode()) >= LARGE_KERNELS
+        own += [(kern, C_LIN_FLAGS if big else ()), (f"{name}.c", ()), (f"{name}_api.c", ())]
         if not derivatives:
             own.append((f"{name}_lin_stub.c", ()))
         return [(f, cc, [*C_FLAGS, "-fPIC", *extra]) for f, extra in own]
