@@ -767,15 +767,22 @@ def constraints_of_tree(system):
     return fc, A, b, len(system.q_dep), len(system.u_dep)
 
 
-def _rot(k, th):
-    """Rotation by th about the unit axis k (components in the frame's axes)."""
+def _rot(k, th, ik=None):
+    """Rotation by th about the unit axis k (components in the frame's axes);
+    with the build's interner ik, its sine and cosine kept nodes (each one
+    temporary of the C: a C compiler without -fno-math-errno calls sin and
+    cos as often as the code names them)."""
     K = _skew(k)
-    return sm.eye(3) + sm.sin(th) * K + (1 - sm.cos(th)) * (K * K)
+    s, c = sm.sin(th), sm.cos(th)
+    if ik is not None:
+        s, c = ik.keep(s), ik.keep(c)
+    return sm.eye(3) + s * K + (1 - c) * (K * K)
 
 
 def _orientation(n, tree):
     """n.R (body axes -> inertial axes) as A Rot(k, theta) B, sharing the
     angle with the parent when the joint turns about the parent's axis."""
+    ik = tree.ik
     if n is tree.float_root:
         # the recursions' axes are this body's (_common_axes)
         n.rep = (sm.eye(3), None, sm.S.Zero, sm.eye(3))
@@ -807,16 +814,15 @@ def _orientation(n, tree):
                 if k is not None and _same_vec(B * kp, k):
                     rep = (A, k, th + q, B * E0T)
                 else:
-                    Rp = A * (_rot(k, th) if k is not None else sm.eye(3)) * B
+                    Rp = A * (_rot(k, th, ik) if k is not None else sm.eye(3)) * B
                     rep = (Rp, kp, q, E0T)
     if rep is None:
-        Rp = A * (_rot(k, th) if k is not None else sm.eye(3)) * B
+        Rp = A * (_rot(k, th, ik) if k is not None else sm.eye(3)) * B
         rep = (Rp * ET, None, sm.S.Zero, sm.eye(3))
     A, k, th, B = rep
-    ik = tree.ik
     n.rep = rep = (ik.kept(A), k, ik.keep(th), B)
     A, k, th, B = rep
-    n.R = ik.kept(ik.kept(A * _rot(k, th)) * B if k is not None else A * B)
+    n.R = ik.kept(ik.kept(A * _rot(k, th, ik)) * B if k is not None else A * B)
 
 
 def _same(X, Y, q):
