@@ -36,14 +36,16 @@ DOF = {"revolute": 1, "continuous": 1, "prismatic": 1, "fixed": 0, "floating": 6
 KINDS = tuple(DOF)
 
 
-def exact_rotation(R, tol=1e-12):
+def exact_rotation(R, tol=1e-15):
     """R (a rotation matrix of floats) with the entries that are 0 or +-1
-    up to rounding made exact: |entry| below tol is 0, and an entry alone
-    in its row and column after that is its sign. A file's ``rpy="0 0
-    1.5708"``-style right angles come as cos(pi/2) = 6.1e-17 beside exact
-    ones; exact, the generated code folds them (no products with 6.1e-17 or
-    3.7e-33, a joint axis along a frame axis stays one) and the result
-    differs from the unrounded one by those roundings (1e-16)."""
+    up to the rounding of double arithmetic made exact: |entry| below tol
+    is 0, and an entry alone in its row and column after that is its sign.
+    A file's right angles (``rpy="1.5707963267948966 0 0"``) come as
+    cos(pi/2) = 6.1e-17 beside exact ones; exact, the generated code folds
+    them (no products with 6.1e-17 or 3.7e-33, a joint axis along a frame
+    axis stays one) and the result differs from the unrounded one by those
+    roundings (1e-16). An angle the file rounds (``3.14159265359``: sine
+    2e-13) is kept as it is, as Pinocchio reads it."""
     R = np.array(R, dtype=float)
     R[np.abs(R) < tol] = 0.0
     for i in range(3):
