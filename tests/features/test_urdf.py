@@ -243,3 +243,32 @@ def test_joint_limits_as_impacts():
     assert -0.1 - 1e-9 <= sol.x[:, 2].min() and sol.x[:, 2].max() <= 0.2 + 1e-9
     free = gen.compile(gen.Model.from_urdf(ARM, mimic="ignore", name="arm_free"))
     assert free.simulate(x0, 1.0, 1e-3).x[:, 0].max() > 1.05
+
+
+def test_right_angles_are_exact_and_rounded_angles_kept():
+    """A joint origin's rpy right angles (cos(pi/2) = 6.1e-17 in double)
+    reach the System as exact 0 and +-1 (the generated code folds them);
+    an angle the file rounds (3.14159265359: sine 2e-13) stays as SciPy's
+    rotation of it, as Pinocchio reads it."""
+    from scipy.spatial.transform import Rotation
+    urdf = ARM.replace('xyz="0 0 0.3" rpy="0.3 0 0"',
+                       'xyz="0 0 0.3" rpy="1.5707963267948966 0 -1.5707963267948966"'
+                       ).replace('xyz="0.4 0 0" rpy="0 0.2 0"', 'xyz="0.4 0 0" rpy="0 3.14159265359 0"')
+    assert urdf.count("1.5707963267948966") == 2 and "3.14159265359" in urdf
+    robot = gen.load_urdf(urdf, mimic="ignore")
+    joint = {j.name: j for j in robot.system.joints}
+
+    def placement(name):
+        j = joint[name]
+        return j.parent_interframe.dcm(j.parent.frame)
+
+    right = placement("j1")
+    want = Rotation.from_euler("xyz", [np.pi / 2, 0, -np.pi / 2]).as_matrix()
+    assert 0 < np.abs(want[np.abs(want) < 0.5]).max() < 1e-15      # SciPy's is rounded
+    assert all(e in (0, 1, -1) and e.is_Integer for e in right)
+    assert any(np.array_equal(np.array(m.tolist(), dtype=float), np.round(want))
+               for m in (right, right.T))
+    rounded = np.array(placement("j2").tolist(), dtype=float)
+    want = Rotation.from_euler("xyz", [0, 3.14159265359, 0]).as_matrix()
+    assert min(np.abs(m - want).max() for m in (rounded, rounded.T)) < 1e-16
+    assert 1e-13 < np.abs(rounded[np.abs(rounded) < 0.5]).max() < 1e-12
