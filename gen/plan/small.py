@@ -46,7 +46,8 @@ import math
 import re
 from dataclasses import dataclass
 
-__all__ = ["SMALL_MAX_SIZE", "SMALL_MAX_PATHS", "accel_program", "c_lines", "Program"]
+__all__ = ["SMALL_MAX_SIZE", "SMALL_MAX_PATHS", "BIND", "accel_program", "kernel_program",
+           "c_lines", "Program"]
 
 # the straight-line solve is for systems of at most this size (Kane: the
 # speeds; Lagrange: speeds plus multipliers); larger ones keep the
@@ -55,6 +56,8 @@ SMALL_MAX_SIZE = 8
 # and at most this many pivot paths (each a copy of the rest of the solve)
 SMALL_MAX_PATHS = 16
 FAIL = "return GEN_RT_ERR_SINGULAR;"
+# the fused right-hand side's locals of M, f, A and a (kernel_program)
+BIND = {"M": "m_", "f": "f_", "A": "ca_", "a": "cb_"}
 
 
 class _TooLarge(Exception):
@@ -281,7 +284,7 @@ def _lu_step(tr, n, a, piv, k, tol, cont, paths):
         tr.items.append(f"if (!({b.t} > {tol.t})) {FAIL}")
         return _lu_pivot(tr, n, a, piv, k, choices[0], tol, cont, paths)
     # the runtime's search: |a_kk|, then each later row with a larger |a_ik|
-    best, p = tr.name("b"), tr.name("p")
+    best, p = tr.name("sb"), tr.name("sp")
     init = "0" if a[k][k].is_zero else tr.abs_(a[k][k]).t
     tr.items += [f"gen_rt_real {best} = {init};", f"int {p} = {k};"]
     for i in cands:
@@ -501,3 +504,20 @@ def c_lines(prog, indent="    ", real="gen_rt_real"):
 
     walk(prog.items, indent)
     return out
+
+
+def kernel_program(kernel, method, n, m, ind=(), dep=()):
+    """accel_program over a right-hand-side kernel's outputs M, f, A and a
+    as the fused kernel binds them (the locals BIND[name]<k>; an entry
+    whose expression is the number 0 or 1 as that literal), or None when
+    the model is too large for it or its kernel lacks one of them."""
+    outs = {o.name: o.exprs for o in kernel.outputs}
+    if any(k not in outs for k in BIND):
+        return None
+
+    def entries(name):
+        return [0 if e == 0 else 1 if e == 1 else f"{BIND[name]}{k}"
+                for k, e in enumerate(outs[name])]
+
+    return accel_program(method, n, m, entries("M"), entries("f"), entries("A"),
+                         entries("a"), ind=ind, dep=dep)

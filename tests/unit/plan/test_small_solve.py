@@ -46,8 +46,6 @@ def _harness(tmp, key):
     src = f"""#include <stdio.h>
 #include <stdlib.h>
 #include "gen_rt_private.h"
-/* (gen_rt_dynamics.c's own; a wired solve needs it in a header) */
-#define GEN_RT_PARTITION_CMAX GEN_RT_C(1e9)
 static int small(const double *in, double *out_ud)
 {{
 {decl}
