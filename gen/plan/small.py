@@ -34,11 +34,16 @@ the caller then takes the runtime's general path, which names the failure.
     prog = accel_program("kkt", n, m, M, f, A, a)     # None: too large
     lines = c_lines(prog, real="double")
 
-Not used by the models yet (issue 47's remaining work): a model hook that
-runs the program over the fused kernel's locals before the runtime's path,
-GEN_RT_PARTITION_CMAX moved from gen_rt_dynamics.c into a header, and the
-seed's golden sources regenerated. tests/unit/plan/test_small_solve.py
-checks the programs against the runtime, bit for bit.
+A model uses it through kernel_program: a constrained model with explicit
+kinematics whose system is small enough gets a fused right-hand side
+(gen.codegen.render, templates/c/model_kern.c.j2): its rhs_terms kernel
+binds M, f, A and a to locals (BIND), runs the program over them and returns
+its status; the model's eval_rhs calls it first when no multipliers are
+asked, and the runtime's rhs_ through gen_rt_model.rhs_solve, each falling
+back to the general path on a nonzero status. The partition's bound
+GEN_RT_PARTITION_CMAX is in gen_rt.h. tests/unit/plan/test_small_solve.py
+checks the programs against the runtime, bit for bit, and the seed's models
+with and without the general path.
 """
 from __future__ import annotations
 
