@@ -81,7 +81,6 @@ int pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_r
         out_a[0] = cb_0;
     }
     if (!out_ud) return GEN_RT_OK;
-    if (!((m_0 * 0 + m_3 * 0 + f_1 * 0 + ca_0 * 0 + ca_1 * 0 + cb_0 * 0) == 0)) return GEN_RT_ERR_SINGULAR;
     const double s1 = -ca_0;
     const double s2 = -cb_0;
     const double s3 = ca_0 < 0 ? -ca_0 : ca_0;
@@ -93,7 +92,6 @@ int pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_r
     if (!(s7 > s6)) return GEN_RT_ERR_SINGULAR;
     const double s8 = s1 / ca_1;
     const double s9 = s2 / ca_1;
-    if (!((s8 * 0 + s9 * 0) == 0)) return GEN_RT_ERR_SINGULAR;
     if (s8 > GEN_RT_PARTITION_CMAX || s8 < -GEN_RT_PARTITION_CMAX) return GEN_RT_ERR_SINGULAR;
     const double s10 = 0 + m_0;
     const double s11 = m_3 * s8;
@@ -115,8 +113,7 @@ int pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_r
     const double s25 = s8 * s23;
     const double s26 = 0 + s25;
     const double s27 = s26 + s9;
-    if (!((s24 * 0 + s27 * 0) == 0)) return GEN_RT_ERR_SINGULAR;
-    if (!((s23 * 0) == 0)) return GEN_RT_ERR_SINGULAR;
+    if (!((m_0 * 0 + m_3 * 0 + f_1 * 0 + ca_0 * 0 + ca_1 * 0 + cb_0 * 0 + s8 * 0 + s9 * 0 + s23 * 0 + s24 * 0 + s27 * 0) == 0)) return GEN_RT_ERR_SINGULAR;
     out_ud[0] = s24;
     out_ud[1] = s27;
     return GEN_RT_OK;
