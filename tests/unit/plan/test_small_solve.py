@@ -44,7 +44,8 @@ def _harness(tmp, key):
     decl = "\n".join(f"    const double {v} = in[{i}]; (void){v};" for i, v in enumerate(NAMES))
     call = (f"gen_rt_accel_kkt({n}, {m}, Mv, fv, Av, av, w, iw, ud, 0)" if method == "kkt" else
             f"gen_rt_accel_partitioned({n}, {m}, ind, dep, Mv, fv, Av, av, w, iw, ud, 0)")
-    src = f"""#include <stdio.h>
+    src = f"""#include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include "gen_rt_private.h"
 static int small(const double *in, double *out_ud)

@@ -83,12 +83,12 @@ int pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_r
     if (!out_ud) return GEN_RT_OK;
     const double s1 = -ca_0;
     const double s2 = -cb_0;
-    const double s3 = ca_0 < 0 ? -ca_0 : ca_0;
-    const double s4 = ca_1 < 0 ? -ca_1 : ca_1;
+    const double s3 = fabs(ca_0);
+    const double s4 = fabs(ca_1);
     const double s5 = s4 > s3 ? s4 : s3;
     if (!(s5 > 0)) return GEN_RT_ERR_SINGULAR;
     const double s6 = GEN_RT_PIVOT_RTOL * s5;
-    const double s7 = ca_1 < 0 ? -ca_1 : ca_1;
+    const double s7 = fabs(ca_1);
     if (!(s7 > s6)) return GEN_RT_ERR_SINGULAR;
     const double s8 = s1 / ca_1;
     const double s9 = s2 / ca_1;
@@ -103,10 +103,10 @@ int pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_r
     const double s17 = f_1 - s16;
     const double s18 = s8 * s17;
     const double s19 = 0 + s18;
-    const double s20 = s14 < 0 ? -s14 : s14;
+    const double s20 = fabs(s14);
     if (!(s20 > 0)) return GEN_RT_ERR_SINGULAR;
     const double s21 = GEN_RT_PIVOT_RTOL * s20;
-    const double s22 = s14 < 0 ? -s14 : s14;
+    const double s22 = fabs(s14);
     if (!(s22 > s21)) return GEN_RT_ERR_SINGULAR;
     const double s23 = s19 / s14;
     const double s24 = 0 + s23;
