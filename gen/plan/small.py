@@ -167,7 +167,10 @@ class _Tracer:
             return _lit(-x.lit)
         if x.zero:
             return _V(f"(-{x.t})", zero=True)
-        return self.let(f"-{x.t}")
+        v = self.let(f"-{x.t}")
+        if x.t in self.finite:            # -x is finite where x is: no test of its own
+            self.finite.add(v.t)
+        return v
 
     def add(self, x, y):
         if y.is_zero and not x.mnz:
