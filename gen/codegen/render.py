@@ -204,6 +204,22 @@ def _comment_label(names, labels, i):
     return f"; sympy: {lab}"
 
 
+def _small_solve(b, plan):
+    """The straight-line solve of a small constrained model (gen.plan.small's
+    Program), or None: for a backend whose templates have the fused
+    right-hand side, explicit kinematics and velocity constraints, the
+    reactions outside the motion, and a system small enough. rhs_terms then
+    also solves for u' by the runtime's partitioned or KKT solve traced as
+    straight-line code, before the runtime's general path (which it matches
+    bit for bit or leaves to)."""
+    m, kernels = plan.model, plan.kernels
+    if not (b.fused_rhs and plan.accel in ("partitioned", "kkt") and m.qdot is not None
+            and m.mv > 0 and "rhs_terms" in kernels and getattr(m, "aux_G", None) is None):
+        return None
+    return kernel_program(kernels["rhs_terms"], plan.accel, m.nu, m.mv, ind=m.u_ind,
+                          dep=m.u_dep)
+
+
 def build_context(plan, iface, timings=None, backend="c"):
     """The Jinja2 context of a plan: plain data and the interface."""
     t1 = time.perf_counter()
@@ -213,25 +229,14 @@ def build_context(plan, iface, timings=None, backend="c"):
     real = iface.real
     printer = b.printer(_symbol_map(m, kernels), real)
     p = m.name
-    # the fused right-hand side (a backend whose templates have it,
-    # unconstrained, explicit kinematics, the unrolled LDL^T): rhs_terms also
-    # solves for u', its M and f bound to locals the solve reads
-    # (gen_rt_model.rhs_solve)
+    # the fused right-hand side (gen_rt_model.rhs_solve; a backend whose
+    # templates have it, explicit kinematics): rhs_terms also solves for u',
+    # M and f in locals, by the unrolled LDL^T (unconstrained) or _small_solve
     fused = (b.fused_rhs and plan.accel == "ldlt" and m.qdot is not None
              and "rhs_terms" in kernels)
     mass_plan = ldlt_program(m.nu, plan.mass_nonzero) if plan.accel == "ldlt" else None
-    # a small constrained model (explicit kinematics, its reactions outside
-    # its motion): rhs_terms also solves for u' by the runtime's partitioned
-    # or KKT solve traced as straight-line code (gen.plan.small), before the
-    # runtime's general path (which it matches bit for bit or leaves to)
-    small = None
-    if (b.fused_rhs and plan.accel in ("partitioned", "kkt") and m.qdot is not None
-            and m.mv > 0 and "rhs_terms" in kernels
-            and getattr(m, "aux_G", None) is None):
-        small = kernel_program(kernels["rhs_terms"], plan.accel, m.nu, m.mv,
-                               ind=m.u_ind, dep=m.u_dep)
+    small = _small_solve(b, plan)
     kctx = _kernel_context(kernels, printer, fused=mass_plan if fused else None, small=small)
-    fused = fused or small is not None
     t2 = time.perf_counter()
     mx = lambda n: max(1, n)  # noqa: E731  C99 has no zero-length arrays
     nq, nu, nr, mc, mv = m.nq, m.nu, m.nr, m.mc, m.mv
@@ -287,9 +292,8 @@ def build_context(plan, iface, timings=None, backend="c"):
         "mass_solve": mass_plan,
         "mass_solve_statements": (ldlt_statements(mass_plan)
                                   if mass_plan and not mass_plan["loop"] else None),
-        "fused_rhs": fused,
-        # the fused right-hand side of a small constrained model (gen.plan.small)
-        "small_solve": small is not None,
+        "fused_rhs": fused or small is not None,
+        "small_solve": small is not None,    # its solve: gen.plan.small's
         # reactions inside the motion, solved with u' (gen_rt_accel_reactions)
         "reactions_coupled": getattr(m, "aux_G", None) is not None,
         # q' is u itself (the usual q' = u): the fused right-hand side's q'
