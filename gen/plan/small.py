@@ -86,13 +86,16 @@ class _V:
 
 
 def _lit(v):
-    """A literal 0, -0 or 1 (the only ones folded: any other number stays in
-    its local, so a float build computes with the float value)."""
+    """A literal 0, -0, 1 or -1 (-1: the negation of a structural 1; the
+    only ones folded: any other number stays in its local, so a float build
+    computes with the float value)."""
     neg = math.copysign(1.0, v) < 0
     if v == 0.0:
         return _V("(-(gen_rt_real)0)" if neg else "0", -0.0 if neg else 0.0, mnz=neg)
     if v == 1.0:
         return _V("1", 1.0, mnz=False)
+    if v == -1.0:
+        return _V("(-1)", -1.0, mnz=False)
     raise ValueError(f"not a literal the solve folds: {v!r}")
 
 
@@ -224,6 +227,8 @@ class _Tracer:
         """|x| (the runtime's x < 0 ? -x : x, which keeps -0 where fabs
         gives +0): only compared, where -0 and +0 are equal, so fabs, one
         instruction where the select is four (c_lines: fabsf in float)."""
+        if x.lit is not None:
+            return _lit(abs(x.lit))
         return self.let(f"fabs({x.t})", mnz=False, flops=0)
 
     def check_finite(self, vals):
@@ -241,8 +246,9 @@ class _Tracer:
         for v in vals:
             if v.is_zero:
                 continue
-            if v.lit is not None:                     # a literal 1
-                m = v if m.lit == 0.0 else self.let(f"1 > {m.t} ? 1 : {m.t}", mnz=False, flops=0)
+            if v.lit is not None:                     # a literal 1 or -1: |v| = 1
+                m = (_lit(1.0) if m.lit == 0.0
+                     else self.let(f"1 > {m.t} ? 1 : {m.t}", mnz=False, flops=0))
                 continue
             a = self.abs_(v)
             m = a if m.lit == 0.0 else self.let(f"{a.t} > {m.t} ? {a.t} : {m.t}", mnz=False,

@@ -30,6 +30,10 @@ CASES = {
                   (0,), (1,)),
     "part-3": ("partitioned", 3, 1, ["M0", "M1", 0, "M1", "M4", 0, 0, 0, "M8"],
                ["f0", "f1", "f2"], ["A0", "A1", "A2"], ["a0"], (0, 2), (1,)),
+    # structural ones in A (a cart's x - ...: the KKT's -A^T gets a literal -1)
+    "kkt-one": ("kkt", 2, 1, ["M0", "M1", "M1", "M3"], ["f0", "f1"], [1, "A1"], ["a0"], (), ()),
+    "part-one": ("partitioned", 2, 1, ["M0", 0, 0, "M3"], ["f0", "f1"], ["A0", 1], ["a0"],
+                 (0,), (1,)),
 }
 NAMES = ["M0", "M1", "M3", "M4", "M8", "f0", "f1", "f2", "A0", "A1", "A2", "a0"]
 
