@@ -121,9 +121,12 @@ class _Tracer:
         self.finite = set(finite)   # names known (or checked) finite here
         self.ops = dict(ops)        # {"flops", "divs"} on this path so far
         self.ends = ends            # the ops of every finished path
+        self.neg_of = {}            # {-x's name: x's name}, shared by the forks
 
     def fork(self):
-        return _Tracer(self.counter, self.guard, self.finite, self.ops, self.ends)
+        t = _Tracer(self.counter, self.guard, self.finite, self.ops, self.ends)
+        t.neg_of = self.neg_of
+        return t
 
     def name(self, stem="s"):
         self.counter[0] += 1
@@ -173,6 +176,7 @@ class _Tracer:
         v = self.let(f"-{x.t}")
         if x.t in self.finite:            # -x is finite where x is: no test of its own
             self.finite.add(v.t)
+        self.neg_of[v.t] = x.t            # |-x| is |x| (max_abs)
         return v
 
     def add(self, x, y):
@@ -243,9 +247,14 @@ class _Tracer:
     def max_abs(self, vals):
         """gen_rt_max_abs: from 0, the largest |v| (a zero never is)."""
         m = _lit(0.0)
+        seen = set()
         for v in vals:
             if v.is_zero:
                 continue
+            base = self.neg_of.get(v.t, v.t)   # x and -x (K's A and -A^T): once
+            if v.lit is None and base in seen:
+                continue
+            seen.add(base)
             if v.lit is not None:                     # a literal 1 or -1: |v| = 1
                 m = (_lit(1.0) if m.lit == 0.0
                      else self.let(f"1 > {m.t} ? 1 : {m.t}", mnz=False, flops=0))
@@ -267,8 +276,11 @@ class _Tracer:
 
 
 def _finite_test(names):
-    """x * 0 is 0 for finite x and NaN otherwise (no libm)."""
-    return f"if (!(({' + '.join(f'{n} * 0' for n in names)}) == 0)) {FAIL}"
+    """x * 0 is 0 for finite x and NaN otherwise (no libm), and a sum is
+    finite only where its terms are: one product for all of them. A finite
+    sum that overflows fails too, and the runtime's general path then gives
+    its own result (values near the type's largest; nothing else changes)."""
+    return f"if (!(({' + '.join(names)}) * 0 == 0)) {FAIL}"
 
 
 # ---------------------------------------------------------------- LU
