@@ -132,9 +132,14 @@ class _Tracer:
         self.counter[0] += 1
         return f"{stem}{self.counter[0]}"
 
-    def let(self, expr, mnz=True, flops=1, divs=0):
+    def let(self, expr, mnz=True, flops=None, divs=0):
+        """A local of expr; flops None: its + - * and negations, counted in
+        the text (a structural zero's product, "(x * 0)", is executed too)."""
         n = self.name()
         self.items.append(f"const gen_rt_real {n} = {expr};")
+        if flops is None:
+            flops = (sum(expr.count(f" {o} ") for o in "*+-") + expr.startswith("-")
+                     + expr.count("(-") - expr.count("(-1)") - expr.count("(-(gen_rt_real)0)"))
         self.ops["flops"] += flops
         self.ops["divs"] += divs
         return _V(n, mnz=mnz)
