@@ -33,8 +33,31 @@
     && ((defined(__clang__) && __clang_major__ >= 14)                        \
         || (!defined(__clang__) && defined(__GNUC__) && __GNUC__ >= 6))
 #define GEN_RT_CLONES __attribute__((target_clones("avx", "default")))
+#define GEN_RT_CLONES_ON 1
 #else
 #define GEN_RT_CLONES
+#define GEN_RT_CLONES_ON 0
+#endif
+
+/* GEN_RT_CLONE_UNIT: a build that compiles a model's kernels file twice, in
+ * parallel, defines it to 1 in one compile and to 2 in the other (gen.compile
+ * does: the two versions of a large kernel are most of a model's compile
+ * time). GEN_RT_CLONE_PART is what the compile holds:
+ * 0  the whole file (GEN_RT_CLONE_UNIT undefined; or 1 where GEN_RT_CLONES
+ *    is empty), a large kernel cloned by target_clones where it is active;
+ * 1  (unit 1, GEN_RT_CLONES active) the baseline version, the ifunc that
+ *    picks a version by the CPU as target_clones' own does, and every other
+ *    kernel;
+ * 2  (unit 2, GEN_RT_CLONES active) the AVX version alone;
+ * 3  (unit 2 elsewhere) nothing.
+ * Each version is compiled from the same code with the same target as
+ * target_clones compiles it. */
+#if defined(GEN_RT_CLONE_UNIT) && GEN_RT_CLONES_ON
+#define GEN_RT_CLONE_PART GEN_RT_CLONE_UNIT
+#elif defined(GEN_RT_CLONE_UNIT) && GEN_RT_CLONE_UNIT == 2
+#define GEN_RT_CLONE_PART 3
+#else
+#define GEN_RT_CLONE_PART 0
 #endif
 
 /* GEN_RT_INTERNAL: a function that a model's translation units share and

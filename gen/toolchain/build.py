@@ -157,10 +157,12 @@ def build_derivatives(base: Built, lin_source: str, timings=None):
                 (tmp / "obj").mkdir()
             except OSError as e:
                 raise cache_error(e, root, "write the sources") from None
-            units = backend.units(name, {}, True)
+            # (the units as the model's build chose them, from its sources)
+            units = backend.units(name, {f.name: f.read_text() for f in src.glob("*.c")}, True)
             lin = [u for u in units if u[0] == f"{name}_lin.c"]
             objs = tmp / "obj"
-            mine = [core / "obj" / (Path(u[0]).stem + ".o") for u in units if u not in lin]
+            mine = [core / "obj" / (u[3] if len(u) > 3 else Path(u[0]).stem + ".o")
+                    for u in units if u not in lin]
             if not all(o.is_file() for o in mine):
                 # an older or pruned cache folder: compile the model again
                 own, runtime = compile_units(src, objs, units, backend, name)

@@ -3,7 +3,7 @@ wiring and the plugin table; gen.compile and gen.generate."""
 from __future__ import annotations
 
 from ...sym.printers import ModelCPrinter
-from .base import (C_FLAGS, C_LIN_FLAGS, RUNTIME_HEADERS, RUNTIME_MAIN, RUNTIME_SOURCES, Backend,
+from .base import (C_FLAGS, C_LIN_FLAGS, C_WIRING_FLAGS, RUNTIME_HEADERS, RUNTIME_MAIN, RUNTIME_SOURCES, Backend,
                    c_compiler)
 
 __all__ = ["C_TEMPLATES", "CBackend"]
@@ -49,8 +49,16 @@ class CBackend(Backend):
 
     def units(self, name, files, derivatives, includes=()):
         cc = c_compiler()
+        kern = f"{name}_kernels.c"
         own = [(f"{name}_lin.c", C_LIN_FLAGS)] if derivatives else []
-        own += [(f"{name}_kernels.c", ()), (f"{name}.c", ()), (f"{name}_api.c", ())]
+        if "GEN_RT_CLONES static" in files.get(kern, ""):
+            # a large kernel's two versions (GEN_RT_CLONES), compiled apart and in
+            # parallel (GEN_RT_CLONE_UNIT in gen_rt.h): the same code, half the wait
+            own += [(kern, ("-DGEN_RT_CLONE_UNIT=1",)),
+                    (kern, ("-DGEN_RT_CLONE_UNIT=2",), f"{name}_kernels_avx.o")]
+        else:
+            own.append((kern, ()))
+        own += [(f"{name}.c", C_WIRING_FLAGS), (f"{name}_api.c", ())]
         if not derivatives:
             own.append((f"{name}_lin_stub.c", ()))
-        return [(f, cc, [*C_FLAGS, "-fPIC", *extra]) for f, extra in own]
+        return [(u[0], cc, [*C_FLAGS, "-fPIC", *u[1]], *u[2:]) for u in own]

@@ -294,8 +294,8 @@ class EigenBackend(CBackend):
         real = "float" if f"{alt_name(name, 'float')}.c" in files else "double"
         _, alt, cxx = sources(name, real, derivatives, C_TEMPLATES)
         alt_flag = "-D" + ALT_DEFINE
-        units = [(f, c, fl, Path(f).stem + ".o")
-                 for f, c, fl in super().units(name, files, derivatives, includes)]
+        units = [(*u[:3], u[3] if len(u) > 3 else Path(u[0]).stem + ".o")
+                 for u in super().units(name, files, derivatives, includes)]
         units += [(f, cc, [*C_FLAGS, "-fPIC", alt_flag,
                            *(C_LIN_FLAGS if f.endswith("_lin.c") else ())],
                    "alt_" + Path(f).stem + ".o") for f in alt]

@@ -1,6 +1,7 @@
 """The right-hand-side kernel of a large model is built twice, for the
 baseline and for AVX, and picked by the CPU at load time (GEN_RT_CLONES in
-csrc/gen_rt.h, gen.codegen.render.CLONE_MIN_STATEMENTS; issue 17): the clones give
+csrc/gen_rt.h, gen.codegen.render.CLONE_MIN_STATEMENTS; issue 17; gen.compile
+builds the two as two units in parallel, GEN_RT_CLONE_UNIT): the clones give
 bit for bit the baseline's numbers (the same IEEE operations, no FMA), the
 code compiles clean under the strict flags and the sanitizers, the threshold
 keeps small models as they were, and the kernels are not exported."""
@@ -47,13 +48,25 @@ def _sources(model, out, monkeypatch, threshold=0):
     return out
 
 
-def _build(src, prefix, nx, states, name, flags):
+def _build(src, prefix, nx, states, name, flags, split=False):
+    """The driver over the model's sources; split: the kernels file compiled
+    as its two units (GEN_RT_CLONE_UNIT 1 and 2, as gen.compile does)."""
     drv = src / f"drv_{name}.c"
     rows = ", ".join("{" + ", ".join(repr(float(v)) for v in x) + "}" for x in states)
     drv.write_text(DRIVER.format(p=prefix, n=len(states), nx=nx, states=rows))
     from gen.codegen.render import model_sources
     srcs = [str(drv)] + [str(src / f) for f in model_sources(prefix)] + sorted(
         str(f) for f in src.glob("gen_rt_*.c"))
+    if split:
+        kern = str(src / f"{prefix}_kernels.c")
+        srcs.remove(kern)
+        for unit in (1, 2):
+            obj = src / f"kernels_{name}_{unit}.o"
+            cmd = [c_compiler(), *C_FLAGS, *STRICT_FLAGS, *flags, f"-DGEN_RT_CLONE_UNIT={unit}",
+                   "-I", str(src), "-c", kern, "-o", str(obj)]
+            proc = subprocess.run(cmd, capture_output=True, text=True)
+            assert proc.returncode == 0 and not proc.stderr.strip(), proc.stderr
+            srcs.append(str(obj))
     exe = src / f"drv_{name}"
     cmd = [c_compiler(), *C_FLAGS, *STRICT_FLAGS, *flags, "-I", str(src), *srcs, "-o", str(exe),
            "-lm"]
@@ -98,13 +111,17 @@ def test_clones_give_the_baseline_bit_for_bit(tmp_path, monkeypatch, which):
                   for th, w in rng.uniform(-2.5, 2.5, (12, 2))]
     base, _ = _run(_build(src, prefix, nx, states, "base", ["-DGEN_RT_NO_CLONES"]))
     clones, avx = _run(_build(src, prefix, nx, states, "clones", []))
+    split, _ = _run(_build(src, prefix, nx, states, "split", [], split=True))
     assert all(ln.split()[0] == "0" for ln in base), base
-    assert clones == base
+    assert clones == base and split == base
     if X86_LINUX:
         exe = src / "drv_clones"
         syms = subprocess.run(["nm", str(exe)], capture_output=True, text=True).stdout
         assert f"{prefix}_k_rhs_terms_isa.avx" in syms, "no AVX clone was built"
         assert avx, "the driver did not report the CPU"
+        syms = subprocess.run(["nm", str(src / "drv_split")], capture_output=True,
+                              text=True).stdout
+        assert f"{prefix}_k_rhs_terms_avx" in syms and f"{prefix}_k_rhs_terms_pick" in syms
 
 
 @pytest.mark.slow
@@ -116,6 +133,8 @@ def test_clones_are_sanitizer_clean(tmp_path, monkeypatch):
     san = ["-O1", "-g", "-fno-omit-frame-pointer", "-fsanitize=address,undefined",
            "-fno-sanitize-recover=all"]
     sanitized, _ = _run(_build(src, "cart2", 6, states, "san", san))
+    assert sanitized == base
+    sanitized, _ = _run(_build(src, "cart2", 6, states, "san_split", san, split=True))
     assert sanitized == base
 
 
@@ -132,16 +151,19 @@ def test_small_models_keep_one_kernel(tmp_path, monkeypatch):
 @pytest.mark.slow
 @pytest.mark.skipif(not X86_LINUX, reason="the clones are built on x86-64 Linux only")
 def test_compiled_library_dispatches_and_hides_its_kernels(monkeypatch):
-    """gen.compile's library (the cffi path) with the clones: the rhs is
-    the baseline library's to the bit, and neither the kernels nor their
-    clones are among the library's exported functions (GEN_RT_INTERNAL)."""
+    """gen.compile's library (the cffi path) with the clones, whose two
+    versions it compiles as two units in parallel (GEN_RT_CLONE_UNIT): the
+    rhs is the baseline library's to the bit, and neither the kernels nor
+    their versions are among the library's exported functions
+    (GEN_RT_INTERNAL)."""
     monkeypatch.setattr(gen.codegen.render, "CLONE_MIN_STATEMENTS", 0)
     sim = gen.compile(n_link_cart.model(2, name="cart2_clones"))
     monkeypatch.setattr(gen.codegen.render, "CLONE_MIN_STATEMENTS", 10 ** 9)
     ref = gen.compile(n_link_cart.model(2, name="cart2_noclones"))
     so = sim.build_info["module"]
     syms = subprocess.run(["nm", so], capture_output=True, text=True).stdout
-    assert "cart2_clones_k_rhs_terms_isa.avx" in syms
+    assert "cart2_clones_k_rhs_terms_avx" in syms and "cart2_clones_k_rhs_terms_base" in syms
+    assert "cart2_clones_k_rhs_terms_pick" in syms
     dyn = subprocess.run(["nm", "-D", "--defined-only", so], capture_output=True,
                          text=True).stdout
     exported = {ln.split()[-1] for ln in dyn.splitlines() if ln.strip()}
@@ -149,7 +171,7 @@ def test_compiled_library_dispatches_and_hides_its_kernels(monkeypatch):
     # (clang 14 exports the ifunc's resolver of a static function, whatever
     # the visibility: a symbol of the compiler's, not a kernel)
     kernels = [s for s in exported if s.startswith("cart2_clones_k_")
-               and not s.endswith(".resolver")]
+               and not s.endswith((".resolver", "_pick"))]
     assert not kernels, kernels
     rng = np.random.default_rng(3)
     X = rng.uniform(-3, 3, (40, sim.nx))
