@@ -155,7 +155,9 @@ def model_ops(model, work):
     from gen.plan.small import kernel_program
     out = Path(work) / model.name
     gen.generate(model, out)
-    text = (out / f"{model.name}_kernels.c").read_text()
+    # (without the preprocessor lines of a large kernel's two versions)
+    text = "\n".join(ln for ln in (out / f"{model.name}_kernels.c").read_text().splitlines()
+                     if not ln.startswith("#"))
     name = f"{model.name}_k_rhs_terms"
     body = function_body(text, name + "_isa" if name + "_isa(" in text else name)
     if model.mv == 0:
