@@ -122,6 +122,18 @@ const char *gen_rt_status_message(int status);
 #endif
 #endif
 
+/* The largest |coefficient| of a dependent speed in the independent ones
+ * that the partitioned solve accepts (beyond it the partition is singular
+ * there): gen_rt_accel_partitioned and a model's straight-line solve
+ * (gen/plan/small.py) test the same bound. */
+#ifndef GEN_RT_PARTITION_CMAX
+#ifdef GEN_RT_REAL_FLOAT
+#define GEN_RT_PARTITION_CMAX GEN_RT_C(1e5)
+#else
+#define GEN_RT_PARTITION_CMAX GEN_RT_C(1e9)
+#endif
+#endif
+
 /* 1 if all n values are finite. */
 int gen_rt_all_finite(int n, const gen_rt_real *v);
 
@@ -442,12 +454,15 @@ typedef struct gen_rt_model {
     void (*output_jacobian)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
                             const gen_rt_real *p, gen_rt_real t, gen_rt_real *Yq,
                             gen_rt_real *Yu, gen_rt_real *Yr);
-    /* the unconstrained right-hand side in one function (explicit kinematics
-     * and GEN_RT_ACCEL_LDLT): q' (qd) and u' (ud) by the model's unrolled
-     * LDL^T, M and f kept in registers (also written where M and f are not
-     * NULL); a status (GEN_RT_ERR_SINGULAR on a failed pivot, ud then not
-     * written); NULL when the model has none (then the runtime calls
-     * rhs_terms and mass_solve) */
+    /* the right-hand side in one function (explicit kinematics): q' (qd)
+     * and u' (ud) by the model's unrolled LDL^T (GEN_RT_ACCEL_LDLT), or for
+     * a small constrained model by the runtime's partitioned or KKT solve
+     * traced as straight-line code (the same results, bit for bit), M and f
+     * kept in registers (also written where M and f are not NULL); a status
+     * (GEN_RT_ERR_SINGULAR on a failed pivot or a value not finite, ud then
+     * not written: the general path decides); NULL when the model has none
+     * (then the runtime calls rhs_terms and mass_solve or its solve). A
+     * constrained model's rhs_solve gives no multipliers. */
     int (*rhs_solve)(const gen_rt_real *q, const gen_rt_real *u, const gen_rt_real *r,
                      const gen_rt_real *p, gen_rt_real t, gen_rt_real *qd, gen_rt_real *M,
                      gen_rt_real *f, gen_rt_real *ud);

@@ -2,14 +2,6 @@
  *   M u' = f + A^T lam,   A u' + a = 0.                                     */
 #include "gen_rt_private.h"
 
-#ifndef GEN_RT_PARTITION_CMAX
-#ifdef GEN_RT_REAL_FLOAT
-#define GEN_RT_PARTITION_CMAX GEN_RT_C(1e5)
-#else
-#define GEN_RT_PARTITION_CMAX GEN_RT_C(1e9)
-#endif
-#endif
-
 void gen_rt_kkt_matrix(int n, int m, const gen_rt_real *M, const gen_rt_real *A,
                        gen_rt_real *K)
 {

@@ -143,11 +143,13 @@ static int rhs_(const gen_rt_model *m, gen_rt_real t, const gen_rt_real *x,
         if (!rt_finite(nu * nu, M) || !rt_finite(nu, f)) return GEN_RT_ERR_NONFINITE_MODEL;
         return m->reaction_solve(q, u, r, p, t, M, f, dxdt + nq, NULL);
     }
-    if (m->accel == GEN_RT_ACCEL_LDLT && m->explicit_kinematics) {
+    if (m->explicit_kinematics &&
+        (m->rhs_solve ? !(mv && lam) : m->accel == GEN_RT_ACCEL_LDLT)) {
         /* the common unconstrained case in one pass (no constraints with
-         * LDL^T): q' and u' from the model's fused right-hand side (or its
-         * kernel and its solve), one check of the whole x'; a failure goes
-         * through the general path below, which names it */
+         * LDL^T), and a small constrained model without its multipliers:
+         * q' and u' from the model's fused right-hand side (or its kernel
+         * and its solve), one check of the whole x'; a failure goes through
+         * the general path below, which names it */
         if (m->rhs_solve) {
             st = m->rhs_solve(q, u, r, p, t, dxdt, NULL, NULL, dxdt + nq);
         } else {
@@ -194,8 +196,9 @@ int gen_rt_model_eval_rhs(const gen_rt_model *m, gen_rt_real t, const gen_rt_rea
                           int *iwork, gen_rt_real *dxdt, gen_rt_real *lam)
 {
     int st;
-    if (m->rhs_solve) {
-        /* the fused right-hand side, straight (rhs_ below names a failure) */
+    if (m->rhs_solve && !(m->mv && lam)) {
+        /* the fused right-hand side, straight (rhs_ below names a failure;
+         * it also gives a constrained model's multipliers) */
         const int nq = m->nq, nu = m->nu;
         st = m->rhs_solve(x, x + nq, r, p, t, work, NULL, NULL, work + nq);
         if (!st && gen_rt_finite_n(nq + nu, work)) {

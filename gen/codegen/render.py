@@ -36,6 +36,7 @@ from ..intake.model import require_model
 from ..sym.printers import kernel_statements, print_kernel_body
 from ..core.resources import csrc_file
 from ..plan.ldlt import demand_order, ldlt_statements, ldlt_work_index, ldlt_program
+from ..plan.small import BIND, c_lines, kernel_program
 
 __all__ = ["Rendered", "render", "render_files", "generate", "write_atomic", "template_env",
            "model_sources", "product_cdef"]
@@ -100,7 +101,7 @@ class Rendered:
 CLONE_MIN_STATEMENTS = 300
 
 
-def _kernel_context(kernels, printer, fused=None):
+def _kernel_context(kernels, printer, fused=None, small=None):
     """Kernels as data: names, arguments, outputs and the printed body
     (print_kernel_body). fused: the plan of the unrolled LDL^T
     (solvers.ldlt_program) when rhs_terms is the fused right-hand side: its
@@ -109,7 +110,10 @@ def _kernel_context(kernels, printer, fused=None):
     them (solvers.demand_order; the solve's statements as (name, expression),
     declared by the template), "fill" the work array's entries (the looped
     solve), "stores" its other outputs' stores, and "bound" lists M and f
-    for the template's stores."""
+    for the template's stores. small: the straight-line solve of a small
+    constrained model (gen.plan.small's Program) when rhs_terms is its fused
+    right-hand side: its body is then the kernel's statements with M, f, A
+    and a as locals (small.BIND), "solve" the program's lines after them."""
     out = []
     for k in kernels.values():
         ctx = {
@@ -118,8 +122,18 @@ def _kernel_context(kernels, printer, fused=None):
             "outputs": [o.name for o in k.outputs],
             "doc": _KERNEL_DOCS.get(k.name, k.name),
             "n_assign": len(k.assignments),
+            "solve": None,
         }
-        if fused is not None and k.name == "rhs_terms":
+        if small is not None and k.name == "rhs_terms":
+            temps, stores = kernel_statements(k, printer, bind=BIND, reads=False)
+            ctx["body"] = ["    " + t for _, t, _ in temps]
+            ctx["fill"] = []
+            ctx["stores"] = ["    " + line for line in stores]
+            ctx["bound"] = [{"name": o.name, "local": BIND[o.name], "size": len(o.exprs)}
+                            for o in k.outputs if o.name in BIND]
+            ctx["solve"] = c_lines(small, real=printer.real_type)
+            n_lines = len(ctx["body"]) + len(ctx["stores"]) + len(ctx["solve"])
+        elif fused is not None and k.name == "rhs_terms":
             bind = {"M": "m_", "f": "f_"}
             temps, stores = kernel_statements(k, printer, bind=bind, reads=not fused["loop"])
             ctx["fill"] = []
@@ -190,6 +204,22 @@ def _comment_label(names, labels, i):
     return f"; sympy: {lab}"
 
 
+def _small_solve(b, plan):
+    """The straight-line solve of a small constrained model (gen.plan.small's
+    Program), or None: for a backend whose templates have the fused
+    right-hand side, explicit kinematics and velocity constraints, the
+    reactions outside the motion, and a system small enough. rhs_terms then
+    also solves for u' by the runtime's partitioned or KKT solve traced as
+    straight-line code, before the runtime's general path (which it matches
+    bit for bit or leaves to)."""
+    m, kernels = plan.model, plan.kernels
+    if not (b.fused_rhs and plan.accel in ("partitioned", "kkt") and m.qdot is not None
+            and m.mv > 0 and "rhs_terms" in kernels and getattr(m, "aux_G", None) is None):
+        return None
+    return kernel_program(kernels["rhs_terms"], plan.accel, m.nu, m.mv, ind=m.u_ind,
+                          dep=m.u_dep)
+
+
 def build_context(plan, iface, timings=None, backend="c"):
     """The Jinja2 context of a plan: plain data and the interface."""
     t1 = time.perf_counter()
@@ -199,14 +229,14 @@ def build_context(plan, iface, timings=None, backend="c"):
     real = iface.real
     printer = b.printer(_symbol_map(m, kernels), real)
     p = m.name
-    # the fused right-hand side (a backend whose templates have it,
-    # unconstrained, explicit kinematics, the unrolled LDL^T): rhs_terms also
-    # solves for u', its M and f bound to locals the solve reads
-    # (gen_rt_model.rhs_solve)
+    # the fused right-hand side (gen_rt_model.rhs_solve; a backend whose
+    # templates have it, explicit kinematics): rhs_terms also solves for u',
+    # M and f in locals, by the unrolled LDL^T (unconstrained) or _small_solve
     fused = (b.fused_rhs and plan.accel == "ldlt" and m.qdot is not None
              and "rhs_terms" in kernels)
     mass_plan = ldlt_program(m.nu, plan.mass_nonzero) if plan.accel == "ldlt" else None
-    kctx = _kernel_context(kernels, printer, fused=mass_plan if fused else None)
+    small = _small_solve(b, plan)
+    kctx = _kernel_context(kernels, printer, fused=mass_plan if fused else None, small=small)
     t2 = time.perf_counter()
     mx = lambda n: max(1, n)  # noqa: E731  C99 has no zero-length arrays
     nq, nu, nr, mc, mv = m.nq, m.nu, m.nr, m.mc, m.mv
@@ -262,7 +292,8 @@ def build_context(plan, iface, timings=None, backend="c"):
         "mass_solve": mass_plan,
         "mass_solve_statements": (ldlt_statements(mass_plan)
                                   if mass_plan and not mass_plan["loop"] else None),
-        "fused_rhs": fused,
+        "fused_rhs": fused or small is not None,
+        "small_solve": small is not None,    # its solve: gen.plan.small's
         # reactions inside the motion, solved with u' (gen_rt_accel_reactions)
         "reactions_coupled": getattr(m, "aux_G", None) is not None,
         # q' is u itself (the usual q' = u): the fused right-hand side's q'

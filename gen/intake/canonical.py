@@ -357,18 +357,22 @@ def _massless(name, names, everything):
 # -------------------------------------------------- 7. explicit kinematics
 def explicit_kinematics(conv, syms):
     """(qdot, qd): q' as expressions of (q, u) when Kqd is diagonal (the
-    usual q' = u), else None; and, when q' stays implicit and there are
+    usual q' = u) or a diagonal with its rows permuted, else None; and, when q' stays implicit and there are
     velocity constraints, the symbols qd of q' in the acceleration-constraint
     term a (the run time fills them with the q' it solved from Kqd q' = kr;
     never sympy's symbolic solve of the kinematics, 0/0 at regular
     configurations such as ZYX Euler angles at hover), else []."""
     Kqd, nq = conv.Kqd, len(syms.Q)
     qdot = None
-    if all(Kqd[i, j] == 0 for i in range(nq) for j in range(nq) if i != j):
-        diag = [Kqd[i, i] for i in range(nq)]
-        if all(d != 0 for d in diag):
-            qdot = sm.Matrix([-(conv.Ku[i, :].dot(sm.Matrix(syms.U)) + conv.kf[i]) / diag[i]
-                              for i in range(nq)])
+    # row i of Kqd q' = -(Ku u + kf) holds the one q'_j with Kqd[i, j] != 0
+    # (a diagonal, or a permutation of one: kd_eqs listed in another order
+    # than q, as the seed pendulum's [q1' - u1, q2' - u2] for q = [q2, q1])
+    cols = [[j for j in range(nq) if Kqd[i, j] != 0] for i in range(nq)]
+    if all(len(c) == 1 for c in cols) and sorted(c[0] for c in cols) == list(range(nq)):
+        row_of = {c[0]: i for i, c in enumerate(cols)}
+        U = sm.Matrix(syms.U)
+        qdot = sm.Matrix([-(conv.Ku[i, :].dot(U) + conv.kf[i]) / Kqd[i, j]
+                          for j, i in sorted(row_of.items())])
     # (Model.a, d(A u + b)/dq q' + d(A u + b)/dt, is formed on first use:
     # the kernels take it as a directional derivative of the CSE'd graph of
     # A u + b instead, gen.plan.ir)

@@ -34,11 +34,16 @@ the caller then takes the runtime's general path, which names the failure.
     prog = accel_program("kkt", n, m, M, f, A, a)     # None: too large
     lines = c_lines(prog, real="double")
 
-Not used by the models yet (issue 47's remaining work): a model hook that
-runs the program over the fused kernel's locals before the runtime's path,
-GEN_RT_PARTITION_CMAX moved from gen_rt_dynamics.c into a header, and the
-seed's golden sources regenerated. tests/unit/plan/test_small_solve.py
-checks the programs against the runtime, bit for bit.
+A model uses it through kernel_program: a constrained model with explicit
+kinematics whose system is small enough gets a fused right-hand side
+(gen.codegen.render, templates/c/model_kern.c.j2): its rhs_terms kernel
+binds M, f, A and a to locals (BIND), runs the program over them and returns
+its status; the model's eval_rhs calls it first when no multipliers are
+asked, and the runtime's rhs_ through gen_rt_model.rhs_solve, each falling
+back to the general path on a nonzero status. The partition's bound
+GEN_RT_PARTITION_CMAX is in gen_rt.h. tests/unit/plan/test_small_solve.py
+checks the programs against the runtime, bit for bit, and the seed's models
+with and without the general path.
 """
 from __future__ import annotations
 
@@ -46,7 +51,8 @@ import math
 import re
 from dataclasses import dataclass
 
-__all__ = ["SMALL_MAX_SIZE", "SMALL_MAX_PATHS", "accel_program", "c_lines", "Program"]
+__all__ = ["SMALL_MAX_SIZE", "SMALL_MAX_PATHS", "BIND", "accel_program", "kernel_program",
+           "c_lines", "Program"]
 
 # the straight-line solve is for systems of at most this size (Kane: the
 # speeds; Lagrange: speeds plus multipliers); larger ones keep the
@@ -55,6 +61,8 @@ SMALL_MAX_SIZE = 8
 # and at most this many pivot paths (each a copy of the rest of the solve)
 SMALL_MAX_PATHS = 16
 FAIL = "return GEN_RT_ERR_SINGULAR;"
+# the fused right-hand side's locals of M, f, A and a (kernel_program)
+BIND = {"M": "m_", "f": "f_", "A": "ca_", "a": "cb_"}
 
 
 class _TooLarge(Exception):
@@ -78,13 +86,16 @@ class _V:
 
 
 def _lit(v):
-    """A literal 0, -0 or 1 (the only ones folded: any other number stays in
-    its local, so a float build computes with the float value)."""
+    """A literal 0, -0, 1 or -1 (-1: the negation of a structural 1; the
+    only ones folded: any other number stays in its local, so a float build
+    computes with the float value)."""
     neg = math.copysign(1.0, v) < 0
     if v == 0.0:
         return _V("(-(gen_rt_real)0)" if neg else "0", -0.0 if neg else 0.0, mnz=neg)
     if v == 1.0:
         return _V("1", 1.0, mnz=False)
+    if v == -1.0:
+        return _V("(-1)", -1.0, mnz=False)
     raise ValueError(f"not a literal the solve folds: {v!r}")
 
 
@@ -110,17 +121,25 @@ class _Tracer:
         self.finite = set(finite)   # names known (or checked) finite here
         self.ops = dict(ops)        # {"flops", "divs"} on this path so far
         self.ends = ends            # the ops of every finished path
+        self.neg_of = {}            # {-x's name: x's name}, shared by the forks
 
     def fork(self):
-        return _Tracer(self.counter, self.guard, self.finite, self.ops, self.ends)
+        t = _Tracer(self.counter, self.guard, self.finite, self.ops, self.ends)
+        t.neg_of = self.neg_of
+        return t
 
     def name(self, stem="s"):
         self.counter[0] += 1
         return f"{stem}{self.counter[0]}"
 
-    def let(self, expr, mnz=True, flops=1, divs=0):
+    def let(self, expr, mnz=True, flops=None, divs=0):
+        """A local of expr; flops None: its + - * and negations, counted in
+        the text (a structural zero's product, "(x * 0)", is executed too)."""
         n = self.name()
         self.items.append(f"const gen_rt_real {n} = {expr};")
+        if flops is None:
+            flops = (sum(expr.count(f" {o} ") for o in "*+-") + expr.startswith("-")
+                     + expr.count("(-") - expr.count("(-1)") - expr.count("(-(gen_rt_real)0)"))
         self.ops["flops"] += flops
         self.ops["divs"] += divs
         return _V(n, mnz=mnz)
@@ -159,7 +178,11 @@ class _Tracer:
             return _lit(-x.lit)
         if x.zero:
             return _V(f"(-{x.t})", zero=True)
-        return self.let(f"-{x.t}")
+        v = self.let(f"-{x.t}")
+        if x.t in self.finite:            # -x is finite where x is: no test of its own
+            self.finite.add(v.t)
+        self.neg_of[v.t] = x.t            # |-x| is |x| (max_abs)
+        return v
 
     def add(self, x, y):
         if y.is_zero and not x.mnz:
@@ -210,23 +233,36 @@ class _Tracer:
         return self.guarded(coef, acc, b, self.add(acc, self.mul(coef, b)))
 
     def abs_(self, x):
-        return self.let(f"{x.t} < 0 ? -{x.t} : {x.t}", mnz=False, flops=0)
+        """|x| (the runtime's x < 0 ? -x : x, which keeps -0 where fabs
+        gives +0): only compared, where -0 and +0 are equal, so fabs, one
+        instruction where the select is four (c_lines: fabsf in float)."""
+        if x.lit is not None:
+            return _lit(abs(x.lit))
+        return self.let(f"fabs({x.t})", mnz=False, flops=0)
 
     def check_finite(self, vals):
-        """The runtime's all-finite test (else: its SINGULAR)."""
-        names = [v.t for v in vals if v.lit is None and not v.zero and v.t not in self.finite]
-        if names:
-            self.items.append(_finite_test(names))
-            self.finite.update(names)
+        """The runtime's all-finite tests (of M, f, A and a before its solve:
+        NONFINITE_MODEL; of a solution: SINGULAR), deferred to the path's one
+        test before it writes (end): the status is nonzero either way and
+        nothing is written before it, while a branch in the middle waits for
+        the slowest value it tests (the kernel's longest chain: a third of
+        the seed's Kane model's time with clang)."""
+        self.promise_finite(*vals)
 
     def max_abs(self, vals):
         """gen_rt_max_abs: from 0, the largest |v| (a zero never is)."""
         m = _lit(0.0)
+        seen = set()
         for v in vals:
             if v.is_zero:
                 continue
-            if v.lit is not None:                     # a literal 1
-                m = v if m.lit == 0.0 else self.let(f"1 > {m.t} ? 1 : {m.t}", mnz=False, flops=0)
+            base = self.neg_of.get(v.t, v.t)   # x and -x (K's A and -A^T): once
+            if v.lit is None and base in seen:
+                continue
+            seen.add(base)
+            if v.lit is not None:                     # a literal 1 or -1: |v| = 1
+                m = (_lit(1.0) if m.lit == 0.0
+                     else self.let(f"1 > {m.t} ? 1 : {m.t}", mnz=False, flops=0))
                 continue
             a = self.abs_(v)
             m = a if m.lit == 0.0 else self.let(f"{a.t} > {m.t} ? {a.t} : {m.t}", mnz=False,
@@ -245,8 +281,11 @@ class _Tracer:
 
 
 def _finite_test(names):
-    """x * 0 is 0 for finite x and NaN otherwise (no libm)."""
-    return f"if (!(({' + '.join(f'{n} * 0' for n in names)}) == 0)) {FAIL}"
+    """x * 0 is 0 for finite x and NaN otherwise (no libm), and a sum is
+    finite only where its terms are: one product for all of them. A finite
+    sum that overflows fails too, and the runtime's general path then gives
+    its own result (values near the type's largest; nothing else changes)."""
+    return f"if (!(({' + '.join(names)}) * 0 == 0)) {FAIL}"
 
 
 # ---------------------------------------------------------------- LU
@@ -281,7 +320,7 @@ def _lu_step(tr, n, a, piv, k, tol, cont, paths):
         tr.items.append(f"if (!({b.t} > {tol.t})) {FAIL}")
         return _lu_pivot(tr, n, a, piv, k, choices[0], tol, cont, paths)
     # the runtime's search: |a_kk|, then each later row with a larger |a_ik|
-    best, p = tr.name("b"), tr.name("p")
+    best, p = tr.name("sb"), tr.name("sp")
     init = "0" if a[k][k].is_zero else tr.abs_(a[k][k]).t
     tr.items += [f"gen_rt_real {best} = {init};", f"int {p} = {k};"]
     for i in cands:
@@ -424,7 +463,11 @@ def accel_program(method, n, m, M, f, A, a, ind=(), dep=(), out="out_ud"):
     Av, av = vals[n * n + n:n * n + n + m * n], vals[n * n + n + m * n:]
     ends = []
     tr = _Tracer([0], [], [], {"flops": 0, "divs": 0}, ends)
-    tr.check_finite(vals)
+    # the runtime's test of M, f, A and a before its solve; in the KKT system
+    # f and -a are the right-hand side, each of which its own unknown's
+    # substitutions only update (never drop), so a value that is not finite
+    # there reaches the solution, which is tested: they need no test of their own
+    tr.check_finite([*Mv, *Av] if method == "kkt" else vals)
     paths = [1]
     try:
         if method == "kkt":
@@ -490,7 +533,8 @@ def c_lines(prog, indent="    ", real="gen_rt_real"):
     def walk(items, ind):
         for it in items:
             if isinstance(it, str):
-                out.append(ind + it.replace("gen_rt_real", real))
+                it = it.replace("gen_rt_real", real)
+                out.append(ind + (it.replace("fabs(", "fabsf(") if real == "float" else it))
                 continue
             _, cond, then, other = it
             out.append(f"{ind}if ({cond}) {{")
@@ -501,3 +545,20 @@ def c_lines(prog, indent="    ", real="gen_rt_real"):
 
     walk(prog.items, indent)
     return out
+
+
+def kernel_program(kernel, method, n, m, ind=(), dep=()):
+    """accel_program over a right-hand-side kernel's outputs M, f, A and a
+    as the fused kernel binds them (the locals BIND[name]<k>; an entry
+    whose expression is the number 0 or 1 as that literal), or None when
+    the model is too large for it or its kernel lacks one of them."""
+    outs = {o.name: o.exprs for o in kernel.outputs}
+    if any(k not in outs for k in BIND):
+        return None
+
+    def entries(name):
+        return [0 if e == 0 else 1 if e == 1 else f"{BIND[name]}{k}"
+                for k, e in enumerate(outs[name])]
+
+    return accel_program(method, n, m, entries("M"), entries("f"), entries("A"),
+                         entries("a"), ind=ind, dep=dep)

@@ -267,7 +267,9 @@ def _indirect_targets(p):
               "output_jacobian": f"{p}_output_jacobian", "mass_matrix": f"{p}_mass_matrix",
               "forcing": f"{p}_forcing", "rhs_solve": f"{p}_k_rhs_terms",
               "reaction_solve": f"{p}_reaction_solve"}
-    out = {caller: [member.get(k, f"{p}_k_{k}") for k in ks]
+    # a small constrained model's rhs_solve is a wrapper of its fused kernel
+    extra = {"rhs_solve": [f"{p}_rhs_solve"]}
+    out = {caller: [n for k in ks for n in [member.get(k, f"{p}_k_{k}")] + extra.get(k, [])]
            for caller, ks in _RUNTIME_INDIRECT.items()}
     for integrator in ("gen_rt_rk4_step", "gen_rt_dopri5_trial", "gen_rt_rodas4_trial"):
         out[integrator] = list(_CALLBACKS)
@@ -275,7 +277,7 @@ def _indirect_targets(p):
     # -O3 gen_rt_model_rhs into rhs_cb, say): it may reach any kernel. The
     # kernels call nothing indirectly, so this bound is safe (and may be loose)
     members = {k for ks in _RUNTIME_INDIRECT.values() for k in ks}
-    out[None] = sorted(member.get(k, f"{p}_k_{k}") for k in members)
+    out[None] = sorted(n for k in members for n in [member.get(k, f"{p}_k_{k}")] + extra.get(k, []))
     return out
 
 

@@ -52,10 +52,13 @@ C_FLAGS = ["-std=c99", "-O2", "-fno-strict-aliasing", "-ffp-contract=off", "-fno
 # semantics are the same at every level (no -ffast-math), so the numbers are
 # too (tests/golden/seed_numbers.json, bit for bit)
 C_LIN_FLAGS = ["-O1"]
-# added for <name>.c, the wiring: calls into the runtime (compiled apart at
-# -O2) and the unrolled mass-matrix solve, which the right-hand side does
-# not use (its fused kernel solves M u' = f itself): -O1 halves its compile
-# (n = 16 cart: 0.70 -> 0.39 s) for ... (bench/README, issue 47)
+# added for <name>.c, the wiring, of a model with a large kernel (the C
+# backend's units): calls into the runtime (compiled apart at -O2) and the
+# unrolled mass-matrix solve, which the right-hand side does not use (its
+# fused kernel solves M u' = f itself): -O1 halves its compile (n = 16 cart:
+# 0.70 -> 0.39 s of gcc) with its rhs, linearize and step_sensitivity as fast
+# (docs/guides/speed.md). A small model keeps -O2: there eval_rhs's own
+# wiring is a measurable share of a call (the seed's Lagrange model).
 C_WIRING_FLAGS = ["-O1"]
 # the runtime's objects (shared by every model library and FMU binary of a
 # scalar type): position independent, and hidden, so that a library exports

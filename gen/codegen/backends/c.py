@@ -60,14 +60,16 @@ class CBackend(Backend):
         own = [(f"{name}_lin.c", C_LIN_FLAGS)] if derivatives else []
         text = files.get(kern, "")
         level = tuple(C_LIN_FLAGS) if len(text.encode()) >= LARGE_KERNELS else ()
-        if "GEN_RT_CLONES static" in text:
+        large = "GEN_RT_CLONES static" in text
+        if large:
             # a large kernel's two versions (GEN_RT_CLONES), compiled apart and in
             # parallel (GEN_RT_CLONE_UNIT in gen_rt.h): the same code, half the wait
             own += [(kern, ("-DGEN_RT_CLONE_UNIT=1", *level)),
                     (kern, ("-DGEN_RT_CLONE_UNIT=2", *level), f"{name}_kernels_avx.o")]
         else:
             own.append((kern, level))
-        own += [(f"{name}.c", C_WIRING_FLAGS), (f"{name}_api.c", ())]
+        # (a small model's wiring stays at -O2: its eval_rhs is a share of its time)
+        own += [(f"{name}.c", C_WIRING_FLAGS if large else ()), (f"{name}_api.c", ())]
         if not derivatives:
             own.append((f"{name}_lin_stub.c", ()))
         return [(u[0], cc, [*C_FLAGS, "-fPIC", *u[1]], *u[2:]) for u in own]

@@ -87,7 +87,8 @@ def _run(exe):
 @pytest.mark.parametrize("which", ["cart", "kane"])
 def test_clones_give_the_baseline_bit_for_bit(tmp_path, monkeypatch, which):
     """With the threshold at 0 the seed Kane pendulum (constrained: the
-    plain kernel) and the 2-link cart (the fused right-hand side with its
+    fused right-hand side with its straight-line partitioned solve,
+    gen.plan.small) and the 2-link cart (the fused right-hand side with its
     unrolled LDL^T) get the clones; the library built with them gives, at
     random states, the same bits as the same sources built with
     GEN_RT_NO_CLONES, and the same under ASan and UBSan. The numbers are
@@ -99,8 +100,7 @@ def test_clones_give_the_baseline_bit_for_bit(tmp_path, monkeypatch, which):
         model, prefix = seed_pendulum.kane_model(), "pendulum_kane"
     src = _sources(model, tmp_path / "src", monkeypatch)
     kern = (src / f"{prefix}_kernels.c").read_text()
-    assert f"GEN_RT_CLONES static {'int' if which == 'cart' else 'void'} " \
-           f"{prefix}_k_rhs_terms_isa(" in kern
+    assert f"GEN_RT_CLONES static int {prefix}_k_rhs_terms_isa(" in kern
     rng = np.random.default_rng(17)
     nx = model.nq + model.nu
     if which == "cart":

@@ -1,6 +1,7 @@
-"""gen.plan.small (issue 47, not wired into the models yet): the straight-line
-accelerations traced from the runtime's KKT and partitioned solves are the
-runtime's, bit for bit, or fail before writing.
+"""gen.plan.small (issue 47): the straight-line accelerations traced from the
+runtime's KKT and partitioned solves are the runtime's, bit for bit, or fail
+before writing; wired into a small constrained model's fused right-hand
+side, eval_rhs gives the general path's bits.
 
 Reference: the runtime itself. A harness compiled with csrc/runtime calls
 gen_rt_accel_kkt / gen_rt_accel_partitioned and the traced program on the
@@ -29,6 +30,10 @@ CASES = {
                   (0,), (1,)),
     "part-3": ("partitioned", 3, 1, ["M0", "M1", 0, "M1", "M4", 0, 0, 0, "M8"],
                ["f0", "f1", "f2"], ["A0", "A1", "A2"], ["a0"], (0, 2), (1,)),
+    # structural ones in A (a cart's x - ...: the KKT's -A^T gets a literal -1)
+    "kkt-one": ("kkt", 2, 1, ["M0", "M1", "M1", "M3"], ["f0", "f1"], [1, "A1"], ["a0"], (), ()),
+    "part-one": ("partitioned", 2, 1, ["M0", 0, 0, "M3"], ["f0", "f1"], ["A0", 1], ["a0"],
+                 (0,), (1,)),
 }
 NAMES = ["M0", "M1", "M3", "M4", "M8", "f0", "f1", "f2", "A0", "A1", "A2", "a0"]
 
@@ -43,11 +48,10 @@ def _harness(tmp, key):
     decl = "\n".join(f"    const double {v} = in[{i}]; (void){v};" for i, v in enumerate(NAMES))
     call = (f"gen_rt_accel_kkt({n}, {m}, Mv, fv, Av, av, w, iw, ud, 0)" if method == "kkt" else
             f"gen_rt_accel_partitioned({n}, {m}, ind, dep, Mv, fv, Av, av, w, iw, ud, 0)")
-    src = f"""#include <stdio.h>
+    src = f"""#include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include "gen_rt_private.h"
-/* (gen_rt_dynamics.c's own; a wired solve needs it in a header) */
-#define GEN_RT_PARTITION_CMAX GEN_RT_C(1e9)
 static int small(const double *in, double *out_ud)
 {{
 {decl}
@@ -118,3 +122,38 @@ def test_straight_line_solve_is_the_runtime_bit_for_bit(key, tmp_path):
         elif st == "0" and np.all(np.isfinite(r)):
             pytest.fail(f"the runtime solved {r.tolist()} and the program did not: {line}")
     assert ok > 2000
+
+
+@pytest.mark.parametrize("which", ["kane", "lagrange"])
+def test_models_fused_solve_is_the_general_path(which, request):
+    """The seed's models: eval_rhs without multipliers (the fused kernel's
+    straight-line solve) gives the same status and bits as with them (the
+    runtime's general path, gen_rt_accel_partitioned / gen_rt_accel_kkt),
+    at consistent states, states off the constraints, and at q1 = 0, where
+    the Kane model's velocity constraint divides by zero (the fused solve
+    fails there and the general path names the failure)."""
+    from helpers import pendulum_state
+    sim = request.getfixturevalue(f"{which}_sim")
+    fn = sim.library.function("eval_rhs")
+    ffi = sim.library.ffi
+    rng = np.random.default_rng(3)
+    states = [pendulum_state(a, w, 1.0, which) for a, w in rng.uniform(-3, 3, (100, 2))]
+    states += list(rng.uniform(-2, 2, (100, 4)))
+    q1 = sim.state_names.index("q1")
+    for x in states[:10]:
+        y = np.array(x, dtype=float)
+        y[q1] = 0.0
+        states.append(y)
+    fails = 0
+    for x in states:
+        x = np.ascontiguousarray(x, dtype=float)
+        fast, slow, lam = (ffi.new("eomgen_real[]", 4), ffi.new("eomgen_real[]", 4),
+                           ffi.new("eomgen_real[]", 1))
+        xp = ffi.cast("eomgen_real *", ffi.from_buffer(x))
+        st1 = fn(0.0, xp, ffi.NULL, ffi.NULL, fast, ffi.NULL)
+        st2 = fn(0.0, xp, ffi.NULL, ffi.NULL, slow, lam)
+        assert st1 == st2, (x, st1, st2)
+        if st1 == 0:
+            assert [float(v).hex() for v in fast] == [float(v).hex() for v in slow], x
+        fails += st1 != 0
+    assert fails < len(states) // 4

@@ -101,35 +101,42 @@ static const pendulum_kane_real pendulum_kane_u_zero[2] = { 0 };
 static void pendulum_kane_mass_matrix(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *M)
 {
     pendulum_kane_real qd[2], f[2];
-    pendulum_kane_real Kqd[4];
     pendulum_kane_real A[2], a[1];
-    pendulum_kane_k_rhs_terms(q, pendulum_kane_u_zero, pendulum_kane_r_zero, p, t, Kqd, qd, M, f, A, a);
+    (void)pendulum_kane_k_rhs_terms(q, pendulum_kane_u_zero, pendulum_kane_r_zero, p, t, qd, M, f, A, a, NULL);
 }
 
 static void pendulum_kane_forcing(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p,
                       pendulum_kane_real t, pendulum_kane_real *f)
 {
     pendulum_kane_real qd[2], M[4];
-    pendulum_kane_real Kqd[4];
     pendulum_kane_real A[2], a[1];
-    pendulum_kane_k_rhs_terms(q, u, r, p, t, Kqd, qd, M, f, A, a);
+    (void)pendulum_kane_k_rhs_terms(q, u, r, p, t, qd, M, f, A, a, NULL);
 }
 
 static void pendulum_kane_kinematics(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t,
                          pendulum_kane_real *Kqd, pendulum_kane_real *qd)
 {
-    pendulum_kane_k_kinematics(q, u, p, t, Kqd, qd);
+    (void)Kqd;
+    pendulum_kane_k_kinematics(q, u, p, t, qd);
 }
 
 static void pendulum_kane_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p,
                         pendulum_kane_real t, pendulum_kane_real *Kqd, pendulum_kane_real *qd, pendulum_kane_real *M, pendulum_kane_real *f, pendulum_kane_real *A, pendulum_kane_real *a)
 {
-    pendulum_kane_k_rhs_terms(q, u, r, p, t, Kqd, qd, M, f, A, a);
+    (void)Kqd;
+    (void)pendulum_kane_k_rhs_terms(q, u, r, p, t, qd, M, f, A, a, NULL);
+}
+
+/* the runtime's rhs_solve: the fused right-hand side without A and a */
+static int pendulum_kane_rhs_solve(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p,
+                       pendulum_kane_real t, pendulum_kane_real *qd, pendulum_kane_real *M, pendulum_kane_real *f, pendulum_kane_real *ud)
+{
+    return pendulum_kane_k_rhs_terms(q, u, r, p, t, qd, M, f, NULL, NULL, ud);
 }
 
 static const gen_rt_model pendulum_kane_model = {
     2, 2, 0, 3, 1, 1,
-    0, GEN_RT_ACCEL_PARTITIONED,
+    1, GEN_RT_ACCEL_PARTITIONED,
     pendulum_kane_q_ind, pendulum_kane_q_dep, pendulum_kane_u_ind, pendulum_kane_u_dep,
     pendulum_kane_mass_matrix, pendulum_kane_forcing, pendulum_kane_kinematics, pendulum_kane_rhs_terms,
     pendulum_kane_k_constraints, pendulum_kane_k_constraint_jacobian,
@@ -138,9 +145,9 @@ static const gen_rt_model pendulum_kane_model = {
     pendulum_kane_lin_terms,
     NULL,
     0, NULL,
-    pendulum_kane_k_accel_terms,
-    0, NULL, NULL,
     NULL,
+    0, NULL, NULL,
+    pendulum_kane_rhs_solve,
     NULL,
     NULL
 };
@@ -204,8 +211,8 @@ int pendulum_kane_eval_forcing(const pendulum_kane_real *q, const pendulum_kane_
 
 int pendulum_kane_eval_kinematics(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *qdot)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_KIN_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_KIN_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_KIN_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_KIN_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_IN(q, 2);
     PENDULUM_KANE_CHECK_IN(u, 2);
     if (!p) p = pendulum_kane_p_default;
@@ -227,7 +234,7 @@ int pendulum_kane_eval_constraints(const pendulum_kane_real *q, const pendulum_k
 
 int pendulum_kane_eval_constraint_jacobian(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *Jc)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_JAC_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_JAC_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_IN(q, 2);
     if (!p) p = pendulum_kane_p_default;
     else PENDULUM_KANE_CHECK_IN(p, 3);
@@ -271,8 +278,8 @@ int pendulum_kane_eval_energy(const pendulum_kane_real *q, const pendulum_kane_r
 
 int pendulum_kane_eval_rhs(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *dxdt, pendulum_kane_real *lam)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_EVAL_RHS_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_EVAL_RHS_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_EVAL_RHS_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_EVAL_RHS_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_IN(x, 4);
     if (!r) r = pendulum_kane_r_zero;
@@ -280,13 +287,21 @@ int pendulum_kane_eval_rhs(pendulum_kane_real t, const pendulum_kane_real *x, co
     if (!p) p = pendulum_kane_p_default;
     else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_OUT(dxdt);
+    /* the fused right-hand side called directly, without M, f, A and a: x'
+     * into work, written out on success (its u' is finite then, its q' the checked u);
+     * the runtime's call below names a failure and gives the multipliers */
+    if (!lam && !pendulum_kane_k_rhs_terms(x, x + 2, r, p, t, work, NULL, NULL, NULL, NULL, work + 2)) {
+        int i;
+        for (i = 0; i < 4; ++i) dxdt[i] = work[i];
+        return GEN_RT_OK;
+    }
     return gen_rt_model_eval_rhs(&pendulum_kane_model, t, x, r, p, work, iwork, dxdt, lam);
 }
 
 int pendulum_kane_eval_auxiliary_forces(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *F)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_AUX_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED, 0)];
-    int iwork[GEN_RT_MODEL_AUX_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED, 0)];
+    pendulum_kane_real work[GEN_RT_MODEL_AUX_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED, 0)];
+    int iwork[GEN_RT_MODEL_AUX_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED, 0)];
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_IN(x, 4);
     if (!r) r = pendulum_kane_r_zero;
@@ -298,7 +313,7 @@ int pendulum_kane_eval_auxiliary_forces(pendulum_kane_real t, const pendulum_kan
 
 int pendulum_kane_project(pendulum_kane_real t, const pendulum_kane_real *p, pendulum_kane_real tol, int max_iter, pendulum_kane_real *x)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_PROJECT_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_PROJECT_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_REAL(t);
     if (!p) p = pendulum_kane_p_default;
     else PENDULUM_KANE_CHECK_IN(p, 3);
@@ -308,8 +323,8 @@ int pendulum_kane_project(pendulum_kane_real t, const pendulum_kane_real *p, pen
 
 int pendulum_kane_consistent_state(pendulum_kane_real t, const pendulum_kane_real *p, pendulum_kane_real tol, int max_iter, pendulum_kane_real *x)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_CONSISTENT_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_CONSISTENT_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_CONSISTENT_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_CONSISTENT_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_REAL(t);
     if (!p) p = pendulum_kane_p_default;
     else PENDULUM_KANE_CHECK_IN(p, 3);
@@ -337,8 +352,8 @@ void pendulum_kane_sim_options_default(pendulum_kane_sim_options *opts)
 
 int pendulum_kane_step_rk4(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, int project, pendulum_kane_real *x)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_STEP_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_STEP_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_STEP_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_STEP_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_REAL(h);
     if (!r) r = pendulum_kane_r_zero;
@@ -351,8 +366,8 @@ int pendulum_kane_step_rk4(pendulum_kane_real t, pendulum_kane_real h, const pen
 
 int pendulum_kane_advance(pendulum_kane_real t0, pendulum_kane_real t1, const pendulum_kane_real *r, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, pendulum_kane_sim_stats *stats, pendulum_kane_real *x)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_ADVANCE_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_ADVANCE_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_ADVANCE_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_ADVANCE_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
     gen_rt_sim_options opts_rt = { 0 };
     gen_rt_sim_stats stats_rt = { 0 };
     pendulum_kane_sim_options opts_default;
@@ -415,8 +430,8 @@ int pendulum_kane_simulate_rows_kept(int rows, int every, int final_only)
 
 int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_real *r, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_sim_stats *stats)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_SIMULATE_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_SIMULATE_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_SIMULATE_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_SIMULATE_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
     gen_rt_sim_options opts_rt = { 0 };
     gen_rt_sim_stats stats_rt = { 0 };
     pendulum_kane_sim_options opts_default;
@@ -469,8 +484,8 @@ int pendulum_kane_simulate(const pendulum_kane_real *x0, pendulum_kane_real t0, 
 
 int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_input *in, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_real *r_out, pendulum_kane_sim_stats *stats)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_SIMULATE_INPUT_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_SIMULATE_INPUT_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_SIMULATE_INPUT_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_SIMULATE_INPUT_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
     gen_rt_input in_rt = { 0 };
     gen_rt_sim_options opts_rt = { 0 };
     gen_rt_sim_stats stats_rt = { 0 };
@@ -538,8 +553,8 @@ int pendulum_kane_simulate_input(const pendulum_kane_real *x0, pendulum_kane_rea
 
 int pendulum_kane_simulate_events(const pendulum_kane_real *x0, pendulum_kane_real t0, pendulum_kane_real t_end, pendulum_kane_real dt, const pendulum_kane_input *in, const pendulum_kane_events *ev, const pendulum_kane_real *p, const pendulum_kane_sim_options *opts, int capacity, pendulum_kane_real *t_out, pendulum_kane_real *x_out, pendulum_kane_real *lam_out, pendulum_kane_real *r_out, pendulum_kane_sim_stats *stats)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_SIMULATE_EVENTS_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED, 0)];
-    int iwork[GEN_RT_MODEL_SIMULATE_EVENTS_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED, 0)];
+    pendulum_kane_real work[GEN_RT_MODEL_SIMULATE_EVENTS_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED, 0)];
+    int iwork[GEN_RT_MODEL_SIMULATE_EVENTS_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED, 0)];
     gen_rt_input in_rt = { 0 };
     gen_rt_events ev_rt = { 0 };
     gen_rt_sim_options opts_rt = { 0 };
@@ -621,8 +636,8 @@ int pendulum_kane_simulate_events(const pendulum_kane_real *x0, pendulum_kane_re
 
 int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_LINEARIZE_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_LINEARIZE_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_LINEARIZE_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_LINEARIZE_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_IN(x_op, 4);
     if (!r_op) r_op = pendulum_kane_r_zero;
     else PENDULUM_KANE_CHECK_IN(r_op, 0);
@@ -635,8 +650,8 @@ int pendulum_kane_linearize(const pendulum_kane_real *x_op, const pendulum_kane_
 
 int pendulum_kane_jacobian(pendulum_kane_real t, const pendulum_kane_real *x, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *Jx, pendulum_kane_real *Jr)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_JACOBIAN_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_JACOBIAN_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_JACOBIAN_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_JACOBIAN_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_IN(x, 4);
     if (!r) r = pendulum_kane_r_zero;
@@ -649,8 +664,8 @@ int pendulum_kane_jacobian(pendulum_kane_real t, const pendulum_kane_real *x, co
 
 int pendulum_kane_step_sensitivity(pendulum_kane_real t, pendulum_kane_real h, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real *x, pendulum_kane_real *Fx, pendulum_kane_real *Fr)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_STEP_SENS_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_STEP_SENS_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_STEP_SENS_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_STEP_SENS_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_REAL(t);
     PENDULUM_KANE_CHECK_REAL(h);
     if (!r) r = pendulum_kane_r_zero;
@@ -712,8 +727,8 @@ int pendulum_kane_eval_hybrid(pendulum_kane_real t, const pendulum_kane_real *x,
 
 int pendulum_kane_linearize_outputs(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *A, pendulum_kane_real *B, pendulum_kane_real *C, pendulum_kane_real *D)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_LINEARIZE_OUTPUTS_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED, 0)];
-    int iwork[GEN_RT_MODEL_LINEARIZE_OUTPUTS_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED, 0)];
+    pendulum_kane_real work[GEN_RT_MODEL_LINEARIZE_OUTPUTS_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED, 0)];
+    int iwork[GEN_RT_MODEL_LINEARIZE_OUTPUTS_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED, 0)];
     PENDULUM_KANE_CHECK_IN(x_op, 4);
     if (!r_op) r_op = pendulum_kane_r_zero;
     else PENDULUM_KANE_CHECK_IN(r_op, 0);
@@ -726,8 +741,8 @@ int pendulum_kane_linearize_outputs(const pendulum_kane_real *x_op, const pendul
 
 int pendulum_kane_linearize_discrete(const pendulum_kane_real *x_op, const pendulum_kane_real *r_op, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real dt, pendulum_kane_real *Ad, pendulum_kane_real *Bd)
 {
-    pendulum_kane_real work[GEN_RT_MODEL_LINEARIZE_DISCRETE_WORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
-    int iwork[GEN_RT_MODEL_LINEARIZE_DISCRETE_IWORK(2, 2, 1, 1, 0, 0, GEN_RT_ACCEL_PARTITIONED)];
+    pendulum_kane_real work[GEN_RT_MODEL_LINEARIZE_DISCRETE_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
+    int iwork[GEN_RT_MODEL_LINEARIZE_DISCRETE_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
     PENDULUM_KANE_CHECK_IN(x_op, 4);
     if (!r_op) r_op = pendulum_kane_r_zero;
     else PENDULUM_KANE_CHECK_IN(r_op, 0);

@@ -15,43 +15,24 @@
 #include "pendulum_kane_kernels.h"
 
 /* q' (or Kqd and its right-hand side) (0 temporaries) */
-void pendulum_kane_k_kinematics(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_kr)
+void pendulum_kane_k_kinematics(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_qdot)
 {
     (void)q;
     (void)u;
     (void)p;
     (void)t;
-    out_Kqd[0] = 0;
-    out_Kqd[1] = 1;
-    out_Kqd[2] = 1;
-    out_Kqd[3] = 0;
-    out_kr[0] = u[1];
-    out_kr[1] = u[0];
+    out_qdot[0] = u[0];
+    out_qdot[1] = u[1];
 }
 
-/* the acceleration-constraint term a at the q' solved at run time (10 temporaries) */
-void pendulum_kane_k_accel_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_a)
-{
-    (void)q;
-    (void)u;
-    (void)qd;
-    (void)p;
-    (void)t;
-    const double w0 = (q[1]*q[1]);
-    const double w1 = (q[0]*q[0]) + w0;
-    const double w2 = sqrt(w1/w0)/w1;
-    const double v0_0 = (1.0/(w0));
-    const double v0_1 = sqrt(v0_0*w1);
-    const double v0_2 = (1.0/(v0_1));
-    const double v0_3 = q[0]*u[0];
-    const double j0_0 = 2*q[1]*qd[1];
-    const double j0_1 = 2*q[0]*qd[0] + j0_0;
-    const double j0_2 = -1.0/2.0*j0_0*v0_2/(w0*w0) + j0_1*((1.0/2.0)*v0_0*v0_2/w1 - v0_1/(w1*w1));
-    out_a[0] = q[1]*qd[0]*u[0]*w2 + qd[1]*v0_3*w2 + u[1]*j0_0*w2 + j0_2*(q[1]*v0_3 + u[1]*w0);
-}
-
-/* everything the right-hand side needs (5 temporaries) */
-void pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_kr, pendulum_kane_real *out_M, pendulum_kane_real *out_f, pendulum_kane_real *out_A, pendulum_kane_real *out_a)
+/* everything the right-hand side needs (13 temporaries) and u' by the runtime's
+ * solve (GEN_RT_ACCEL_PARTITIONED) traced as straight-line code for this model
+ * (gen/plan/small.py), M, f, A and a in locals (the runtime's rhs_solve); a
+ * status: GEN_RT_ERR_SINGULAR, before anything is written to out_ud, where
+ * the runtime's general path must decide (a small pivot, a value not
+ * finite). M, f, A and a are stored only where out_M, out_f, out_A and
+ * out_a are given, u' where out_ud is given and the solve succeeded. */
+int pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_qdot, pendulum_kane_real *out_M, pendulum_kane_real *out_f, pendulum_kane_real *out_A, pendulum_kane_real *out_a, pendulum_kane_real *out_ud)
 {
     (void)q;
     (void)u;
@@ -63,21 +44,79 @@ void pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_
     const double w2 = sqrt(w1/w0)/w1;
     const double w3 = q[0]*q[1]*w2;
     const double w4 = w0*w2;
-    out_Kqd[0] = 0;
-    out_Kqd[1] = 1;
-    out_Kqd[2] = 1;
-    out_Kqd[3] = 0;
-    out_kr[0] = u[1];
-    out_kr[1] = u[0];
-    out_M[0] = p[1];
-    out_M[1] = 0;
-    out_M[2] = 0;
-    out_M[3] = p[1];
-    out_f[0] = 0;
-    out_f[1] = p[1]*p[2];
-    out_A[0] = w3;
-    out_A[1] = w4;
-    out_a[0] = 0;
+    const double v0_0 = (1.0/(w0));
+    const double v0_1 = sqrt(v0_0*w1);
+    const double v0_2 = (1.0/(v0_1));
+    const double j0_0 = 2*q[1]*u[1];
+    const double j0_1 = 2*q[0]*u[0] + j0_0;
+    const double j0_2 = -1.0/2.0*j0_0*v0_2/(w0*w0) + j0_1*((1.0/2.0)*v0_0*v0_2/w1 - v0_1/(w1*w1));
+    const double j0_3 = q[0]*q[1]*j0_2 + q[0]*u[1]*w2 + q[1]*u[0]*w2;
+    const double j0_4 = j0_0*w2 + j0_2*w0;
+    const double m_0 = p[1];
+    const double m_1 = 0;
+    const double m_2 = 0;
+    const double m_3 = p[1];
+    const double f_0 = 0;
+    const double f_1 = p[1]*p[2];
+    const double ca_0 = w3;
+    const double ca_1 = w4;
+    const double cb_0 = u[0]*j0_3 + u[1]*j0_4;
+    out_qdot[0] = u[0];
+    out_qdot[1] = u[1];
+    if (out_M) {
+        out_M[0] = m_0;
+        out_M[1] = m_1;
+        out_M[2] = m_2;
+        out_M[3] = m_3;
+    }
+    if (out_f) {
+        out_f[0] = f_0;
+        out_f[1] = f_1;
+    }
+    if (out_A) {
+        out_A[0] = ca_0;
+        out_A[1] = ca_1;
+    }
+    if (out_a) {
+        out_a[0] = cb_0;
+    }
+    if (!out_ud) return GEN_RT_OK;
+    const double s1 = -ca_0;
+    const double s2 = -cb_0;
+    const double s3 = fabs(ca_0);
+    const double s4 = fabs(ca_1);
+    const double s5 = s4 > s3 ? s4 : s3;
+    if (!(s5 > 0)) return GEN_RT_ERR_SINGULAR;
+    const double s6 = GEN_RT_PIVOT_RTOL * s5;
+    const double s7 = fabs(ca_1);
+    if (!(s7 > s6)) return GEN_RT_ERR_SINGULAR;
+    const double s8 = s1 / ca_1;
+    const double s9 = s2 / ca_1;
+    if (s8 > GEN_RT_PARTITION_CMAX || s8 < -GEN_RT_PARTITION_CMAX) return GEN_RT_ERR_SINGULAR;
+    const double s10 = 0 + m_0;
+    const double s11 = m_3 * s8;
+    const double s12 = 0 + s11;
+    const double s13 = s8 * s12;
+    const double s14 = s10 + s13;
+    const double s15 = m_3 * s9;
+    const double s16 = 0 + s15;
+    const double s17 = f_1 - s16;
+    const double s18 = s8 * s17;
+    const double s19 = 0 + s18;
+    const double s20 = fabs(s14);
+    if (!(s20 > 0)) return GEN_RT_ERR_SINGULAR;
+    const double s21 = GEN_RT_PIVOT_RTOL * s20;
+    const double s22 = fabs(s14);
+    if (!(s22 > s21)) return GEN_RT_ERR_SINGULAR;
+    const double s23 = s19 / s14;
+    const double s24 = 0 + s23;
+    const double s25 = s8 * s23;
+    const double s26 = 0 + s25;
+    const double s27 = s26 + s9;
+    if (!((m_0 + m_3 + f_1 + ca_0 + ca_1 + cb_0 + s8 + s9 + s23 + s24 + s27) * 0 == 0)) return GEN_RT_ERR_SINGULAR;
+    out_ud[0] = s24;
+    out_ud[1] = s27;
+    return GEN_RT_OK;
 }
 
 /* f_c(q) (0 temporaries) */

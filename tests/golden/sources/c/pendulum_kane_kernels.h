@@ -17,11 +17,9 @@
 #include "gen_rt.h"
 #include "pendulum_kane.h"
 
-GEN_RT_INTERNAL void pendulum_kane_k_kinematics(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_kr);
+GEN_RT_INTERNAL void pendulum_kane_k_kinematics(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_qdot);
 
-GEN_RT_INTERNAL void pendulum_kane_k_accel_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_a);
-
-GEN_RT_INTERNAL void pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_kr, pendulum_kane_real *out_M, pendulum_kane_real *out_f, pendulum_kane_real *out_A, pendulum_kane_real *out_a);
+GEN_RT_INTERNAL int pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_qdot, pendulum_kane_real *out_M, pendulum_kane_real *out_f, pendulum_kane_real *out_A, pendulum_kane_real *out_a, pendulum_kane_real *out_ud);
 
 GEN_RT_INTERNAL void pendulum_kane_k_constraints(const pendulum_kane_real *q, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_fc);
 

@@ -15,8 +15,8 @@
 #include <stddef.h>
 #include "pendulum_kane_kernels.h"
 
-/* Jacobian blocks of the linearization (83 temporaries) */
-static void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *ud, const pendulum_kane_real *lam, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_Ku, pendulum_kane_real *out_M, pendulum_kane_real *out_A, pendulum_kane_real *out_Kq, pendulum_kane_real *out_Rq, pendulum_kane_real *out_Ru, pendulum_kane_real *out_Sq, pendulum_kane_real *out_Su, pendulum_kane_real *out_Vq, pendulum_kane_real *out_Jc, pendulum_kane_real *out_Sqd)
+/* Jacobian blocks of the linearization (82 temporaries) */
+static void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulum_kane_real *u, const pendulum_kane_real *qd, const pendulum_kane_real *ud, const pendulum_kane_real *lam, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t, pendulum_kane_real *out_Kqd, pendulum_kane_real *out_Ku, pendulum_kane_real *out_M, pendulum_kane_real *out_A, pendulum_kane_real *out_Kq, pendulum_kane_real *out_Rq, pendulum_kane_real *out_Ru, pendulum_kane_real *out_Sq, pendulum_kane_real *out_Su, pendulum_kane_real *out_Vq, pendulum_kane_real *out_Jc)
 {
     (void)q;
     (void)u;
@@ -45,31 +45,32 @@ static void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulu
     const double v1 = (1.0/2.0)/sqrt(w1*w2);
     const double v2 = v1*w1;
     const double v3 = (1.0/(w2*w2));
-    const double v4 = (1.0/(w3));
-    const double v5 = 2*w12;
-    const double v6 = 2*u[1];
-    const double v7 = v6*w0;
-    const double v8 = v4*v5 + v4*v7;
-    const double v9 = (-v5*w13 - v7*w13)/(w3*w3);
-    const double v10 = v4*w13;
-    const double v11 = 2*v10;
-    const double v12 = (1.0/(w2*w2*w2));
-    const double v13 = 4*u[1]*w8 + 4*w12*w3;
-    const double v14 = 2*v3;
-    const double v15 = u[1]*v14;
-    const double v16 = v14*w3;
-    const double v17 = v3*v5;
-    const double v18 = q[0]*qd[0] + q[1]*qd[1];
-    const double v19 = q[0]*qd[1] + q[1]*qd[0];
-    const double v20 = (1.0/(q[1]*q[1]*q[1]));
-    const double v21 = v20*w14;
-    const double v22 = qd[1]*v21;
-    const double v23 = qd[1]*w2;
-    const double v24 = v20*v23;
-    const double v25 = qd[1]*v0;
-    const double v26 = u[1]*v25;
-    const double v27 = v6*w5 + w15;
-    const double v28 = (1.0/2.0)/sqrt(w2);
+    const double v4 = q[1]*u[0];
+    const double v5 = q[0]*u[0];
+    const double v6 = (1.0/(w3));
+    const double v7 = 2*w12;
+    const double v8 = 2*u[1];
+    const double v9 = v8*w0;
+    const double v10 = v6*v7 + v6*v9;
+    const double v11 = (-v7*w13 - v9*w13)/(w3*w3);
+    const double v12 = v6*w13;
+    const double v13 = 2*v12;
+    const double v14 = (1.0/(w2*w2*w2));
+    const double v15 = 4*u[1]*w8 + 4*w12*w3;
+    const double v16 = 2*v3;
+    const double v17 = u[1]*v16;
+    const double v18 = v16*w3;
+    const double v19 = v3*v7;
+    const double v20 = q[1]*u[1] + v5;
+    const double v21 = q[0]*u[1] + v4;
+    const double v22 = (u[1]*u[1])*v0;
+    const double v23 = (1.0/(q[1]*q[1]*q[1]));
+    const double v24 = v23*w14;
+    const double v25 = u[1]*v24;
+    const double v26 = u[1]*w2;
+    const double v27 = v23*v26;
+    const double v28 = v8*w5 + w15;
+    const double v29 = (1.0/2.0)/sqrt(w2);
     const double d0 = v0;
     const double d1 = -d0/(w0*w0);
     const double d2 = 2*q[0];
@@ -89,26 +90,24 @@ static void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulu
     const double d16 = -lam[0]*d10;
     const double d17 = -lam[0]*d13;
     const double d18 = -lam[0]*d14;
-    const double d19 = q[1]*u[0];
-    const double d20 = q[0]*u[0];
+    const double d19 = v4;
+    const double d20 = v5;
     const double d21 = (1.0/2.0)*d5;
     const double d22 = (1.0/2.0)*d6;
-    const double d23 = d19*v11 + d21*v8 + d3*v9;
-    const double d24 = d0*v10*v6 + d20*v11 + d22*v8 + d4*v9;
-    const double d25 = v11*w6;
-    const double d26 = v11*w0;
-    const double d27 = -d11*v15 - d19*v16 + d2*v12*v13 + d23*w1 - d3*v17;
-    const double d28 = d0*v12*v13 + d1*w14 - d12*v15 - d20*v16 + d24*w1 - d4*v17;
-    const double d29 = d25*w1 - v16*w6;
-    const double d30 = d26*w1 - v14*w8;
+    const double d23 = d19*v13 + d21*v10 + d3*v11;
+    const double d24 = d0*v12*v8 + d20*v13 + d22*v10 + d4*v11;
+    const double d25 = v13*w6;
+    const double d26 = v13*w0;
+    const double d27 = -d11*v17 - d19*v18 + d2*v14*v15 + d23*w1 - d3*v19;
+    const double d28 = d0*v14*v15 + d1*w14 - d12*v17 - d20*v18 + d24*w1 - d4*v19;
+    const double d29 = d25*w1 - v18*w6;
+    const double d30 = d26*w1 - v16*w8;
     const double d31 = u[0]*d7;
     const double d32 = u[0]*d8;
-    const double d33 = qd[0]*w15 + qd[1]*w16 + ud[0]*d9 + ud[1]*d13 - d2*v22 - d23*v24 + d27*v18 + d31*v19 + d7*v26;
-    const double d34 = qd[0]*w16 + qd[1]*v27 + ud[0]*d10 + ud[1]*d14 - d0*v22 - d24*v24 + d28*v18 + d32*v19 + d8*v26 + 3*v23*w14/(q[1]*q[1]*q[1]*q[1]);
-    const double d35 = -d25*v24 + d29*v18 + v19*w5;
-    const double d36 = -d26*v24 + d30*v18 + v25*w5;
-    const double d37 = q[0]*w15 + q[1]*w16;
-    const double d38 = q[0]*w16 + q[1]*v27 - v21*w2;
+    const double d33 = u[0]*w15 + u[1]*w16 + ud[0]*d9 + ud[1]*d13 - d2*v25 - d23*v27 + d27*v20 + d31*v21 + d7*v22;
+    const double d34 = u[0]*w16 + u[1]*v28 + ud[0]*d10 + ud[1]*d14 - d0*v25 - d24*v27 + d28*v20 + d32*v21 + d8*v22 + 3*v26*w14/(q[1]*q[1]*q[1]*q[1]);
+    const double d35 = q[0]*w15 + q[1]*w16 - d25*v27 + d29*v20 + v21*w5;
+    const double d36 = q[0]*w16 + q[1]*v28 + u[1]*v0*w5 - d26*v27 + d30*v20 - v24*w2;
     out_Kqd[0] = 0;
     out_Kqd[1] = 1;
     out_Kqd[2] = 1;
@@ -141,10 +140,8 @@ static void pendulum_kane_k_lin_terms(const pendulum_kane_real *q, const pendulu
     out_Su[1] = d36;
     out_Vq[0] = u[0]*d9 + u[1]*d13;
     out_Vq[1] = u[0]*d10 + u[1]*d14;
-    out_Jc[0] = d2*v28;
-    out_Jc[1] = d0*v28;
-    out_Sqd[0] = d37;
-    out_Sqd[1] = d38;
+    out_Jc[0] = d2*v29;
+    out_Jc[1] = d0*v29;
 }
 
 /* ------------------------------------------------------------------ */
@@ -155,6 +152,6 @@ void pendulum_kane_lin_terms(const pendulum_kane_real *q, const pendulum_kane_re
                         const pendulum_kane_real *lam, const pendulum_kane_real *r, const pendulum_kane_real *p, pendulum_kane_real t,
                         const gen_rt_lin_out *o)
 {
-    pendulum_kane_k_lin_terms(q, u, qd, ud, lam, r, p, t, o->Kqd, o->Ku, o->M, o->A, o->Kq, o->Rq, o->Ru, o->Sq, o->Su, o->Vq, o->Jc, o->Sqd);
+    pendulum_kane_k_lin_terms(q, u, qd, ud, lam, r, p, t, o->Kqd, o->Ku, o->M, o->A, o->Kq, o->Rq, o->Ru, o->Sq, o->Su, o->Vq, o->Jc);
 }
 
