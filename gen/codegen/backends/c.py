@@ -31,9 +31,12 @@ C_TEMPLATES = [
 
 
 # a kernels unit at least this large (the right-hand side of a robot of some
-# 30 joints: Talos, 390 kB) is compiled at -O1, as the derivative kernels
-# are: clang's time on Talos's 3.8 -> 2.6 s of CPU, its right-hand side as
-# fast (3.79 us at -O1, 3.90 us at -O2, medians of 3; bench/README.md "Robots")
+# 30 joints: Talos, 390 kB), or with a large kernel's two versions, is
+# compiled at -O1, as the derivative kernels are: clang's time on Talos's
+# 3.8 -> 2.6 s of CPU, its right-hand side as fast (3.79 us at -O1, 3.90 us
+# at -O2, medians of 3; bench/README.md "Robots"); the n = 16 cart's two
+# units 0.35 + 0.30 -> 0.24 + 0.18 s, rhs_batch per state 568 -> 575 ns
+# (n = 20: 1560 -> 1416 ns; gcc: 616 -> 619, 978 -> 1048 ns; speed guide)
 LARGE_KERNELS = 256 * 1024
 
 
@@ -59,8 +62,8 @@ class CBackend(Backend):
         kern = f"{name}_kernels.c"
         own = [(f"{name}_lin.c", C_LIN_FLAGS)] if derivatives else []
         text = files.get(kern, "")
-        level = tuple(C_LIN_FLAGS) if len(text.encode()) >= LARGE_KERNELS else ()
         large = "GEN_RT_CLONES static" in text
+        level = tuple(C_LIN_FLAGS) if large or len(text.encode()) >= LARGE_KERNELS else ()
         if large:
             # a large kernel's two versions (GEN_RT_CLONES), compiled apart and in
             # parallel (GEN_RT_CLONE_UNIT in gen_rt.h): the same code, half the wait
