@@ -64,6 +64,10 @@ class CBackend(Backend):
         text = files.get(kern, "")
         large = "GEN_RT_CLONES static" in text
         level = tuple(C_LIN_FLAGS) if large or len(text.encode()) >= LARGE_KERNELS else ()
+        # the wiring first: compiled two at a time, its fixed cost (0.1-0.3 s
+        # of clang) runs beside the kernels' units instead of after them
+        # (n = 8 cart: the compile's wall 0.33 -> 0.25 s)
+        own.append((f"{name}.c", C_WIRING_FLAGS if large else ()))
         if large:
             # a large kernel's two versions (GEN_RT_CLONES), compiled apart and in
             # parallel (GEN_RT_CLONE_UNIT in gen_rt.h): the same code, half the wait
@@ -71,8 +75,7 @@ class CBackend(Backend):
                     (kern, ("-DGEN_RT_CLONE_UNIT=2", *level), f"{name}_kernels_avx.o")]
         else:
             own.append((kern, level))
-        # (a small model's wiring stays at -O2: its eval_rhs is a share of its time)
-        own += [(f"{name}.c", C_WIRING_FLAGS if large else ()), (f"{name}_api.c", ())]
+        own.append((f"{name}_api.c", ()))
         if not derivatives:
             own.append((f"{name}_lin_stub.c", ()))
         return [(u[0], cc, [*C_FLAGS, "-fPIC", *u[1]], *u[2:]) for u in own]
