@@ -445,7 +445,7 @@ def _partitioned(tr, n, m, ind, dep, M, f, A, a, out, paths):
     _lu(tr, m, Ad, tr.max_abs(A), reduced, paths)
 
 
-def accel_program(method, n, m, M, f, A, a, ind=(), dep=(), out="out_ud"):
+def accel_program(method, n, m, M, f, A, a, ind=(), dep=(), out="out_ud", inputs=()):
     """The straight-line solve of u' by the runtime's method ("partitioned"
     or "kkt"), or None when the model is too large (SMALL_MAX_SIZE,
     SMALL_MAX_PATHS). M (n * n, row-major), f (n), A (m * n), a (m): each
@@ -453,7 +453,9 @@ def accel_program(method, n, m, M, f, A, a, ind=(), dep=(), out="out_ud"):
     model's entry is that literal. The program first checks the entries
     finite (the runtime's NONFINITE_MODEL test before its solve), writes u'
     to out[0..n-1] and returns GEN_RT_OK, or returns a failure before
-    writing anything."""
+    writing anything. inputs: C names of the caller's inputs, tested finite
+    with the values before anything is written (the caller may then test
+    its inputs only when the program fails)."""
     if method not in ("partitioned", "kkt"):
         raise ValueError(f"method must be 'partitioned' or 'kkt', got {method!r}")
     if m < 1 or (n + m if method == "kkt" else n) > SMALL_MAX_SIZE:
@@ -462,7 +464,8 @@ def accel_program(method, n, m, M, f, A, a, ind=(), dep=(), out="out_ud"):
     Mv, fv = vals[:n * n], vals[n * n:n * n + n]
     Av, av = vals[n * n + n:n * n + n + m * n], vals[n * n + n + m * n:]
     ends = []
-    tr = _Tracer([0], [], [], {"flops": 0, "divs": 0}, ends)
+    # (the inputs first in every path's test: known first, off its critical path)
+    tr = _Tracer([0], list(inputs), [], {"flops": 0, "divs": 0}, ends)
     # the runtime's test of M, f, A and a before its solve; in the KKT system
     # f and -a are the right-hand side, each of which its own unknown's
     # substitutions only update (never drop), so a value that is not finite
@@ -547,7 +550,7 @@ def c_lines(prog, indent="    ", real="gen_rt_real"):
     return out
 
 
-def kernel_program(kernel, method, n, m, ind=(), dep=()):
+def kernel_program(kernel, method, n, m, ind=(), dep=(), inputs=()):
     """accel_program over a right-hand-side kernel's outputs M, f, A and a
     as the fused kernel binds them (the locals BIND[name]<k>; an entry
     whose expression is the number 0 or 1 as that literal), or None when
@@ -561,4 +564,4 @@ def kernel_program(kernel, method, n, m, ind=(), dep=()):
                 for k, e in enumerate(outs[name])]
 
     return accel_program(method, n, m, entries("M"), entries("f"), entries("A"),
-                         entries("a"), ind=ind, dep=dep)
+                         entries("a"), ind=ind, dep=dep, inputs=inputs)

@@ -157,3 +157,47 @@ def test_models_fused_solve_is_the_general_path(which, request):
             assert [float(v).hex() for v in fast] == [float(v).hex() for v in slow], x
         fails += st1 != 0
     assert fails < len(states) // 4
+
+
+
+@pytest.mark.parametrize("which", ["kane", "lagrange"])
+def test_models_fused_solve_tests_every_input(which, request):
+    """eval_rhs of a small constrained model tests its inputs only where the
+    fused solve failed; the solve's own finite test holds every input (the
+    state, t and the constants), so a NaN or an infinity in any one of them
+    is still GEN_RT_ERR_NONFINITE_INPUT (gen_rt_status.h), with or without
+    multipliers, and a NULL state or output GEN_RT_ERR_NULL."""
+    from gen.core.status import status_value
+    from helpers import pendulum_state
+    sim = request.getfixturevalue(f"{which}_sim")
+    fn = sim.library.function("eval_rhs")
+    ffi = sim.library.ffi
+    x0 = np.array(pendulum_state(0.4, 0.2, 1.0, which), dtype=float)
+    p0 = np.array(sim.constants, dtype=float)
+    out, lam = ffi.new("eomgen_real[]", 4), ffi.new("eomgen_real[]", 1)
+
+    def ptr(v):
+        return ffi.cast("eomgen_real *", ffi.from_buffer(v))
+
+    def call(x, t=0.0, p=None, with_lam=False):
+        x = np.ascontiguousarray(x, dtype=float)
+        return fn(t, ptr(x), ffi.NULL, ffi.NULL if p is None else ptr(p), out,
+                  lam if with_lam else ffi.NULL)
+
+    assert call(x0) == 0 and call(x0, p=p0) == 0
+    codes = []
+    for bad in (np.nan, np.inf, -np.inf):
+        for with_lam in (False, True):
+            for i in range(4):
+                x = x0.copy()
+                x[i] = bad
+                codes.append(call(x, with_lam=with_lam))
+            codes.append(call(x0, t=bad, with_lam=with_lam))
+            for i in range(len(p0)):
+                p = p0.copy()
+                p[i] = bad
+                codes.append(call(x0, p=p, with_lam=with_lam))
+    assert set(codes) == {status_value("ERR_NONFINITE_INPUT")}, codes
+    null = status_value("ERR_NULL")
+    assert fn(0.0, ffi.NULL, ffi.NULL, ffi.NULL, out, ffi.NULL) == null
+    assert fn(0.0, ptr(x0), ffi.NULL, ffi.NULL, ffi.NULL, ffi.NULL) == null

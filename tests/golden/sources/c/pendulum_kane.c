@@ -180,6 +180,7 @@ static int pendulum_kane_finite(int n, const pendulum_kane_real *v)
 
 #define PENDULUM_KANE_CHECK_OUT(ptr) \
     do { if (!(ptr)) return GEN_RT_ERR_NULL; } while (0)
+#define PENDULUM_KANE_CHECK_NULL(ptr, n) do { if ((n) > 0 && !(ptr)) return GEN_RT_ERR_NULL; } while (0)
 
 const char * pendulum_kane_status_message(int status)
 {
@@ -280,12 +281,9 @@ int pendulum_kane_eval_rhs(pendulum_kane_real t, const pendulum_kane_real *x, co
 {
     pendulum_kane_real work[GEN_RT_MODEL_EVAL_RHS_WORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
     int iwork[GEN_RT_MODEL_EVAL_RHS_IWORK(2, 2, 1, 1, 0, 1, GEN_RT_ACCEL_PARTITIONED)];
-    PENDULUM_KANE_CHECK_REAL(t);
-    PENDULUM_KANE_CHECK_IN(x, 4);
+    PENDULUM_KANE_CHECK_NULL(x, 4);
     if (!r) r = pendulum_kane_r_zero;
-    else PENDULUM_KANE_CHECK_IN(r, 0);
     if (!p) p = pendulum_kane_p_default;
-    else PENDULUM_KANE_CHECK_IN(p, 3);
     PENDULUM_KANE_CHECK_OUT(dxdt);
     /* the fused right-hand side called directly, without M, f, A and a: x'
      * into work, written out on success (its u' is finite then, its q' the checked u);
@@ -295,6 +293,10 @@ int pendulum_kane_eval_rhs(pendulum_kane_real t, const pendulum_kane_real *x, co
         for (i = 0; i < 4; ++i) dxdt[i] = work[i];
         return GEN_RT_OK;
     }
+    PENDULUM_KANE_CHECK_REAL(t);
+    PENDULUM_KANE_CHECK_IN(x, 4);
+    PENDULUM_KANE_CHECK_IN(r, 0);
+    PENDULUM_KANE_CHECK_IN(p, 3);
     return gen_rt_model_eval_rhs(&pendulum_kane_model, t, x, r, p, work, iwork, dxdt, lam);
 }
 

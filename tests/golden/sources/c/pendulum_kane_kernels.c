@@ -113,7 +113,7 @@ int pendulum_kane_k_rhs_terms(const pendulum_kane_real *q, const pendulum_kane_r
     const double s25 = s8 * s23;
     const double s26 = 0 + s25;
     const double s27 = s26 + s9;
-    if (!((m_0 + m_3 + f_1 + ca_0 + ca_1 + cb_0 + s8 + s9 + s23 + s24 + s27) * 0 == 0)) return GEN_RT_ERR_SINGULAR;
+    if (!((q[0] + q[1] + u[0] + u[1] + p[0] + p[1] + p[2] + t + m_0 + m_3 + f_1 + ca_0 + ca_1 + cb_0 + s8 + s9 + s23 + s24 + s27) * 0 == 0)) return GEN_RT_ERR_SINGULAR;
     out_ud[0] = s24;
     out_ud[1] = s27;
     return GEN_RT_OK;
