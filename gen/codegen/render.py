@@ -110,8 +110,8 @@ def _wiring_mass_solve(mass_plan, kctx):
     unrolled statements, so the same bits) rather than unrolled again: the
     wiring's compile was then its unrolled solve's (n = 8 cart: clang
     0.23 -> 0.12 s)."""
-    if (mass_plan is None or mass_plan["loop"] or not any(k.get("clones") for k in kctx)
-            or any(len(c["ks"]) != c["j"] for c in mass_plan["cols"])):
+    if (mass_plan is None or mass_plan["loop"] or not mass_plan["dense"]
+            or not any(k.get("clones") for k in kctx)):
         return mass_plan
     return {**mass_plan, "loop": True}
 

@@ -71,6 +71,7 @@ def ldlt_program(n, nonzero):
     loop: M is dense (no structural zero in L) and n >= LDLT_LOOP_MIN: the
           template calls the runtime's solve in loops instead (the same
           operations, in the same order, as the statements of this plan);
+    dense: L has no structural zero (the loops would be exact at any n);
     diag: row-major indices of M's diagonal after the first (the pivot scale);
     cols: per column j, the k with l_jk != 0 (ks), the index of M_jj (d), and
           its rows i > j with l_ij != 0: the index of M_ij or None (base) and
@@ -95,6 +96,8 @@ def ldlt_program(n, nonzero):
         "n": n,
         # solved in loops by the runtime (gen_rt_ldlt_dense), not unrolled
         "loop": dense and n >= LDLT_LOOP_MIN,
+        # L has no structural zero (the loops then do the same operations)
+        "dense": dense,
         "diag": [i * n + i for i in range(1, n)],
         "cols": cols,
         "forward": [{"i": i, "ks": [k for k in range(i) if L[i][k]]} for i in range(n)],
