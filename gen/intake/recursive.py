@@ -77,7 +77,7 @@ from ..core.errors import ModelError
 from ..sym.intern import Interner
 from .sympy_compat import time_symbol
 
-__all__ = ["equations_of_tree", "accelerations_of_tree", "constraints_of_tree",
+__all__ = ["equations_of_tree", "constraints_of_tree", "Tree", "Places", "joint_kinematics",
            "check_joints_move", "massless_joint_error",
            "SUPPORTED_JOINTS"]
 
@@ -87,22 +87,22 @@ SUPPORTED_JOINTS = ("PinJoint", "PrismaticJoint", "CylindricalJoint", "PlanarJoi
 _T = time_symbol()
 
 
-def _name(obj):
+def name_of(obj):
     return getattr(obj, "name", None) or str(obj)
 
 
-def _cross(a, b):
+def cross(a, b):
     return sm.Matrix([a[1] * b[2] - a[2] * b[1],
                       a[2] * b[0] - a[0] * b[2],
                       a[0] * b[1] - a[1] * b[0]])
 
 
-def _col(xs):
+def col(xs):
     xs = list(xs)
     return sm.Matrix(xs) if xs else sm.zeros(0, 1)
 
 
-def _skew(a):
+def skew(a):
     return sm.Matrix([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
 
 
@@ -117,14 +117,14 @@ class _Body:
     __slots__ = ("body", "joint", "parent", "children", "E", "r", "S", "rel_bias",
                  "speed_idx", "w", "al", "a", "F", "N", "Ic", "depth", "Ftot", "Ntot",
                  "rep", "R", "Sw", "rw", "Iw", "r_pp", "r_cc", "mt", "h", "J", "cw", "cv",
-                 "IA", "pA", "U", "Dinv", "uu")
+                 "IA", "pA", "U", "Dinv", "uu", "p", "So", "cJ", "v", "c", "fw", "fv", "Rn")
 
     def __init__(self, body, joint, parent):
         self.body, self.joint, self.parent = body, joint, parent
         self.children = []
 
 
-class _Tree:
+class Tree:
     """The System's joint tree, checked, in an order parents first."""
 
     def __init__(self, system):
@@ -155,17 +155,17 @@ class _Tree:
             kind = type(j).__name__
             if kind not in SUPPORTED_JOINTS and not callable(getattr(j, "motion_subspace", None)):
                 raise ModelError(
-                    f"joint {_name(j)!r} is a {kind}: formulation='recursive' takes "
+                    f"joint {name_of(j)!r} is a {kind}: formulation='recursive' takes "
                     f"{', '.join(SUPPORTED_JOINTS)}")
             for b in (j.parent, j.child):
                 if not isinstance(b, me.RigidBody):
                     raise ModelError(
-                        f"body {_name(b)!r} of joint {_name(j)!r} is a {type(b).__name__}: "
+                        f"body {name_of(b)!r} of joint {name_of(j)!r} is a {type(b).__name__}: "
                         "formulation='recursive' takes rigid bodies")
             if j.child in child_of:
                 raise ModelError(
-                    f"body {_name(j.child)!r} is the child of joints {_name(child_of[j.child])!r} "
-                    f"and {_name(j)!r}: formulation='recursive' takes the joints of a tree; "
+                    f"body {name_of(j.child)!r} is the child of joints {name_of(child_of[j.child])!r} "
+                    f"and {name_of(j)!r}: formulation='recursive' takes the joints of a tree; "
                     "close a loop with holonomic constraints on the tree instead "
                     "(System.add_holonomic_constraints, with the dependent coordinates "
                     "and speeds in q_dep and u_dep)")
@@ -176,7 +176,7 @@ class _Tree:
             if j.parent not in child_of:
                 if j.parent.frame != self.N:
                     raise ModelError(
-                        f"body {_name(j.parent)!r} (parent of joint {_name(j)!r}) is not "
+                        f"body {name_of(j.parent)!r} (parent of joint {name_of(j)!r}) is not "
                         f"connected to the tree: it is no joint's child and its frame "
                         f"{j.parent.frame.name!r} is not the System's frame {self.N.name!r}")
                 self.ground.add(j.parent)
@@ -184,7 +184,7 @@ class _Tree:
             if b not in child_of and b not in self.ground and not (
                     isinstance(b, me.RigidBody) and b.frame == self.N):
                 raise ModelError(
-                    f"body {_name(b)!r} is not connected to the tree: no joint has it as "
+                    f"body {name_of(b)!r} is not connected to the tree: no joint has it as "
                     "its child (formulation='recursive' needs every body joined, through "
                     "joints, to the System's frame)")
         # parents first
@@ -207,7 +207,7 @@ class _Tree:
                 nodes[child] = n
                 order.append(n)
             if len(rest) == len(pending):     # pragma: no cover - cycles are refused above
-                raise ModelError(f"joints {[_name(j) for _, j in rest]} do not form a tree")
+                raise ModelError(f"joints {[name_of(j) for _, j in rest]} do not form a tree")
             pending = rest
         self.nodes, self.order = nodes, order
         # joint speeds -> positions in system.u
@@ -216,7 +216,7 @@ class _Tree:
             try:
                 n.speed_idx = [uidx[s] for s in n.joint.speeds]
             except KeyError as e:
-                raise ModelError(f"speed {e.args[0]} of joint {_name(n.joint)!r} is not one "
+                raise ModelError(f"speed {e.args[0]} of joint {name_of(n.joint)!r} is not one "
                                  "of the System's speeds") from None
         self._qdot_map()
 
@@ -274,7 +274,7 @@ def equations_of_tree(system, interner=None):
     zero = sm.zeros(3, 1)
     for n in tree.order:
         al_p, a_p = (zero, zero) if n.parent is None else (n.parent.al, n.parent.a)
-        n.al, n.a = ik.kept(al_p + n.cw), ik.kept(a_p + _cross(al_p, n.rw) + n.cv)
+        n.al, n.a = ik.kept(al_p + n.cw), ik.kept(a_p + cross(al_p, n.rw) + n.cv)
     # forces in: each body's F - m a and T - I al - w x I w, plus its
     # children's (formed with their signs: negating a large sum would make
     # sympy distribute the -1 over every term)
@@ -282,10 +282,10 @@ def equations_of_tree(system, interner=None):
     for n in reversed(tree.order):
         b = n.body
         Fi = n.F - b.mass * n.a
-        Ni = n.N + (-n.Iw) * n.al + _cross(n.Iw * n.w, n.w)
+        Ni = n.N + (-n.Iw) * n.al + cross(n.Iw * n.w, n.w)
         for c in n.children:
             Fi += c.Ftot
-            Ni += c.Ntot + _cross(c.rw, c.Ftot)
+            Ni += c.Ntot + cross(c.rw, c.Ftot)
         n.Ftot, n.Ntot = Fi, Ni = ik.kept(Fi), ik.kept(Ni)
         tau = n.Sw.T * sm.Matrix.vstack(Ni, Fi)
         for k, idx in enumerate(n.speed_idx):
@@ -300,7 +300,7 @@ def equations_of_tree(system, interner=None):
         mt, h, J = n.body.mass, sm.zeros(3, 1), n.Iw
         for c in n.children:
             d = c.rw
-            dt_, ht, ndt = _skew(d), _skew(c.h), _skew(-d)
+            dt_, ht, ndt = skew(d), skew(c.h), skew(-d)
             mt += c.mt
             h += c.h + c.mt * d
             J += c.J + (ht * ndt + ndt * ht) + c.mt * (dt_ * ndt)
@@ -309,14 +309,14 @@ def equations_of_tree(system, interner=None):
         nj = n.Sw.shape[1]
         if not nj:
             continue
-        ht = _skew(n.h)
+        ht = skew(n.h)
         sw, sv = n.Sw[:3, :], n.Sw[3:, :]
         L = ik.kept(n.J * sw + ht * sv)
-        P = ik.kept(n.mt * sv + sm.Matrix.hstack(*[_cross(sw[:, k], n.h) for k in range(nj)]))
+        P = ik.kept(n.mt * sv + sm.Matrix.hstack(*[cross(sw[:, k], n.h) for k in range(nj)]))
         m = n
         while m is not None:
             if m is not n:
-                L = ik.kept(L + sm.Matrix.hstack(*[_cross(prev.rw, P[:, k]) for k in range(nj)]))
+                L = ik.kept(L + sm.Matrix.hstack(*[cross(prev.rw, P[:, k]) for k in range(nj)]))
             blk = m.Sw.T * sm.Matrix.vstack(L, P)    # rows: m's speeds, columns: n's
             for a_, ia in enumerate(m.speed_idx):
                 for b_, ib in enumerate(n.speed_idx):
@@ -326,102 +326,7 @@ def equations_of_tree(system, interner=None):
     return M, f, tree.q, tree.u, tree.kdes
 
 
-def accelerations_of_tree(system, interner=None):
-    """u' of a System's joint tree by the articulated body algorithm (see
-    the module docstring), for an open tree without constraints; interner as
-    for :func:`equations_of_tree`.
-
-    Spatial quantities in the inertial frame's axes at each body's mass
-    centre (angular part first; accelerations are those of the mass centres,
-    as in the Newton-Euler equations RNEA uses): per body, inward, its
-    articulated inertia ``IA = [[A, B], [B^T, C]]`` (the blocks kept apart:
-    ``C`` is the subtree's mass times the identity where nothing couples),
-    its bias force ``pA``, ``U = IA S``, ``D = S^T U`` and ``D^-1`` (1 x 1
-    for pins and sliders, up to 3 x 3), ``uu = -S^T pA``; then, outward,
-    ``u'_j = D^-1 (uu - U^T a')`` and the body's acceleration ``a' + S u'_j``
-    (``a'``: the parent's carried to the body, plus the velocity-product
-    part). Every body's quantities are shared opaque nodes (``Interner.keep``):
-    the expression graph, and so the straight-line C, is linear in the bodies.
-
-    Returns
-    -------
-    (ud, q, u, kdes) : sympy Matrix (nu, 1), list, list, Matrix (nq, 1)
-        The accelerations in the System's speed order and the System's
-        kinematic equations (``kdes = 0``).
-    """
-    ik = Interner() if interner is None else interner
-    tree = _walk(system, ik)
-    nu = len(tree.u)
-    # the graph is a few nodes deep per body, inward and outward: the
-    # pipeline's recursive walks (model conversion, CSE) go that deep
-    import sys
-    sys.setrecursionlimit(max(sys.getrecursionlimit(), 2000 + 200 * len(tree.order)))
-    I3 = sm.eye(3)
-    for n in reversed(tree.order):
-        Iw = n.Iw
-        # the body: I a + b - f_ext, b = [w x Iw w; 0] (mass-centre accelerations)
-        A, B, C = Iw, sm.zeros(3, 3), n.body.mass * I3
-        pw, pv = _cross(n.w, Iw * n.w) - n.N, -n.F
-        for c in n.children:
-            # the child's articulated inertia and bias force carried to this
-            # body's mass centre: X^T Ia X, X^T pa (X: motion from here to there)
-            Ac, Bc, Cc = c.IA
-            pcw, pcv = c.pA
-            # (Rx Bc^T = -(Bc Rx)^T: one product, both triangles of it)
-            Rx = _skew(c.rw)
-            RC, P = ik.kept(Rx * Cc), ik.kept(Bc * Rx)
-            A = A + Ac - P - P.T - RC * Rx
-            B = B + Bc + RC
-            C = C + Cc
-            pw = pw + pcw + _cross(c.rw, pcv)
-            pv = pv + pcv
-        A, B, C, pw, pv = ik.sym_kept(A), ik.kept(B), ik.sym_kept(C), ik.kept(pw), ik.kept(pv)
-        nj = n.Sw.shape[1]
-        cw, cv = n.cw, n.cv
-        if nj:
-            sw, sv = n.Sw[:3, :], n.Sw[3:, :]
-            Uw, Uv = ik.kept(A * sw + B * sv), ik.kept(B.T * sw + C * sv)
-            D = ik.sym_kept(sw.T * Uw + sv.T * Uv)
-            _check_moved(n, D)
-            n.Dinv = Dinv = _inv_small(D, ik)
-            n.uu = uu = ik.kept(-(sw.T * pw + sv.T * pv))
-            n.U = (Uw, Uv)
-            # the articulated inertia seen through the joint: IA - U D^-1 U^T,
-            # and its bias pA + Ia c + U D^-1 uu
-            UDw, UDv = ik.kept(Uw * Dinv), ik.kept(Uv * Dinv)
-            Aa = A - UDw * Uw.T
-            Ba = B - UDw * Uv.T
-            Ca = C - UDv * Uv.T
-            g = UDw * uu, UDv * uu
-        else:
-            Aa, Ba, Ca = A, B, C
-            g = (sm.zeros(3, 1), sm.zeros(3, 1))
-        Aa, Ba, Ca = ik.sym_kept(Aa), ik.kept(Ba), ik.sym_kept(Ca)
-        n.IA = (Aa, Ba, Ca)
-        n.pA = (ik.kept(pw + Aa * cw + Ba * cv + g[0]),
-                ik.kept(pv + Ba.T * cw + Ca * cv + g[1]))
-    ud = sm.zeros(nu, 1)
-    for n in tree.order:
-        if n.parent is None:
-            aw, av = n.cw, n.cv
-        else:
-            pal, pa = n.parent.al, n.parent.a
-            aw = pal + n.cw
-            av = pa + _cross(pal, n.rw) + n.cv
-        aw, av = ik.kept(aw), ik.kept(av)
-        nj = n.Sw.shape[1]
-        if nj:
-            Uw, Uv = n.U
-            uj = ik.kept(n.Dinv * (n.uu - (Uw.T * aw + Uv.T * av)))
-            for k, idx in enumerate(n.speed_idx):
-                ud[idx] = uj[k]
-            aw = aw + n.Sw[:3, :] * uj
-            av = av + n.Sw[3:, :] * uj
-        n.al, n.a = ik.kept(aw), ik.kept(av)
-    return ud, tree.q, tree.u, tree.kdes
-
-
-def _check_moved(n, D):
+def check_moved(n, D):
     """A ModelError naming the body when its joint moves no mass or
     inertia (D = S^T IA S has a zero on its diagonal: a massless body, and
     nothing beyond it that the joint's motion moves), whose accelerations
@@ -448,13 +353,13 @@ def massless_joint_error(joint, speeds):
     """The ModelError of a joint that moves no mass or inertia: its child
     body named, and the speeds whose accelerations are undetermined."""
     return ModelError(
-        f"body {_name(joint.child)!r} has no mass or inertia that its joint "
-        f"{_name(joint)!r} moves (nor has any body beyond it), so the equations do "
+        f"body {name_of(joint.child)!r} has no mass or inertia that its joint "
+        f"{name_of(joint)!r} moves (nor has any body beyond it), so the equations do "
         f"not determine the acceleration of {', '.join(str(s.func) for s in speeds)}: "
         "give it a mass or inertia, or weld it to its parent (WeldJoint)")
 
 
-def _inv_small(D, ik):
+def inv_small(D, ik):
     """The inverse of a small symmetric matrix of kept entries, by its
     adjugate over placeholder symbols (sympy's inv would test the kept
     entries for zero, a walk down the whole graph)."""
@@ -499,11 +404,11 @@ def _walk(system, ik):
     a; the joint's own share: cw, cv) and central inertia: what CRBA/RNEA
     (equations_of_tree) and ABA (accelerations_of_tree) both start from. ik:
     the build's Interner (tree.ik)."""
-    tree = _Tree(system)
+    tree = Tree(system)
     tree.ik = ik
-    _joint_kinematics(tree)
+    joint_kinematics(tree)
     _common_axes(tree)
-    places = _Places(tree, system)
+    places = Places(tree, system)
     # each body's axes in the inertial frame's: R = A Rot(k, theta) B, the
     # angles of consecutive joints about one axis summed (a chain of parallel
     # pins keeps cos(q1 + ... + qn), not a product of n rotations)
@@ -534,7 +439,7 @@ def _common_axes(tree):
             tree.Rt = tree.ik.kept(n.E)       # child <- parent = root <- inertial
 
 
-def _joint_kinematics(tree):
+def joint_kinematics(tree):
     """Per joint: E, the joint vector's parts r_pp and r_cc, S and the
     velocity-product part of d/dt [w_rel; v_rel] (rel_bias), in the child's
     axes."""
@@ -549,39 +454,39 @@ def _joint_kinematics(tree):
             n.r_cc = child.masscenter.pos_from(j.child_point).to_matrix(child.frame)
             w_rel = child.frame.ang_vel_in(parent.frame).to_matrix(child.frame)
         except ValueError as e:
-            raise ModelError(f"joint {_name(j)!r}: sympy cannot relate body "
-                             f"{_name(child)!r} to body {_name(parent)!r} ({e})") from None
+            raise ModelError(f"joint {name_of(j)!r}: sympy cannot relate body "
+                             f"{name_of(child)!r} to body {name_of(parent)!r} ({e})") from None
         if any(e.has(_T) for e in n.r_cc):
-            raise ModelError(f"joint {_name(j)!r}: its child point moves in body "
-                             f"{_name(child)!r}")
+            raise ModelError(f"joint {name_of(j)!r}: its child point moves in body "
+                             f"{name_of(child)!r}")
         if callable(getattr(j, "motion_subspace", None)):
             # a joint that gives its own S and velocity-product part (the
             # quaternion joints of gen.intake.robots.joints)
             n.S, n.rel_bias = j.motion_subspace()
             continue
         # d/dt in the parent frame of C_child - C_parent, in the child's axes
-        v_rel = n.E * n.r_pp.diff(_T) + _cross(w_rel, n.r_cc)
+        v_rel = n.E * n.r_pp.diff(_T) + cross(w_rel, n.r_cc)
         rel = sm.Matrix.vstack(w_rel, v_rel).xreplace(tree.qdot)
         S = rel.jacobian(list(j.speeds)) if len(j.speeds) else sm.zeros(6, 0)
-        resid = rel - S * _col(j.speeds)
+        resid = rel - S * col(j.speeds)
         if not all(_is_zero(e) for e in resid):
             raise ModelError(
-                f"joint {_name(j)!r}: the child's motion relative to the parent is not "
+                f"joint {name_of(j)!r}: the child's motion relative to the parent is not "
                 "linear and homogeneous in the joint's speeds (an explicitly time-"
                 "dependent joint): formulation='recursive' does not take it")
         if any(e.has(*udots) for e in S):
-            raise ModelError(f"joint {_name(j)!r}: the joint's motion holds speed derivatives")
+            raise ModelError(f"joint {name_of(j)!r}: the joint's motion holds speed derivatives")
         qs = sorted((S.atoms(sm.Function) & qset), key=sm.default_sort_key)
         if qs:
             dq = sm.Matrix([tree.qdot[x.diff(_T)] for x in qs])
             # (dS/dt) u_j: the part of d/dt [w_rel; v_rel] (child's axes) without u'
-            n.rel_bias = (S * _col(j.speeds)).jacobian(qs) * dq
+            n.rel_bias = (S * col(j.speeds)).jacobian(qs) * dq
         else:
             n.rel_bias = None
         n.S = S
 
 
-class _Places:
+class Places:
     """Which body a load's point or frame belongs to (None: the ground), and
     a vector in the inertial axes."""
 
@@ -617,7 +522,7 @@ class _Places:
                 self.points[pt] = n.body
                 return n.body
         raise ModelError(
-            f"{what} acts on point {_name(pt)!r}, which the joint tree does not know: "
+            f"{what} acts on point {name_of(pt)!r}, which the joint tree does not know: "
             "not a body's mass centre, a joint's point, or a point fixed in a body")
 
     def body_of_frame(self, fr, what):
@@ -634,7 +539,7 @@ class _Places:
                 self.frames[fr] = n.body
                 return n.body
         raise ModelError(
-            f"{what} acts on frame {_name(fr)!r}, which the joint tree does not know: "
+            f"{what} acts on frame {name_of(fr)!r}, which the joint tree does not know: "
             "not a body's frame, a joint's frame, or a frame fixed in a body")
 
     def in_world(self, vec):
@@ -673,7 +578,7 @@ def _external_loads(tree, system, places):
             n.F += Fw
             if ld.point != b.masscenter:
                 rb = ld.point.pos_from(b.masscenter).to_matrix(b.frame)
-                n.N += _cross(n.R * rb, Fw)
+                n.N += cross(n.R * rb, Fw)
         elif isinstance(ld, me.Torque):
             b = places.body_of_frame(ld.frame, f"torque {ld}")
             if b is None:
@@ -695,7 +600,7 @@ def _velocities(tree):
         R = n.R
         n.Sw = ik.kept(sm.Matrix.vstack(R * n.S[:3, :], R * n.S[3:, :])) if n.S.shape[1] \
             else sm.zeros(6, 0)
-        rel = ik.kept(n.Sw * _col(n.joint.speeds))
+        rel = ik.kept(n.Sw * col(n.joint.speeds))
         w_rel, v_rel = rel[:3, :], rel[3:, :]
         if n.parent is None:
             w_p, Rp = zero, (sm.eye(3) if tree.Rt is None else tree.Rt)
@@ -706,8 +611,8 @@ def _velocities(tree):
         n.w = ik.kept(w_p + w_rel)
         # the joint's share of the velocity-product accelerations: the
         # body's (al, a) = the parent's carried to it + (cw, cv) at u' = 0
-        cw = _cross(w_p, w_rel)
-        cv = _cross(w_p, _cross(w_p, r)) + _cross(2 * w_p, v_rel) + _cross(w_rel, v_rel)
+        cw = cross(w_p, w_rel)
+        cv = cross(w_p, cross(w_p, r)) + cross(2 * w_p, v_rel) + cross(w_rel, v_rel)
         if n.rel_bias is not None:
             cw += R * n.rel_bias[:3, :]
             cv += R * n.rel_bias[3:, :]
@@ -715,10 +620,10 @@ def _velocities(tree):
         b = n.body
         # R I first, one node per entry: R (I R^T) as one product would
         # repeat each column of R I in three entries
-        n.Iw = ik.sym_kept(ik.kept(R * _inertia_matrix(b)) * R.T)
+        n.Iw = ik.sym_kept(ik.kept(R * inertia_matrix(b)) * R.T)
 
 
-def _inertia_matrix(body):
+def inertia_matrix(body):
     """The body's central inertia in its own axes: read off the dyadic's
     terms when they are all in those axes (sympy's to_matrix expresses
     each of the nine components through dot products, the slowest step of
@@ -753,11 +658,11 @@ def constraints_of_tree(system):
         System's q and u).
     """
     if not isinstance(system, me.System):
-        _Tree(system)           # the error naming what it got
+        Tree(system)           # the error naming what it got
     nh, nn = len(system.holonomic_constraints), len(system.nonholonomic_constraints)
     if not nh and not nn:
         return None
-    tree = _Tree(system)        # the same checks and q' map as equations_of_tree
+    tree = Tree(system)        # the same checks and q' map as equations_of_tree
     vc = sm.Matrix(system.velocity_constraints).xreplace(tree.qdot)
     A = vc.jacobian(tree.u)
     b = vc.xreplace({s: 0 for s in tree.u})
@@ -772,7 +677,7 @@ def _rot(k, th, ik=None):
     with the build's interner ik, its sine and cosine kept nodes (each one
     temporary of the C: a C compiler without -fno-math-errno calls sin and
     cos as often as the code names them)."""
-    K = _skew(k)
+    K = skew(k)
     s, c = sm.sin(th), sm.cos(th)
     if ik is not None:
         s, c = ik.keep(s), ik.keep(c)
@@ -790,7 +695,7 @@ def _orientation(n, tree):
         return
     if n.parent is None:
         A, k, th, B = sm.eye(3), None, sm.S.Zero, sm.eye(3)
-        if n.joint.parent.frame != tree.N:     # pragma: no cover - refused in _Tree
+        if n.joint.parent.frame != tree.N:     # pragma: no cover - refused in Tree
             A = sm.Matrix(tree.N.dcm(n.joint.parent.frame))
     else:
         A, k, th, B = n.parent.rep

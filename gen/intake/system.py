@@ -189,8 +189,8 @@ def recursive_model(cls, system, formulation, partition, **options):
             f"{system.fixed_point.name!r} is empty: no joints, coordinates or speeds, so "
             "the model would have no state; add bodies and joints "
             "(System.add_joints) first")
-    from .recursive import (accelerations_of_tree, check_joints_move, constraints_of_tree,
-                            equations_of_tree)
+    from .aba import accelerations_of_tree
+    from .recursive import check_joints_move, constraints_of_tree, equations_of_tree
     cons = constraints_of_tree(system)
     interner = Interner()
     if cons is None and not options.get("hybrid") and formulation == "recursive":
