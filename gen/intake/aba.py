@@ -315,17 +315,30 @@ def _inward(n, ik):
         n.uu = uu = ik.kept(-(sw.T * pw + sv.T * pv))
         n.U = (Uw, Uv)
         UDw, UDv = ik.kept(Uw * Dinv), ik.kept(Uv * Dinv)
-        Aa = ik.sym_kept(A - UDw * Uw.T)
-        Ba = ik.kept(B - UDw * Uv.T)
-        Ca = ik.sym_kept(C - UDv * Uv.T)
+        Aa, Ba, Ca = (sm.Matrix(x) for x in (A - UDw * Uw.T, B - UDw * Uv.T, C - UDv * Uv.T))
         gw, gv = UDw * uu, UDv * uu
+        # I^a S = 0 and S^T p^a = 0: along a joint axis that is a body axis
+        # (S a unit column) the articulated inertia's row and column and the
+        # bias's entry are zero; written as zeros, not as x - x
+        for k in _unit_axes(n.So):
+            if k < 3:
+                Aa[k, :], Aa[:, k], Ba[k, :] = sm.zeros(1, 3), sm.zeros(3, 1), sm.zeros(1, 3)
+            else:
+                Ca[k - 3, :], Ca[:, k - 3], Ba[:, k - 3] = \
+                    sm.zeros(1, 3), sm.zeros(3, 1), sm.zeros(3, 1)
+        Aa, Ba, Ca = ik.sym_kept(Aa), ik.kept(Ba), ik.sym_kept(Ca)
     else:
         Aa, Ba, Ca = A, B, C
         gw, gv = sm.zeros(3, 1), sm.zeros(3, 1)
     if n.parent is None:
         return
-    pw = ik.kept(pw + Aa * cw + Ba * cv + gw)
-    pv = ik.kept(pv + Ba.T * cw + Ca * cv + gv)
+    pw, pv = sm.Matrix(pw + Aa * cw + Ba * cv + gw), sm.Matrix(pv + Ba.T * cw + Ca * cv + gv)
+    for k in _unit_axes(n.So):
+        if k < 3:
+            pw[k] = 0
+        else:
+            pv[k - 3] = 0
+    pw, pv = ik.kept(pw), ik.kept(pv)
     # X^T (.) X: into the parent's axes (E^T . E), then shifted by p
     E, ET = n.E, n.E.T
     Ap = ik.sym_kept(ET * ik.kept(Aa * E))
@@ -338,6 +351,17 @@ def _inward(n, ik):
     n.parent.IA = (a + Ap - P - P.T - RC * rx, b + Bp + RC, c + Cp)
     n.parent.fw = n.parent.fw + pwp + cross(n.p, pvp)
     n.parent.fv = n.parent.fv + pvp
+
+
+def _unit_axes(S):
+    """The rows k of S's columns that are signed unit vectors e_k (its only
+    nonzero entry +-1): the joint's axes that are body axes."""
+    out = []
+    for j in range(S.shape[1]):
+        nz = [k for k in range(6) if S[k, j] != 0]
+        if len(nz) == 1 and S[nz[0], j] in (1, -1):
+            out.append(nz[0])
+    return out
 
 
 def _outward(n, a0, ud, ik):
