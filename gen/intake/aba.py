@@ -285,14 +285,14 @@ def _velocity(n, ik):
         c = (c[0] + n.cJ[:3, :], c[1] + n.cJ[3:, :])
     n.v = (w, v)
     n.c = (ik.kept(c[0]), ik.kept(c[1]))
-    # the body's bias force v x* I v - f_ext, I at the origin from the
-    # mass centre's: hv = m (v + w x rc), hw = Ic w + rc x hv
+    # the body's bias force v x* I v - f_ext: at the mass centre (velocity
+    # vc) [w x Ic w; m w x vc], moved to the origin
     b, rc = n.body, n.r_cc
     Ic = inertia_matrix(b)
-    hv = ik.kept(b.mass * (v + cross(w, rc)))
-    hw = ik.kept(Ic * w + cross(rc, hv))
-    n.fw = cross(w, hw) + cross(v, hv) - n.fw
-    n.fv = cross(w, hv) - n.fv
+    vc = ik.kept(v + cross(w, rc))
+    fv = ik.kept(b.mass * cross(w, vc))
+    n.fw = cross(w, ik.kept(Ic * w)) + cross(rc, fv) - n.fw
+    n.fv = fv - n.fv
     # the body's spatial inertia at its origin
     m, rx = b.mass, skew(rc)
     n.IA = (Ic - m * rx * rx, m * rx, m * sm.eye(3))
@@ -311,9 +311,13 @@ def _inward(n, ik):
         Uw, Uv = ik.kept(A * sw + B * sv), ik.kept(B.T * sw + C * sv)
         D = ik.sym_kept(sw.T * Uw + sv.T * Uv)
         check_moved(n, D)
-        n.Dinv = Dinv = inv_small(D, ik)
         n.uu = uu = ik.kept(-(sw.T * pw + sv.T * pv))
         n.U = (Uw, Uv)
+        if n.parent is None and nj > 1:
+            # a free root: D^-1 only in u' = D^-1 (uu - U^T a'), a solve
+            n.Dinv, n.D = None, D
+            return
+        n.Dinv = Dinv = inv_small(D, ik)
         UDw, UDv = ik.kept(Uw * Dinv), ik.kept(Uv * Dinv)
         Aa, Ba, Ca = (sm.Matrix(x) for x in (A - UDw * Uw.T, B - UDw * Uv.T, C - UDv * Uv.T))
         gw, gv = UDw * uu, UDv * uu
@@ -353,6 +357,26 @@ def _inward(n, ik):
     n.parent.fv = n.parent.fv + pvp
 
 
+def _solve_spd(D, b, ik):
+    """x of D x = b, D symmetric positive definite (kept entries), through
+    its LDL^T factors, each entry one kept node."""
+    k = D.shape[0]
+    L, d, di = sm.eye(k), [None] * k, [None] * k
+    for j in range(k):
+        d[j] = ik.keep(D[j, j] - sm.Add(*[L[j, m]**2 * d[m] for m in range(j)]))
+        di[j] = ik.keep(1 / d[j])
+        for i in range(j + 1, k):
+            L[i, j] = ik.keep((D[i, j] - sm.Add(*[L[i, m] * L[j, m] * d[m] for m in range(j)]))
+                              * di[j])
+    y = [None] * k
+    for i in range(k):
+        y[i] = ik.keep(b[i] - sm.Add(*[L[i, m] * y[m] for m in range(i)]))
+    x = [None] * k
+    for i in reversed(range(k)):
+        x[i] = ik.keep(y[i] * di[i] - sm.Add(*[L[m, i] * x[m] for m in range(i + 1, k)]))
+    return sm.Matrix(x)
+
+
 def _unit_axes(S):
     """The rows k of S's columns that are signed unit vectors e_k (its only
     nonzero entry +-1): the joint's axes that are body axes."""
@@ -378,7 +402,8 @@ def _outward(n, a0, ud, ik):
     aw, av = ik.kept(aw), ik.kept(av)
     if n.So.shape[1]:
         Uw, Uv = n.U
-        uj = ik.kept(n.Dinv * (n.uu - (Uw.T * aw + Uv.T * av)))
+        rhs = n.uu - (Uw.T * aw + Uv.T * av)
+        uj = ik.kept(n.Dinv * rhs if n.Dinv is not None else _solve_spd(n.D, rhs, ik))
         for k, s in enumerate(n.joint.speeds):
             ud[n.speed_idx[k]] = uj[k]
         aw = ik.kept(aw + n.So[:3, :] * uj)

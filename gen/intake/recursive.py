@@ -117,7 +117,7 @@ class _Body:
     __slots__ = ("body", "joint", "parent", "children", "E", "r", "S", "rel_bias",
                  "speed_idx", "w", "al", "a", "F", "N", "Ic", "depth", "Ftot", "Ntot",
                  "rep", "R", "Sw", "rw", "Iw", "r_pp", "r_cc", "mt", "h", "J", "cw", "cv",
-                 "IA", "pA", "U", "Dinv", "uu", "p", "So", "cJ", "v", "c", "fw", "fv", "Rn")
+                 "IA", "pA", "U", "D", "Dinv", "uu", "p", "So", "cJ", "v", "c", "fw", "fv", "Rn")
 
     def __init__(self, body, joint, parent):
         self.body, self.joint, self.parent = body, joint, parent
