@@ -258,6 +258,13 @@ class EKF:
         ws.rptr = c("double *", ws.rbuf.ctypes.data)
         ws.zptr = c("double *", ws.zbuf.ctypes.data)
         ws.f_predict, ws.f_update, ws.f_step = ws.fn("predict"), ws.fn("update"), ws.fn("step")
+        # the calls' fast path (predict, update, step): the buffers as
+        # memoryviews, whose slice assignment takes exactly a float64 buffer
+        # of their shape (anything else raises: the general path), and the
+        # C functions and pointers resolved once
+        self._rin = memoryview(ws.rbuf) if self.nr else None
+        self._zin = memoryview(ws.zbuf)
+        self._c = (ws.f_predict, ws.f_update, ws.f_step, ws.ptr, ws.rptr, ws.zptr)
         return ws
 
     def _write_settings(self, ws):
@@ -421,15 +428,22 @@ class EKF:
             When the model's step fails (a singular configuration, a
             diverged state): the estimate is left as it was.
         """
-        self._inputs(r)
-        ws = self._ws
-        st = ws.f_predict(ws.ptr, ws.rptr)
+        try:
+            self._rin[:] = r        # the common case: r float64 (nr,)
+        except (TypeError, ValueError):
+            self._inputs(r)
+        f, _, _, ws, rp, _ = self._c
+        st = f(ws, rp)
         if st:
-            if not np.all(np.isfinite(ws.rbuf)):
-                raise InputError(f"r = {ws.rbuf[:self.nr].tolist()} "
-                                 f"[{', '.join(self.model.input_labels)}]: every entry must be "
-                                 "finite", "r")
-            self._check(st, "predict")
+            self._predict_failed(st)
+
+    def _predict_failed(self, st):
+        ws = self._ws
+        if not np.all(np.isfinite(ws.rbuf)):
+            raise InputError(f"r = {ws.rbuf[:self.nr].tolist()} "
+                             f"[{', '.join(self.model.input_labels)}]: every entry must be "
+                             "finite", "r")
+        self._check(st, "predict")
 
     def update(self, z):
         """One update with the measurements z (a NaN entry: missing, not
@@ -447,9 +461,12 @@ class EKF:
         gen.SolverError
             When the measurement kernels or the constraints fail there.
         """
-        self._measurements(z)
-        ws = self._ws
-        st = ws.f_update(ws.ptr, ws.zptr)
+        try:
+            self._zin[:] = z        # the common case: z float64 (nz,)
+        except (TypeError, ValueError):
+            self._measurements(z)
+        _, f, _, ws, _, zp = self._c
+        st = f(ws, zp)
         if st:
             self._check(st, "update")
 
@@ -464,10 +481,16 @@ class EKF:
         r : array_like, shape (nr,)
             The inputs held over it.
         """
-        self._inputs(r)
-        self._measurements(z)
-        ws = self._ws
-        st = ws.f_step(ws.ptr, ws.zptr, ws.rptr)
+        try:
+            self._rin[:] = r
+        except (TypeError, ValueError):
+            self._inputs(r)
+        try:
+            self._zin[:] = z
+        except (TypeError, ValueError):
+            self._measurements(z)
+        _, _, f, ws, rp, zp = self._c
+        st = f(ws, zp, rp)
         if st:
             self._check(st, "step")
 
