@@ -230,10 +230,15 @@ static PyObject *eomgen_fast_call(PyObject *self, PyObject *const *args, Py_ssiz
         if (c->n[i] > 0)
             memcpy(c->buf[i], PyArray_DATA((PyArrayObject *)args[i]),
                    (size_t)c->n[i] * sizeof(eomgen_real));
+    /* the GIL released, as cffi's calls do (the owner holds ws and the
+     * buffers; a call on one workspace from two threads at once is the
+     * caller's race, as through cffi) */
+    Py_BEGIN_ALLOW_THREADS
     if (c->nargs == 1)
         st = ((eomgen_fast_call1_fn)c->fn)(c->ws, c->buf[0]);
     else
         st = ((eomgen_fast_call2_fn)c->fn)(c->ws, c->buf[0], c->buf[1]);
+    Py_END_ALLOW_THREADS
     return PyLong_FromLong(st);
 }
 
