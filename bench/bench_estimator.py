@@ -14,7 +14,8 @@ Rows, per filter kind (EKF, UKF), in microseconds per predict + update:
 - filterpy, eomgen's step: the same filterpy filters with the model in C
   (sim.step_sensitivity for the EKF's x and F, sim.step for the UKF's sigma
   points): filterpy's own matrix algebra and Python calls;
-- gen: ekf.predict(r); ekf.update(z) (two C calls through cffi);
+- gen: ekf.predict(r); ekf.update(z) (two C calls through the host module's
+  CPython functions, csrc/host/gen_host_fast.c);
 - gen, step: ekf.step(z, r) (the same in one C call);
 - gen, batch: ekf.filter over a recording (one C call), per step.
 

@@ -1,6 +1,6 @@
 /*
- * gen_host_fast.c - the Python fast paths of Simulator.rhs and
- * Simulator.rhs_batch: see gen_host_fast.h. One vectorcall (METH_FASTCALL)
+ * gen_host_fast.c - the Python fast paths of Simulator.rhs,
+ * Simulator.rhs_batch and a product's workspace calls: see gen_host_fast.h. One vectorcall (METH_FASTCALL)
  * function object per model table and path, its self a capsule holding the
  * table: the call checks its arguments' types and sizes with numpy's C API,
  * allocates the result (unless given), calls the model's eval_rhs (per
@@ -9,6 +9,7 @@
  */
 #define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
 #include <numpy/arrayobject.h>
+#include <string.h>
 
 #define EOMGEN_FAST_CAPSULE "eomgen_api"
 
@@ -181,4 +182,106 @@ void *eomgen_fast_rhs_new(const eomgen_api *api)
 void *eomgen_fast_rhs_batch_new(const eomgen_api *api)
 {
     return eomgen_fast_new(api, &eomgen_fast_rhs_batch_def);
+}
+
+/* ---- a product's call on its workspace ---------------------------------- */
+
+#define EOMGEN_FAST_CALL_CAPSULE "eomgen_call"
+
+typedef int (*eomgen_fast_call1_fn)(void *, const eomgen_real *);
+typedef int (*eomgen_fast_call2_fn)(void *, const eomgen_real *, const eomgen_real *);
+
+typedef struct {
+    uintptr_t fn;
+    PyObject *owner;
+    void *ws;
+    int nargs;
+    eomgen_real *buf[2];
+    npy_intp n[2];
+} eomgen_fast_call_ctx;
+
+static void eomgen_fast_call_free(PyObject *cap)
+{
+    eomgen_fast_call_ctx *c =
+        (eomgen_fast_call_ctx *)PyCapsule_GetPointer(cap, EOMGEN_FAST_CALL_CAPSULE);
+    if (c == NULL)
+        return;
+    Py_XDECREF(c->owner);
+    PyMem_Free(c);
+}
+
+/* f(a[, b]) -> fn's status, or None where an argument is not an exact
+ * array of the type and size (nothing copied then) */
+static PyObject *eomgen_fast_call(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    eomgen_fast_call_ctx *c =
+        (eomgen_fast_call_ctx *)PyCapsule_GetPointer(self, EOMGEN_FAST_CALL_CAPSULE);
+    int i, st;
+    if (c == NULL)
+        return NULL;
+    if (nargs != c->nargs) {
+        PyErr_SetString(PyExc_TypeError, "eomgen fast call: wrong number of arguments");
+        return NULL;
+    }
+    for (i = 0; i < c->nargs; ++i)
+        if (!eomgen_fast_vector(args[i], c->n[i]))
+            Py_RETURN_NONE;
+    for (i = 0; i < c->nargs; ++i)
+        if (c->n[i] > 0)
+            memcpy(c->buf[i], PyArray_DATA((PyArrayObject *)args[i]),
+                   (size_t)c->n[i] * sizeof(eomgen_real));
+    /* the GIL released, as cffi's calls do (the owner holds ws and the
+     * buffers; a call on one workspace from two threads at once is the
+     * caller's race, as through cffi) */
+    Py_BEGIN_ALLOW_THREADS
+    if (c->nargs == 1)
+        st = ((eomgen_fast_call1_fn)c->fn)(c->ws, c->buf[0]);
+    else
+        st = ((eomgen_fast_call2_fn)c->fn)(c->ws, c->buf[0], c->buf[1]);
+    Py_END_ALLOW_THREADS
+    return PyLong_FromLong(st);
+}
+
+static PyMethodDef eomgen_fast_call_def = {
+    "call", (PyCFunction)(void (*)(void))eomgen_fast_call, METH_FASTCALL,
+    "call(a[, b]) -> status, or None: the fast path of a product's call"
+};
+
+void *eomgen_fast_call_new(uintptr_t fn, void *owner, void *ws, int nargs,
+                           eomgen_real *buf0, long n0, eomgen_real *buf1, long n1)
+{
+    PyObject *cap = NULL, *f = NULL;
+    eomgen_fast_call_ctx *c;
+    PyGILState_STATE gil;
+    if (!fn || !owner || !ws || nargs < 1 || nargs > 2 || !buf0 || n0 < 0
+        || (nargs == 2 && (!buf1 || n1 < 0)))
+        return NULL;
+    gil = PyGILState_Ensure();
+    if (PyArray_API == NULL && _import_array() < 0)
+        goto done;
+    c = (eomgen_fast_call_ctx *)PyMem_Malloc(sizeof(*c));
+    if (c == NULL)
+        goto done;
+    c->fn = fn;
+    c->owner = (PyObject *)owner;
+    Py_INCREF(c->owner);
+    c->ws = ws;
+    c->nargs = nargs;
+    c->buf[0] = buf0;
+    c->buf[1] = nargs == 2 ? buf1 : NULL;
+    c->n[0] = (npy_intp)n0;
+    c->n[1] = nargs == 2 ? (npy_intp)n1 : 0;
+    cap = PyCapsule_New(c, EOMGEN_FAST_CALL_CAPSULE, eomgen_fast_call_free);
+    if (cap == NULL) {
+        Py_DECREF(c->owner);
+        PyMem_Free(c);
+        goto done;
+    }
+    f = PyCFunction_NewEx(&eomgen_fast_call_def, cap, NULL);
+    Py_DECREF(cap);
+done:
+    if (f == NULL)
+        PyErr_Clear();    /* the caller takes the general path */
+    PyGILState_Release(gil);
+    return f;
 }

@@ -119,6 +119,46 @@ def test_wrong_length_and_nan_measurements(cart):
         a.filter([0.0, 0.01], Z[:2], Rin[:2])
 
 
+@pytest.mark.slow
+def test_python_calls_take_the_host_fast_path_and_equal_the_general_path(cart):
+    """predict, update and step from Python: an exact C-contiguous float64
+    array of the size goes through the host module's CPython function
+    (csrc/host/gen_host_fast.c), which declines (None, nothing done)
+    anything else: a list, another dtype, a subclass, a strided view, a
+    wrong size. A filter given lists (the general path) follows the fast
+    one bit for bit; a NaN input through the fast path is the general
+    path's InputError, the estimate unchanged."""
+    fast, slow = cart_ekf(cart), cart_ekf(cart)
+    z = np.array([0.01, 0.5, 0.02])
+    for bad in (np.array([0.3, 0.1]), np.array([1]), np.array([0.3], dtype=np.float32),
+                np.array([0.3]).view(np.recarray), [0.3], 0.3, None):
+        assert fast._fast_predict(bad) is None
+    for bad in (z[::2], z[:2].astype(np.float32), z, [0.01, 0.02]):
+        assert fast._fast_update(bad) is None
+        assert fast._fast_step(bad, np.array([0.3])) is None
+    assert fast._fast_step(z[:2].copy(), [0.3]) is None
+    assert np.array_equal(fast.x, slow.x) and fast.t == slow.t == 0.0
+    rng = np.random.default_rng(9)
+    for k in range(60):
+        r, z = 0.3 * rng.normal(size=1), 0.01 * rng.normal(size=2)
+        if k % 2:
+            fast.predict(r)
+            fast.update(z)
+            slow.predict(r.tolist())
+            slow.update(z.tolist())
+        else:
+            fast.step(z, r)
+            slow.step(z.tolist(), r.tolist())
+        for a, b in ((fast.x, slow.x), (fast.P, slow.P), (fast.innovations, slow.innovations),
+                     (fast.status, slow.status)):
+            assert np.array_equal(a, b)
+    x, P, t = fast.x, fast.P, fast.t
+    with pytest.raises(gen.InputError, match=r"r = \[nan\] \[F\]: every entry must be finite"):
+        fast.predict(np.array([np.nan]))
+    assert np.array_equal(fast.x, x) and np.array_equal(fast.P, P) and fast.t == t
+    assert fast._fast_predict(np.array([0.3])) == 0 and fast.t == t + DT
+
+
 # ---------------------------------------------- the independent reference
 class Reference:
     """The cart-pole without eomgen: sympy's full mass matrix and forcing of

@@ -15,6 +15,7 @@ state of ``sim.linearize``), then the estimated constants: ``state_names``.
 """
 from __future__ import annotations
 
+import ctypes
 import re
 from dataclasses import dataclass
 
@@ -22,9 +23,10 @@ import numpy as np
 
 from ... import pipeline
 from ...codegen.backends.estimator import LAYOUT
-from ...core.errors import InputError, SolverError
+from ...core.errors import BuildError, InputError, SolverError
 from ...core.resources import csrc_file
 from ...core.status import exception_for, status_message, status_name
+from ...toolchain.host import host_module
 from .model import filter_model
 
 __all__ = ["EKF", "UKF", "FilterResult", "KALMAN_CONSTANTS", "ACCEPTED", "GATED", "MISSING",
@@ -89,6 +91,38 @@ class _Workspace:
 
     def fn(self, verb):
         return getattr(self.lib, f"{self.name}_{verb}")
+
+
+def _declined(*args):
+    """The fast path where the host module has none: always the general path."""
+    return None
+
+
+def _fast_call(ffi, fn, owner, bufs):
+    """The host module's CPython fast path of a workspace call fn(ws, a[, b])
+    of the filter's library (csrc/host/gen_host_fast.c): f(a[, b]) copies
+    each argument into its buffer (bufs: (array, size) pairs, in the call's
+    order) when it is an exact C-contiguous float64 array of the size and
+    returns fn's status, else None; it keeps owner (the workspace, which
+    holds the buffers) alive. :func:`_declined` where the host has none."""
+    try:
+        host = host_module("double")
+    except BuildError:
+        return _declined
+    make = getattr(host.lib, "eomgen_fast_call_new", None)
+    if make is None:
+        return _declined
+    hffi = host.ffi
+    args = []
+    for buf, n in list(bufs) + [(None, 0)] * (2 - len(bufs)):
+        args += [hffi.NULL if buf is None else hffi.cast("double *", buf.ctypes.data), n]
+    ptr = make(int(ffi.cast("uintptr_t", fn)), hffi.cast("void *", id(owner)),
+               hffi.cast("void *", owner.buf.ctypes.data), len(bufs), *args)
+    if ptr == hffi.NULL:
+        return _declined
+    f = ctypes.cast(ctypes.c_void_p(int(hffi.cast("uintptr_t", ptr))), ctypes.py_object).value
+    ctypes.pythonapi.Py_DecRef(ctypes.py_object(f))     # the new reference made in C
+    return f
 
 
 def _matrix(what, a, n, diag_only=False):
@@ -213,6 +247,7 @@ class EKF:
             raise InputError(f"t0 must be finite, got {t0!r}", "t0", None, t0)
         self.built, self._ffi, self._lib = pipeline.product(fm.plan, "estimator")
         self._ws = self._new_workspace()
+        self._bind_calls()
         self._ws.Q[:], self._ws.R[:] = Q.ravel(), np.diag(R)
         self._ws.x[:], self._ws.P[:] = x0, P0.ravel()
         self.reset(t0=t0)
@@ -259,6 +294,18 @@ class EKF:
         ws.zptr = c("double *", ws.zbuf.ctypes.data)
         ws.f_predict, ws.f_update, ws.f_step = ws.fn("predict"), ws.fn("update"), ws.fn("step")
         return ws
+
+    def _bind_calls(self):
+        """predict, update and step's fast paths, bound to the filter's
+        workspace: the host module's CPython functions (_fast_call), which
+        take an exact float64 array of the size, copy it into the
+        workspace's buffer and call the library's function; None for any
+        other argument (the general path then, as without them)."""
+        ws, ffi = self._ws, self._ffi
+        self._fast_predict = _fast_call(ffi, ws.f_predict, ws, [(ws.rbuf, self.nr)])
+        self._fast_update = _fast_call(ffi, ws.f_update, ws, [(ws.zbuf, self.nz)])
+        self._fast_step = _fast_call(ffi, ws.f_step, ws, [(ws.zbuf, self.nz),
+                                                          (ws.rbuf, self.nr)])
 
     def _write_settings(self, ws):
         ws.scalars["period"][0] = self.period
@@ -421,15 +468,21 @@ class EKF:
             When the model's step fails (a singular configuration, a
             diverged state): the estimate is left as it was.
         """
-        self._inputs(r)
-        ws = self._ws
-        st = ws.f_predict(ws.ptr, ws.rptr)
+        st = self._fast_predict(r)
+        if st is None:              # r is not an exact float64 (nr,) array
+            self._inputs(r)
+            ws = self._ws
+            st = ws.f_predict(ws.ptr, ws.rptr)
         if st:
-            if not np.all(np.isfinite(ws.rbuf)):
-                raise InputError(f"r = {ws.rbuf[:self.nr].tolist()} "
-                                 f"[{', '.join(self.model.input_labels)}]: every entry must be "
-                                 "finite", "r")
-            self._check(st, "predict")
+            self._predict_failed(st)
+
+    def _predict_failed(self, st):
+        ws = self._ws
+        if not np.all(np.isfinite(ws.rbuf)):
+            raise InputError(f"r = {ws.rbuf[:self.nr].tolist()} "
+                             f"[{', '.join(self.model.input_labels)}]: every entry must be "
+                             "finite", "r")
+        self._check(st, "predict")
 
     def update(self, z):
         """One update with the measurements z (a NaN entry: missing, not
@@ -447,9 +500,11 @@ class EKF:
         gen.SolverError
             When the measurement kernels or the constraints fail there.
         """
-        self._measurements(z)
-        ws = self._ws
-        st = ws.f_update(ws.ptr, ws.zptr)
+        st = self._fast_update(z)
+        if st is None:              # z is not an exact float64 (nz,) array
+            self._measurements(z)
+            ws = self._ws
+            st = ws.f_update(ws.ptr, ws.zptr)
         if st:
             self._check(st, "update")
 
@@ -464,10 +519,12 @@ class EKF:
         r : array_like, shape (nr,)
             The inputs held over it.
         """
-        self._inputs(r)
-        self._measurements(z)
-        ws = self._ws
-        st = ws.f_step(ws.ptr, ws.zptr, ws.rptr)
+        st = self._fast_step(z, r)
+        if st is None:
+            self._inputs(r)
+            self._measurements(z)
+            ws = self._ws
+            st = ws.f_step(ws.ptr, ws.zptr, ws.rptr)
         if st:
             self._check(st, "step")
 
