@@ -8,7 +8,7 @@ CPython fast paths of ``rhs`` and ``rhs_batch``.
 """
 from __future__ import annotations
 
-import ctypes
+from ..toolchain.host import host_object
 
 __all__ = ["ModelLibrary", "fast_rhs"]
 
@@ -20,13 +20,7 @@ def fast_rhs(host, api, which="rhs"):
     make = getattr(host.lib, f"eomgen_fast_{which}_new", None)
     if make is None:
         return None
-    ptr = make(api)
-    if ptr == host.ffi.NULL:
-        return None
-    addr = int(host.ffi.cast("uintptr_t", ptr))
-    fn = ctypes.cast(ctypes.c_void_p(addr), ctypes.py_object).value
-    ctypes.pythonapi.Py_DecRef(ctypes.py_object(fn))     # the new reference made in C
-    return fn
+    return host_object(host, make(api))
 
 
 class ModelLibrary:

@@ -38,8 +38,8 @@ from ..codegen.abi import ABI_TAG, host_interface
 from ..core.cache import cache_dir, cache_error, find_entry_file, new_build_dir, publish, shipped
 from ..core.errors import BuildError
 
-__all__ = ["host_module", "host_sources", "open_model", "open_library", "load", "load_product",
-           "HOST_FLAGS"]
+__all__ = ["host_module", "host_sources", "host_object", "open_model", "open_library", "load",
+           "load_product", "HOST_FLAGS"]
 
 # the host is glue: every call forwards to the model's table
 HOST_FLAGS = ["-O2"]
@@ -111,6 +111,18 @@ def host_module(real="double"):
             return mod
         mod = _modules[real] = _build_and_load(real)
         return mod
+
+
+def host_object(host, ptr):
+    """The Python object a host function returned as a new reference in a
+    ``void *`` (the CPython fast paths of csrc/host/gen_host_fast.c), the
+    reference taken over; None for NULL."""
+    if ptr == host.ffi.NULL:
+        return None
+    addr = int(host.ffi.cast("uintptr_t", ptr))
+    obj = ctypes.cast(ctypes.c_void_p(addr), ctypes.py_object).value
+    ctypes.pythonapi.Py_DecRef(ctypes.py_object(obj))     # the new reference made in C
+    return obj
 
 
 def _build_and_load(real):

@@ -15,7 +15,6 @@ state of ``sim.linearize``), then the estimated constants: ``state_names``.
 """
 from __future__ import annotations
 
-import ctypes
 import re
 from dataclasses import dataclass
 
@@ -26,7 +25,7 @@ from ...codegen.backends.estimator import LAYOUT
 from ...core.errors import BuildError, InputError, SolverError
 from ...core.resources import csrc_file
 from ...core.status import exception_for, status_message, status_name
-from ...toolchain.host import host_module
+from ...toolchain.host import host_module, host_object
 from .model import filter_model
 
 __all__ = ["EKF", "UKF", "FilterResult", "KALMAN_CONSTANTS", "ACCEPTED", "GATED", "MISSING",
@@ -118,11 +117,8 @@ def _fast_call(ffi, fn, owner, bufs):
         args += [hffi.NULL if buf is None else hffi.cast("double *", buf.ctypes.data), n]
     ptr = make(int(ffi.cast("uintptr_t", fn)), hffi.cast("void *", id(owner)),
                hffi.cast("void *", owner.buf.ctypes.data), len(bufs), *args)
-    if ptr == hffi.NULL:
-        return _declined
-    f = ctypes.cast(ctypes.c_void_p(int(hffi.cast("uintptr_t", ptr))), ctypes.py_object).value
-    ctypes.pythonapi.Py_DecRef(ctypes.py_object(f))     # the new reference made in C
-    return f
+    f = host_object(host, ptr)
+    return _declined if f is None else f
 
 
 def _matrix(what, a, n, diag_only=False):
