@@ -155,23 +155,31 @@ static PyMethodDef eomgen_fast_rhs_def = {
     "rhs(t, x, r=None) -> x', or None: the fast path of Simulator.rhs"
 };
 
+/* The end of every eomgen_fast_*_new: the function def bound to the capsule
+ * cap (its reference taken over; NULL: none made), or NULL with the error
+ * cleared (the caller takes the general path); the GIL the caller took
+ * released. */
+static void *eomgen_fast_made(PyMethodDef *def, PyObject *cap, PyGILState_STATE gil)
+{
+    PyObject *fn = NULL;
+    if (cap != NULL) {
+        fn = PyCFunction_NewEx(def, cap, NULL);
+        Py_DECREF(cap);
+    }
+    if (fn == NULL)
+        PyErr_Clear();
+    PyGILState_Release(gil);
+    return fn;
+}
+
 /* cffi calls these with the GIL released: take it for the Python API */
 static void *eomgen_fast_new(const eomgen_api *api, PyMethodDef *def)
 {
-    PyObject *cap, *fn = NULL;
+    PyObject *cap = NULL;
     PyGILState_STATE gil = PyGILState_Ensure();
-    if (PyArray_API == NULL && _import_array() < 0)
-        goto done;
-    cap = PyCapsule_New((void *)api, EOMGEN_FAST_CAPSULE, NULL);
-    if (cap == NULL)
-        goto done;
-    fn = PyCFunction_NewEx(def, cap, NULL);
-    Py_DECREF(cap);
-done:
-    if (fn == NULL)
-        PyErr_Clear();    /* the caller takes the general path */
-    PyGILState_Release(gil);
-    return fn;
+    if (PyArray_API != NULL || _import_array() >= 0)
+        cap = PyCapsule_New((void *)api, EOMGEN_FAST_CAPSULE, NULL);
+    return eomgen_fast_made(def, cap, gil);
 }
 
 void *eomgen_fast_rhs_new(const eomgen_api *api)
@@ -250,7 +258,7 @@ static PyMethodDef eomgen_fast_call_def = {
 void *eomgen_fast_call_new(uintptr_t fn, void *owner, void *ws, int nargs,
                            eomgen_real *buf0, long n0, eomgen_real *buf1, long n1)
 {
-    PyObject *cap = NULL, *f = NULL;
+    PyObject *cap = NULL;
     eomgen_fast_call_ctx *c;
     PyGILState_STATE gil;
     if (!fn || !owner || !ws || nargs < 1 || nargs > 2 || !buf0 || n0 < 0
@@ -275,13 +283,7 @@ void *eomgen_fast_call_new(uintptr_t fn, void *owner, void *ws, int nargs,
     if (cap == NULL) {
         Py_DECREF(c->owner);
         PyMem_Free(c);
-        goto done;
     }
-    f = PyCFunction_NewEx(&eomgen_fast_call_def, cap, NULL);
-    Py_DECREF(cap);
 done:
-    if (f == NULL)
-        PyErr_Clear();    /* the caller takes the general path */
-    PyGILState_Release(gil);
-    return f;
+    return eomgen_fast_made(&eomgen_fast_call_def, cap, gil);
 }
