@@ -17,7 +17,9 @@ Three parts, each a command:
   ``header`` build, ``g++ -O2 -DNDEBUG``, and the ``shipped`` one, the
   wheel's libpinocchio_default), in turns (``--rounds``), medians, the
   ratio C / ABA per round and its median; each driver's ABA must equal
-  ``pin.aba`` to 1e-12 and the C rhs is printed beside (|C - ABA|).
+  ``pin.aba`` to 1e-12 and the C rhs is printed beside (|C - ABA|);
+- the arithmetic operations of the generated right-hand-side kernel
+  (``rhs kernel N flops``: bench/_cdriver.py's count of the printed C).
 
 ``sweep`` (the acceptance's "The robots people use"): every URDF of the
 ``example-robot-data`` wheel, with a floating base where the robot has one
@@ -166,6 +168,21 @@ def import_to_compiled(path, floating, name, warm_cache):
     return float(w), float(c), float(wm), float(cm), cached
 
 
+def rhs_kernel_flops(folder, name):
+    """The arithmetic operations of the generated right-hand-side kernel
+    ``<name>_k_rhs_terms`` (bench/_cdriver.py's count of the printed C; the
+    body of its cloned versions when it has them)."""
+    import re
+    from _cdriver import count_flops, function_body
+    text = re.sub(r"\n#[^\n]*", "", (Path(folder) / f"{name}_kernels.c").read_text())
+    for fn in (f"{name}_k_rhs_terms_isa", f"{name}_k_rhs_terms"):
+        try:
+            return count_flops(function_body(text, fn))["arith"]
+        except ValueError:
+            continue
+    return None
+
+
 def speed(args):
     import gen
     import _pinocchio_cpp as pc
@@ -200,6 +217,7 @@ def speed(args):
                                              - want)) / (1 + np.max(np.abs(want))))
         folder = tempfile.mkdtemp(prefix=f"bench_robots_src_{key}_")
         gen.generate(model, folder)
+        row["flops"] = rhs_kernel_flops(folder, key)
         cs, per, check = [], {k: [] for k in drivers}, {}
         for _ in range(args.rounds):
             cs.append(time_rhs_in_c(folder, key, x, model.p_values, reps=7, runs=1)["eomgen"])
@@ -229,7 +247,7 @@ def speed(args):
                 msg += f" | ABA C++ {k}: differs from pin.aba by {check[k]:.1e}: not timed"
         if "ratio_best" in row:
             msg += f" | C / faster ABA {row['ratio_best']:.3f}"
-        msg += f" | |C - aba| {row['maxdiff']:.1e}"
+        msg += f" | |C - aba| {row['maxdiff']:.1e} | rhs kernel {row['flops']} flops"
         print(msg, flush=True)
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1))
