@@ -243,7 +243,8 @@ def _in_body(n, vec, places, tree):
         elif n.parent is not None and owner is n.parent.body:
             v = n.E * (sm.Matrix(owner.frame.dcm(frame)) * comp)
             qj = list(n.joint.coordinates)
-            v0 = v.xreplace({x: 0 for x in qj})
+            # (doit: the kept sines and cosines at 0 are numbers again)
+            v0 = v.xreplace({x: 0 for x in qj}).doit()
             # a vector along the joint's own axis (its torque) has the same
             # components in both bodies: no rotation at run time
             out += v0 if _same(v, v0, qj) else v
