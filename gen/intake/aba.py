@@ -40,17 +40,15 @@ so the straight-line C, is linear in the bodies.
 """
 from __future__ import annotations
 
-import random
 import sys
 
 import sympy as sm
 import sympy.physics.mechanics as me
-from sympy.core.function import AppliedUndef
 
 from ..core.errors import ModelError
 from ..sym.intern import Interner
-from .recursive import (Places, Tree, check_moved, col, cross, inertia_matrix, inv_small,
-                        joint_kinematics, skew)
+from .recursive import (Places, Tree, col, cross, inertia_matrix, joint_kinematics,
+                        massless_joint_error, same_for_all, skew)
 from .sympy_compat import time_symbol
 
 __all__ = ["accelerations_of_tree"]
@@ -119,7 +117,7 @@ def _at_origin(n, tree):
             # an axis sympy wrote through the joint's own rotation (a pin
             # about a tilted axis): constant in the body's axes
             S0 = So.xreplace({x: 0 for x in qj})
-            if _same(So, S0, qj):
+            if same_for_all(So, S0, qj):
                 So, bias = S0, None
         n.So = ik.kept(So)
         if bias is not None:
@@ -144,25 +142,6 @@ def _keep_entry(e, ik):
             and isinstance(e.args[1], sm.UnevaluatedExpr)):
         return e
     return ik.keep(e)
-
-
-def _same(X, Y, qs):
-    """X == Y for every value of the coordinates qs (numerically at a few
-    points, every other symbol and function of time given random values:
-    both are small matrices of constants, sines and cosines)."""
-    rnd = random.Random(7)
-    free = sorted((X.free_symbols | Y.free_symbols | X.atoms(AppliedUndef)
-                   | Y.atoms(AppliedUndef)) - {_T}, key=str)
-    for _ in range(3):
-        vals = {s: rnd.uniform(0.2, 1.3) for s in free}
-        vals.update({x: rnd.uniform(-2, 2) for x in qs})
-        d = (X - Y).xreplace(vals)
-        try:
-            if max((abs(complex(sm.N(e))) for e in d), default=0.0) > 1e-12:
-                return False
-        except TypeError:
-            return False
-    return True
 
 
 # ------------------------------------------------------------ the loads
@@ -247,7 +226,7 @@ def _in_body(n, vec, places, tree):
             v0 = v.xreplace({x: 0 for x in qj}).doit()
             # a vector along the joint's own axis (its torque) has the same
             # components in both bodies: no rotation at run time
-            out += v0 if _same(v, v0, qj) else v
+            out += v0 if same_for_all(v, v0, qj) else v
         else:
             Rn = _world_rotation(n, tree)
             if owner is None:
@@ -311,34 +290,36 @@ def _inward(n, ik):
         sw, sv = n.So[:3, :], n.So[3:, :]
         Uw, Uv = ik.kept(A * sw + B * sv), ik.kept(B.T * sw + C * sv)
         D = ik.sym_kept(sw.T * Uw + sv.T * Uv)
-        check_moved(n, D)
+        _check_moved(n, D)
         n.uu = uu = ik.kept(-(sw.T * pw + sv.T * pv))
         n.U = (Uw, Uv)
         if n.parent is None and nj > 1:
             # a free root: D^-1 only in u' = D^-1 (uu - U^T a'), a solve
             n.Dinv, n.D = None, D
             return
-        n.Dinv = Dinv = inv_small(D, ik)
+        n.Dinv = Dinv = _inv_small(D, ik)
+        if n.parent is None:
+            return              # the forward pass's U, D^-1, uu only
         UDw, UDv = ik.kept(Uw * Dinv), ik.kept(Uv * Dinv)
         Aa, Ba, Ca = (sm.Matrix(x) for x in (A - UDw * Uw.T, B - UDw * Uv.T, C - UDv * Uv.T))
         gw, gv = UDw * uu, UDv * uu
-        # I^a S = 0 and S^T p^a = 0: along a joint axis that is a body axis
-        # (S a unit column) the articulated inertia's row and column and the
-        # bias's entry are zero; written as zeros, not as x - x
-        for k in _unit_axes(n.So):
-            if k < 3:
-                Aa[k, :], Aa[:, k], Ba[k, :] = sm.zeros(1, 3), sm.zeros(3, 1), sm.zeros(1, 3)
-            else:
-                Ca[k - 3, :], Ca[:, k - 3], Ba[:, k - 3] = \
-                    sm.zeros(1, 3), sm.zeros(3, 1), sm.zeros(3, 1)
-        Aa, Ba, Ca = ik.sym_kept(Aa), ik.kept(Ba), ik.sym_kept(Ca)
     else:
-        Aa, Ba, Ca = A, B, C
+        if n.parent is None:
+            return
+        Aa, Ba, Ca = sm.Matrix(A), sm.Matrix(B), sm.Matrix(C)
         gw, gv = sm.zeros(3, 1), sm.zeros(3, 1)
-    if n.parent is None:
-        return
+    # I^a S = 0 and S^T p^a = 0: along a joint axis that is a body axis (S a
+    # unit column) the articulated inertia's row and column and the bias's
+    # entry are zero; written as zeros, not as x - x
+    axes = _unit_axes(n.So)
+    for k in axes:
+        if k < 3:
+            Aa[k, :], Aa[:, k], Ba[k, :] = sm.zeros(1, 3), sm.zeros(3, 1), sm.zeros(1, 3)
+        else:
+            Ca[k - 3, :], Ca[:, k - 3], Ba[:, k - 3] = sm.zeros(1, 3), sm.zeros(3, 1), sm.zeros(3, 1)
+    Aa, Ba, Ca = ik.sym_kept(Aa), ik.kept(Ba), ik.sym_kept(Ca)
     pw, pv = sm.Matrix(pw + Aa * cw + Ba * cv + gw), sm.Matrix(pv + Ba.T * cw + Ca * cv + gv)
-    for k in _unit_axes(n.So):
+    for k in axes:
         if k < 3:
             pw[k] = 0
         else:
@@ -358,9 +339,52 @@ def _inward(n, ik):
     n.parent.fv = n.parent.fv + pvp
 
 
-def _solve_spd(D, b, ik):
-    """x of D x = b, D symmetric positive definite (kept entries), through
-    its LDL^T factors, each entry one kept node."""
+def _check_moved(n, D):
+    """A ModelError naming the body when its joint moves no mass or
+    inertia (D = S^T IA S has a zero on its diagonal: a massless body, and
+    nothing beyond it that the joint's motion moves), whose accelerations
+    the equations then do not determine (1 / 0 in the recursion)."""
+    zero = [n.joint.speeds[k] for k in range(D.shape[0]) if D[k, k] == 0]
+    if zero:
+        raise massless_joint_error(n.joint, zero)
+
+
+def _inv_small(D, ik):
+    """The inverse of a small symmetric matrix of kept entries, by its
+    adjugate over placeholder symbols (sympy's inv would test the kept
+    entries for zero, a walk down the whole graph)."""
+    k = D.shape[0]
+    if k == 1:
+        return sm.Matrix([[ik.keep(1 / D[0, 0])]])
+    if k > 3:
+        return _inv_ldlt(D, ik)
+    X = sm.Matrix(k, k, lambda i, j: sm.Symbol(f"_D{min(i, j)}_{max(i, j)}"))
+    sub = {X[i, j]: D[i, j] for i in range(k) for j in range(k)}
+    idet = ik.keep(1 / ik.keep(X.det(method="berkowitz").xreplace(sub)))
+    adj = X.adjugate(method="berkowitz").xreplace(sub)
+    return ik.sym_kept(adj * idet)
+
+
+def _inv_ldlt(D, ik):
+    """The inverse of a symmetric positive definite matrix of kept entries
+    (a free joint's 6 x 6) through its LDL^T factors, each entry one kept
+    node: O(k^3) nodes, where the adjugate's cofactors grow factorially."""
+    k = D.shape[0]
+    L, dinv = _ldl(D, ik)
+    # L^-1, unit lower triangular, by forward substitution
+    Li = sm.eye(k)
+    for i in range(k):
+        for j in range(i):
+            Li[i, j] = ik.keep(-sm.Add(*[L[i, m] * Li[m, j] for m in range(j, i)]))
+    low = {(i, j): ik.keep(sm.Add(*[Li[m, i] * dinv[m] * Li[m, j] for m in range(max(i, j), k)]))
+           for i in range(k) for j in range(i + 1)}
+    return sm.Matrix(k, k, lambda i, j: low[max(i, j), min(i, j)])
+
+
+def _ldl(D, ik):
+    """(L, [1 / d]) of D = L diag(d) L^T, D symmetric positive definite
+    (kept entries), each entry one kept node: O(k^3) nodes, where an
+    adjugate's cofactors grow factorially."""
     k = D.shape[0]
     L, d, di = sm.eye(k), [None] * k, [None] * k
     for j in range(k):
@@ -369,6 +393,14 @@ def _solve_spd(D, b, ik):
         for i in range(j + 1, k):
             L[i, j] = ik.keep((D[i, j] - sm.Add(*[L[i, m] * L[j, m] * d[m] for m in range(j)]))
                               * di[j])
+    return L, di
+
+
+def _solve_spd(D, b, ik):
+    """x of D x = b, D symmetric positive definite (kept entries), through
+    its LDL^T factors, each entry one kept node."""
+    k = D.shape[0]
+    L, di = _ldl(D, ik)
     y = [None] * k
     for i in range(k):
         y[i] = ik.keep(b[i] - sm.Add(*[L[i, m] * y[m] for m in range(i)]))

@@ -69,14 +69,18 @@ is the child of two joints, loads on unknown points or frames.
 """
 from __future__ import annotations
 
+import random
+
 import sympy as sm
 import sympy.physics.mechanics as me
+from sympy.core.function import AppliedUndef
 
 from ..core.errors import ModelError
 from ..sym.intern import Interner
 from .sympy_compat import time_symbol
 
 __all__ = ["equations_of_tree", "constraints_of_tree", "Tree", "Places", "joint_kinematics",
+           "same_for_all",
            "check_joints_move", "massless_joint_error",
            "SUPPORTED_JOINTS"]
 
@@ -325,16 +329,6 @@ def equations_of_tree(system, interner=None):
     return M, f, tree.q, tree.u, tree.kdes
 
 
-def check_moved(n, D):
-    """A ModelError naming the body when its joint moves no mass or
-    inertia (D = S^T IA S has a zero on its diagonal: a massless body, and
-    nothing beyond it that the joint's motion moves), whose accelerations
-    the equations then do not determine (1 / 0 in the recursion)."""
-    zero = [n.joint.speeds[k] for k in range(D.shape[0]) if D[k, k] == 0]
-    if zero:
-        raise massless_joint_error(n.joint, zero)
-
-
 def check_joints_move(system, M, speeds):
     """For CRBA's M of an open tree: a ModelError naming the body when the
     rows of M of one of its joint's speeds are all zero (the same refusal
@@ -356,44 +350,6 @@ def massless_joint_error(joint, speeds):
         f"{name_of(joint)!r} moves (nor has any body beyond it), so the equations do "
         f"not determine the acceleration of {', '.join(str(s.func) for s in speeds)}: "
         "give it a mass or inertia, or weld it to its parent (WeldJoint)")
-
-
-def inv_small(D, ik):
-    """The inverse of a small symmetric matrix of kept entries, by its
-    adjugate over placeholder symbols (sympy's inv would test the kept
-    entries for zero, a walk down the whole graph)."""
-    k = D.shape[0]
-    if k == 1:
-        return sm.Matrix([[ik.keep(1 / D[0, 0])]])
-    if k > 3:
-        return _inv_ldlt(D, ik)
-    X = sm.Matrix(k, k, lambda i, j: sm.Symbol(f"_D{min(i, j)}_{max(i, j)}"))
-    sub = {X[i, j]: D[i, j] for i in range(k) for j in range(k)}
-    idet = ik.keep(1 / ik.keep(X.det(method="berkowitz").xreplace(sub)))
-    adj = X.adjugate(method="berkowitz").xreplace(sub)
-    return ik.sym_kept(adj * idet)
-
-
-def _inv_ldlt(D, ik):
-    """The inverse of a symmetric positive definite matrix of kept entries
-    (a free joint's 6 x 6) through its LDL^T factors, each entry one kept
-    node: O(k^3) nodes, where the adjugate's cofactors grow factorially."""
-    k = D.shape[0]
-    L, d = sm.eye(k), [None] * k
-    for j in range(k):
-        d[j] = ik.keep(D[j, j] - sm.Add(*[L[j, m]**2 * d[m] for m in range(j)]))
-        for i in range(j + 1, k):
-            L[i, j] = ik.keep((D[i, j] - sm.Add(*[L[i, m] * L[j, m] * d[m] for m in range(j)]))
-                              / d[j])
-    # L^-1, unit lower triangular, by forward substitution
-    Li = sm.eye(k)
-    for i in range(k):
-        for j in range(i):
-            Li[i, j] = ik.keep(-sm.Add(*[L[i, m] * Li[m, j] for m in range(j, i)]))
-    dinv = [ik.keep(1 / x) for x in d]
-    low = {(i, j): ik.keep(sm.Add(*[Li[m, i] * dinv[m] * Li[m, j] for m in range(max(i, j), k)]))
-           for i in range(k) for j in range(i + 1)}
-    return sm.Matrix(k, k, lambda i, j: low[max(i, j), min(i, j)])
 
 
 def _walk(system, ik):
@@ -713,7 +669,7 @@ def _orientation(n, tree):
             q = rot[0]
             E0T = ET.xreplace({q: 0})
             kp = E0T * wq[:, cols[0]]           # the axis in the parent's axes
-            if _same(ET, _rot(kp, q) * E0T, q):
+            if same_for_all(ET, _rot(kp, q) * E0T, [q]):
                 if k is not None and _same_vec(B * kp, k):
                     rep = (A, k, th + q, B * E0T)
                 else:
@@ -728,18 +684,19 @@ def _orientation(n, tree):
     n.R = ik.kept(ik.kept(A * _rot(k, th, ik)) * B if k is not None else A * B)
 
 
-def _same(X, Y, q):
-    """X == Y as functions of q (numerically at a few values; both are small
-    rotation matrices in q and constants)."""
-    import random
+def same_for_all(X, Y, qs):
+    """X == Y for every value of the coordinates qs (numerically at a few
+    points, every other symbol and function of time given random values:
+    both are small matrices of constants, sines and cosines)."""
     rnd = random.Random(7)
-    free = sorted((X.free_symbols | Y.free_symbols) - {_T}, key=str)
+    free = sorted((X.free_symbols | Y.free_symbols | X.atoms(AppliedUndef)
+                   | Y.atoms(AppliedUndef)) - {_T}, key=str)
     for _ in range(3):
         vals = {s: rnd.uniform(0.2, 1.3) for s in free}
-        vals[q] = rnd.uniform(-2, 2)
-        d = (X - Y).xreplace({q: vals[q]}).xreplace(vals)
+        vals.update({x: rnd.uniform(-2, 2) for x in qs})
+        d = (X - Y).xreplace(vals)
         try:
-            if max(abs(complex(sm.N(e))) for e in d) > 1e-12:
+            if max((abs(complex(sm.N(e))) for e in d), default=0.0) > 1e-12:
                 return False
         except TypeError:
             return False
