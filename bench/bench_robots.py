@@ -171,10 +171,13 @@ def import_to_compiled(path, floating, name, warm_cache):
 def rhs_kernel_flops(folder, name):
     """The arithmetic operations of the generated right-hand-side kernel
     ``<name>_k_rhs_terms`` (bench/_cdriver.py's count of the printed C; the
-    body of its cloned versions when it has them)."""
+    body of its cloned versions when it has them; its scalar body when it
+    also has the two-lane one, which computes the same operations)."""
     import re
     from _cdriver import count_flops, function_body
-    text = re.sub(r"\n#[^\n]*", "", (Path(folder) / f"{name}_kernels.c").read_text())
+    text = (Path(folder) / f"{name}_kernels.c").read_text()
+    text = re.sub(r"\n#if GEN_RT_LANES\n.*?\n#else(?=\n)", "", text, flags=re.S)
+    text = re.sub(r"\n#[^\n]*", "", text)
     for fn in (f"{name}_k_rhs_terms_isa", f"{name}_k_rhs_terms"):
         try:
             return count_flops(function_body(text, fn))["arith"]

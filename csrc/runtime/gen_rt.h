@@ -39,6 +39,22 @@
 #define GEN_RT_CLONES_ON 0
 #endif
 
+/* GEN_RT_LANES: 1 where the generated kernels may compute twin statements
+ * side by side in two-lane vectors of doubles, gen_rt_v2d (GCC's and
+ * clang's vector extension; SSE2 or AVX on x86-64, NEON on AArch64): each
+ * lane computes what its scalar statement computes, bit for bit
+ * (gen/codegen/lanes.py), so the choice changes speed, never a result.
+ * 0 (the scalar statements) elsewhere, in a float build or with
+ * GEN_RT_NO_LANES defined. */
+#if !defined(GEN_RT_NO_LANES) && !defined(GEN_RT_REAL_FLOAT) && defined(__GNUC__) \
+    && (defined(__x86_64__) || defined(__aarch64__))                             \
+    && (defined(__clang__) || __GNUC__ >= 5)
+#define GEN_RT_LANES 1
+typedef double gen_rt_v2d __attribute__((vector_size(16)));
+#else
+#define GEN_RT_LANES 0
+#endif
+
 /* GEN_RT_CLONE_UNIT: a build that compiles a model's kernels file twice, in
  * parallel, defines it to 1 in one compile and to 2 in the other (gen.compile
  * does: the two versions of a large kernel are most of a model's compile

@@ -19,6 +19,7 @@ A product's library renders through the same call: its face's ProductPlan
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import tempfile
 import time
@@ -34,6 +35,7 @@ from ..core.errors import ModelError
 from ..plan.ir import DERIVATIVE_KERNELS, plan as make_plan
 from ..intake.model import require_model
 from ..sym.printers import kernel_statements, print_kernel_body
+from .lanes import lanes_body
 from ..core.resources import csrc_file
 from ..plan.ldlt import demand_order, ldlt_statements, ldlt_work_index, ldlt_program
 from ..plan.small import BIND, c_lines, kernel_program
@@ -93,6 +95,8 @@ class Rendered:
     includes: tuple = ()
 
 
+_IDENT = re.compile(r"\b[A-Za-z_]\w*\b")
+
 # a right-hand-side kernel of at least this many statements is compiled
 # twice, for the baseline and for AVX (GEN_RT_CLONES): past the instruction
 # cache the VEX encoding's smaller code pays (cart, eval_rhs: n = 8 links,
@@ -116,7 +120,7 @@ def _wiring_mass_solve(mass_plan, kctx):
     return {**mass_plan, "loop": True}
 
 
-def _kernel_context(kernels, printer, fused=None, small=None):
+def _kernel_context(kernels, printer, fused=None, small=None, twins=()):
     """Kernels as data: names, arguments, outputs and the printed body
     (print_kernel_body). fused: the plan of the unrolled LDL^T
     (solvers.ldlt_program) when rhs_terms is the fused right-hand side: its
@@ -128,7 +132,9 @@ def _kernel_context(kernels, printer, fused=None, small=None):
     for the template's stores. small: the straight-line solve of a small
     constrained model (gen.plan.small's Program) when rhs_terms is its fused
     right-hand side: its body is then the kernel's statements with M, f, A
-    and a as locals (small.BIND), "solve" the program's lines after them."""
+    and a as locals (small.BIND), "solve" the program's lines after them.
+    twins: the model's twin speeds: the right-hand side's body also in two
+    lanes ("lanes", gen.codegen.lanes; None when it has none)."""
     out = []
     for k in kernels.values():
         ctx = {
@@ -171,11 +177,31 @@ def _kernel_context(kernels, printer, fused=None, small=None):
         else:
             ctx["body"] = print_kernel_body(k, printer)
             n_lines = len(ctx["body"])
+        ctx["lanes"] = None
+        if k.name == "rhs_terms" and small is None and twins and printer.real_type == "double":
+            ctx["lanes"] = _lanes(k, ctx, printer, twins)
         # the right-hand side of a large model: built for the baseline and
         # for AVX, picked at load time (GEN_RT_CLONES in gen_rt.h)
         ctx["clones"] = k.name == "rhs_terms" and n_lines >= CLONE_MIN_STATEMENTS
         out.append(ctx)
     return out
+
+
+def _lanes(k, ctx, printer, twins):
+    """The two-lane body of the right-hand side (gen.codegen.lanes), seeded
+    by its outputs f for the twin speeds, or None."""
+    f = next((o.exprs for o in k.outputs if o.name == "f"), None)
+    if f is None:
+        return None
+    names = [printer._print(e) if e.is_Symbol else None for e in f]
+    seeds = [(names[i], names[j]) for i, j in twins
+             if max(i, j) < len(names) and names[i] and names[j]]
+    after = set()
+    for line in ctx.get("stores", []) + [w[1] for w in ctx.get("fill", [])]:
+        after.update(_IDENT.findall(line))
+    for b in ctx.get("bound", []):
+        after.update(f"{b['local']}{i}" for i in range(b["size"]))
+    return lanes_body(ctx["body"], seeds, after)
 
 
 def _symbol_map(model, kernels):
@@ -256,7 +282,7 @@ def build_context(plan, iface, timings=None, backend="c"):
              and "rhs_terms" in kernels)
     mass_plan = ldlt_program(m.nu, plan.mass_nonzero) if plan.accel == "ldlt" else None
     small = _small_solve(b, plan)
-    kctx = _kernel_context(kernels, printer, fused=mass_plan if fused else None, small=small)
+    kctx = _kernel_context(kernels, printer, mass_plan if fused else None, small, m.twins)
     t2 = time.perf_counter()
     mx = lambda n: max(1, n)  # noqa: E731  C99 has no zero-length arrays
     nq, nu, nr, mc, mv = m.nq, m.nu, m.nr, m.mc, m.mv

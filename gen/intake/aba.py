@@ -51,7 +51,7 @@ from .recursive import (Places, Tree, col, cross, inertia_matrix, joint_kinemati
                         massless_joint_error, same_for_all, skew)
 from .sympy_compat import time_symbol
 
-__all__ = ["accelerations_of_tree"]
+__all__ = ["accelerations_of_tree", "twin_speeds"]
 
 _T = time_symbol()
 
@@ -69,9 +69,10 @@ def accelerations_of_tree(system, interner=None):
 
     Returns
     -------
-    (ud, q, u, kdes) : sympy Matrix (nu, 1), list, list, Matrix (nq, 1)
-        The accelerations in the System's speed order and the System's
-        kinematic equations (``kdes = 0``).
+    (ud, q, u, kdes, twins) : sympy Matrix (nu, 1), list, list, Matrix (nq, 1), list
+        The accelerations in the System's speed order, the System's
+        kinematic equations (``kdes = 0``) and the twin speeds
+        (:func:`twin_speeds`).
     """
     ik = Interner() if interner is None else interner
     tree = Tree(system)
@@ -90,7 +91,47 @@ def accelerations_of_tree(system, interner=None):
     ud = sm.zeros(len(tree.u), 1)
     for n in tree.order:
         _outward(n, a0, ud, ik)
-    return ud, tree.q, tree.u, tree.kdes
+    return ud, tree.q, tree.u, tree.kdes, twin_speeds(tree)
+
+
+def twin_speeds(tree):
+    """Pairs (i, j) of speed indices whose equations are alike: the speeds
+    of twin subtrees, siblings (children of one body, or joined to the
+    ground) with the same joints (kind, number of speeds, children alike,
+    recursively), matched two by two in the tree's order and then joint by
+    joint (a robot's two legs; a quadruped's four legs, as two pairs).
+
+    They are a hint for the generator (gen.codegen.lanes computes twin
+    statements side by side), checked there statement by statement: the
+    limbs' constants and placements may differ."""
+    memo = {}
+
+    def sig(n):
+        k = memo.get(id(n))
+        if k is None:
+            k = memo[id(n)] = (type(n.joint).__name__, len(n.joint.speeds),
+                               tuple(sorted(sig(c) for c in n.children)))
+        return k
+
+    out = []
+
+    def match(a, b):
+        out.extend(zip(a.speed_idx, b.speed_idx))
+        for x, y in zip(sorted(a.children, key=sig), sorted(b.children, key=sig)):
+            match(x, y)
+
+    def visit(nodes):
+        groups = {}
+        for n in nodes:
+            groups.setdefault(sig(n), []).append(n)
+        for group in groups.values():
+            for x, y in zip(group[0::2], group[1::2]):
+                match(x, y)
+            if len(group) % 2:
+                visit(group[-1].children)
+
+    visit([n for n in tree.order if n.parent is None])
+    return out
 
 
 # ------------------------------------------------------------ the joints

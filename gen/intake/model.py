@@ -179,6 +179,10 @@ class Model:
     output_labels: list = field(default_factory=list)   # as the user named them
     # hybrid={name: gen.Impact | gen.Reset} (gen/intake/hybrid.py): HybridDecl in order
     hybrid: list = field(default_factory=list)
+    # pairs (i, j) of speed indices whose equations are alike (a robot's
+    # mirrored limbs: gen.intake.aba.twin_speeds): the generator computes
+    # their right-hand side side by side (gen.codegen.lanes); empty when none
+    twins: list = field(default_factory=list)
 
     # ------------------------------------------------------------------ sizes
     @property

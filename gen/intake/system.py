@@ -196,10 +196,13 @@ def recursive_model(cls, system, formulation, partition, **options):
     if cons is None and not options.get("hybrid") and formulation == "recursive":
         # an open tree: u' by the articulated body algorithm, the model's M
         # the identity (gen.intake.recursive's docstring)
-        ud, q, u, kdes = accelerations_of_tree(system, interner)
+        ud, q, u, kdes, twins = accelerations_of_tree(system, interner)
         M, f = sm.eye(len(u)), ud
     else:
         M, f, q, u, kdes = equations_of_tree(system, interner)
+        twins = []
         if cons is None:
             check_joints_move(system, M, u)
-    return cls.from_matrices(M, f, q, u, kdes, _constraints=cons, **options)
+    model = cls.from_matrices(M, f, q, u, kdes, _constraints=cons, **options)
+    model.twins = twins
+    return model
