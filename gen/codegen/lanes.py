@@ -333,10 +333,8 @@ class _Writer:
                 s2, right, r2 = self.vec(na[2], nb[2])
                 return s1 + s2, f"({left} / {right})", r1 | r2
             best = None
-            for order in (0, 1):
-                cb = [(nb[1], nb[2]), (nb[2], nb[1])][order] if k == "mul" else \
-                    [(nb[1], nb[2]), (nb[2], nb[1])][order]
-                ca = (na[1], na[2])
+            ca = (na[1], na[2])
+            for cb in ((nb[1], nb[2]), (nb[2], nb[1])):
                 xa = [c[1] if k == "add" else c for c in ca]
                 xb = [c[1] if k == "add" else c for c in cb]
                 if any(x[0] != y[0] or self.p.skel(x, 0) != self.p.skel(y, 0)
@@ -487,4 +485,23 @@ def lanes_body(items, seeds, after=()):
                 if stmts[i].name in need:
                     out.append(f"{s.indent}const {stmts[i].ctype} {stmts[i].name} = "
                                f"{vname[a]}[{lane}];")
-    return out
+    return _without_unread(out)
+
+
+def _without_unread(lines):
+    """lines without the vector statements nothing reads (a strict build
+    refuses an unused variable), to a fixed point."""
+    decl = re.compile(rf"^\s*const {VECTOR} (\w+) = ")
+    while True:
+        reads = {}
+        for line in lines:
+            text = line if isinstance(line, str) else line[1]
+            m = decl.match(text) if isinstance(line, str) else None
+            rhs = text[m.end():] if m else text.split("=", 1)[-1]
+            for x in _IDENT.findall(rhs):
+                reads[x] = reads.get(x, 0) + 1
+        keep = [ln for ln in lines if not (isinstance(ln, str) and decl.match(ln)
+                                           and not reads.get(decl.match(ln).group(1)))]
+        if len(keep) == len(lines):
+            return lines
+        lines = keep
