@@ -22,6 +22,7 @@ import gen
 from gen.codegen.backends import C_FLAGS, STRICT_FLAGS, c_compiler
 from gen.codegen.lanes import MIN_PAIRS, VECTOR, lanes_body
 from gen.core.resources import csrc_file
+from conftest import require_tool
 
 LANES_HOST = platform.machine() in ("x86_64", "AMD64", "aarch64", "arm64")
 
@@ -203,6 +204,7 @@ def test_twin_speeds_pair_the_mirrored_legs():
 
 DRV = r"""
 #include <stdio.h>
+#include "gen_rt.h"
 #include "legs.h"
 int main(void)
 {{
@@ -211,6 +213,7 @@ int main(void)
     double dx[{nx}];
     size_t k;
     int i;
+    printf("lanes %d\n", GEN_RT_LANES);
     for (k = 0; k < sizeof X / sizeof X[0]; ++k) {{
         int st = legs_eval_rhs(0.0, X[k], R, NULL, dx, NULL);
         printf("%d", st);
@@ -222,8 +225,9 @@ int main(void)
 """
 
 
-@pytest.mark.skipif(not LANES_HOST, reason="two lanes are built on x86-64 and AArch64 only")
-def test_mirrored_legs_same_bits_with_and_without_lanes(tmp_path):
+def _legs_sources(tmp_path):
+    """The two-legged model's sources with a driver printing u' (%a) at
+    six states; (model, states, source files)."""
     system, inputs = _two_legs()
     model = gen.Model.from_system(system, inputs=inputs, formulation="recursive", name="legs")
     out = tmp_path / "src"
@@ -235,17 +239,36 @@ def test_mirrored_legs_same_bits_with_and_without_lanes(tmp_path):
     rows = ", ".join("{" + ", ".join(float(v).hex() for v in x) + "}" for x in states)
     (out / "drv.c").write_text(DRV.format(nx=model.nx, nr=max(1, model.nr), states=rows))
     from gen.codegen.render import model_sources
-    srcs = [str(out / "drv.c")] + [str(out / f) for f in model_sources("legs")] + sorted(
-        str(f) for f in out.glob("gen_rt_*.c"))
+    srcs = [str(out / "drv.c")] + [str(out / f) for f in model_sources("legs")]
+    return model, states, out, srcs
+
+
+def _legs_runs(tmp_path, cc, run=(), extra=()):
+    """The driver's output (its lines of u') built with and without the
+    lanes (the runtime, which has none, compiled once); each build must
+    have taken its branch."""
+    model, states, out, srcs = _legs_sources(tmp_path)
+    flags = [*C_FLAGS, *STRICT_FLAGS, *extra, "-I", str(out)]
+    rt = tmp_path / "runtime.o"
+    proc = subprocess.run([cc, *flags, "-r", "-nostdlib", *sorted(
+        str(f) for f in out.glob("gen_rt_*.c")), "-o", str(rt)], capture_output=True, text=True)
+    assert proc.returncode == 0 and not proc.stderr.strip(), proc.stderr
     runs = []
-    for flags in ([], ["-DGEN_RT_NO_LANES"]):
+    for lanes in ([], ["-DGEN_RT_NO_LANES"]):
         exe = tmp_path / f"drv{len(runs)}"
-        cmd = [c_compiler(), *C_FLAGS, *STRICT_FLAGS, *flags, "-I", str(out), *srcs,
-               "-o", str(exe), "-lm"]
+        cmd = [cc, *flags, *lanes, *srcs, str(rt), "-o", str(exe), "-lm"]
         proc = subprocess.run(cmd, capture_output=True, text=True)
         assert proc.returncode == 0 and not proc.stderr.strip(), proc.stderr
-        runs.append(subprocess.run([str(exe)], capture_output=True, text=True,
-                                   timeout=60).stdout)
+        lines = subprocess.run([*run, str(exe)], capture_output=True, text=True,
+                               timeout=120).stdout.splitlines()
+        assert lines[0] == f"lanes {0 if lanes else 1}", lines[:1]
+        runs.append("\n".join(lines[1:]) + "\n")
+    return model, states, runs
+
+
+@pytest.mark.skipif(not LANES_HOST, reason="two lanes are built on x86-64 and AArch64 only")
+def test_mirrored_legs_same_bits_with_and_without_lanes(tmp_path):
+    model, states, runs = _legs_runs(tmp_path, c_compiler())
     assert runs[0] == runs[1] and runs[0].count("\n") == len(states)
     # and they are the physics: sympy's own form_eoms on the same System,
     # built again, lambdified and solved with numpy (zero torques)
@@ -262,3 +285,22 @@ def test_mirrored_legs_same_bits_with_and_without_lanes(tmp_path):
         xr[order] = x
         want = np.linalg.solve(Mf(*xr), Ff(*xr)).ravel()[order]
         assert np.max(np.abs(got - want)) < 1e-12 * (1 + np.max(np.abs(want)))
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not LANES_HOST, reason="compared with this host's lanes")
+def test_aarch64_lanes_are_the_hosts_bits(tmp_path):
+    """AArch64 (NEON's two-lane doubles), cross-built and run under
+    qemu-aarch64: the same bits with and without the lanes there, and this
+    host's numbers (to the last bits: the two libms' sin and cos may round
+    apart)."""
+    cc = require_tool("aarch64-linux-gnu-gcc")
+    qemu = require_tool("qemu-aarch64")
+    _, _, host = _legs_runs(tmp_path / "host", c_compiler())
+    _, _, a64 = _legs_runs(tmp_path / "a64", cc, run=[qemu], extra=["-static"])
+    assert a64[0] == a64[1] and a64[0].count("\n") == 6
+    for ra, rh in zip(a64[0].splitlines(), host[0].splitlines()):
+        a = np.array([float.fromhex(v) for v in ra.split()[1:]])
+        h = np.array([float.fromhex(v) for v in rh.split()[1:]])
+        assert ra.split()[0] == rh.split()[0] == "0"
+        assert np.max(np.abs(a - h)) <= 1e-14 * (1 + np.max(np.abs(h)))
