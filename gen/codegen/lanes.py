@@ -410,7 +410,8 @@ def lanes_body(items, seeds, after=()):
         Names of twin results (lane 0, lane 1): the kernel's outputs for
         twin speeds, or names the body copies them to.
     after : iterable of str
-        Names read after the body (the kernel's stores and solve).
+        What the kernel reads after the body (its stores' lines, the names
+        of its bound outputs): the names in it stay defined.
 
     Returns
     -------
@@ -442,7 +443,8 @@ def lanes_body(items, seeds, after=()):
         order = _order(stmts, units, unit_of, p.idx)
     except _Opaque:
         return None
-    plan, need, npairs = [], set(after), 0
+    plan, npairs = [], 0
+    need = {x for text in after for x in _IDENT.findall(text)}
     for k in order:
         u = units[k]
         if len(u) == 2:

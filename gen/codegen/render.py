@@ -19,7 +19,6 @@ A product's library renders through the same call: its face's ProductPlan
 from __future__ import annotations
 
 import os
-import re
 import shutil
 import tempfile
 import time
@@ -94,8 +93,6 @@ class Rendered:
     timings: dict = field(default_factory=dict)
     includes: tuple = ()
 
-
-_IDENT = re.compile(r"\b[A-Za-z_]\w*\b")
 
 # a right-hand-side kernel of at least this many statements is compiled
 # twice, for the baseline and for AVX (GEN_RT_CLONES): past the instruction
@@ -196,11 +193,8 @@ def _lanes(k, ctx, printer, twins):
     names = [printer._print(e) if e.is_Symbol else None for e in f]
     seeds = [(names[i], names[j]) for i, j in twins
              if max(i, j) < len(names) and names[i] and names[j]]
-    after = set()
-    for line in ctx.get("stores", []) + [w[1] for w in ctx.get("fill", [])]:
-        after.update(_IDENT.findall(line))
-    for b in ctx.get("bound", []):
-        after.update(f"{b['local']}{i}" for i in range(b["size"]))
+    after = ctx.get("stores", []) + [w[1] for w in ctx.get("fill", [])] + [
+        f"{b['local']}{i}" for b in ctx.get("bound", []) for i in range(b["size"])]
     return lanes_body(ctx["body"], seeds, after)
 
 
